@@ -1,0 +1,37 @@
+"""bondgraph: the modelling language of bondcosim.
+
+Build a :class:`BondGraph` from elements (``Se, Sf, MSe, MSf, I, C, R, TF,
+GY, MTF, MGY, Zero, One, CField, IField, EquationElement``), connect them with
+bonds, and derive explicit state equations with :meth:`BondGraph.equations`
+(a :class:`StateEquations`).  ``simulate``, ``compile_model`` and
+``linearize`` turn those into numbers.
+"""
+from .elements import (C, CField, EquationElement, GY, I, IField, MGY, MSe, MSf, MTF, One, R, Se, Sf, TF,
+                       Zero, Element, ELEMENT_KINDS)
+from .errors import (BondcosimError, CausalityError, DerivationError, DuplicateNameError, ExpressionError,
+                     GraphError, JunctionError, ParameterError, PortError, SchemaError, UnknownElementKindError)
+from .graph import Bond, BondGraph, Output, Port
+from .params import DOMAINS, Param
+from .system import CausalityReport, StateEquations
+
+__all__ = [
+    "BondGraph", "Bond", "Port", "Output", "Param", "DOMAINS", "StateEquations", "CausalityReport",
+    "Element", "ELEMENT_KINDS", "Se", "Sf", "MSe", "MSf", "I", "C", "R", "TF", "GY", "MTF", "MGY",
+    "Zero", "One", "CField", "IField", "EquationElement",
+    "BondcosimError", "GraphError", "CausalityError", "DerivationError", "DuplicateNameError",
+    "ExpressionError", "JunctionError", "ParameterError", "PortError", "SchemaError",
+    "UnknownElementKindError", "simulate", "compile_model", "linearize",
+]
+
+
+def __getattr__(name):  # numerics are imported lazily: fast CLI start
+    if name == "simulate":
+        from .simulate import simulate
+        return simulate
+    if name == "compile_model":
+        from .evaluate import compile_model
+        return compile_model
+    if name == "linearize":
+        from .linearize import linearize
+        return linearize
+    raise AttributeError(f"module 'bondgraph' has no attribute {name!r}")

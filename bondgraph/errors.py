@@ -1,0 +1,163 @@
+"""Exceptions of bondcosim.
+
+Every error the project raises derives from :class:`BondcosimError`, and each
+also derives from the builtin it refines, so ``except ValueError`` keeps
+working for callers who do not know our types.  Exceptions carry the
+offending names as attributes, not only in their message.
+"""
+from __future__ import annotations
+
+__all__ = [
+    "BondcosimError",
+    "GraphError",
+    "UnknownElementKindError",
+    "DuplicateNameError",
+    "PortError",
+    "JunctionError",
+    "ExpressionError",
+    "ParameterError",
+    "CausalityError",
+    "DerivationError",
+    "SchemaError",
+    "CompilationError",
+    "SimulationError",
+]
+
+
+class BondcosimError(Exception):
+    """Base class of every error raised by bondcosim."""
+
+
+class GraphError(BondcosimError, ValueError):
+    """A bond graph is malformed.
+
+    Attributes
+    ----------
+    problems : list of str
+        Every problem found (validation collects them all before raising).
+    """
+
+    def __init__(self, message: str, problems: list[str] | None = None):
+        self.problems = list(problems) if problems else [message]
+        super().__init__(message)
+
+
+class UnknownElementKindError(GraphError):
+    """An element kind name that bondcosim does not know."""
+
+    def __init__(self, kind: str, known: list[str]):
+        self.kind = kind
+        self.known = list(known)
+        super().__init__(
+            f"unknown element kind {kind!r}; expected one of {', '.join(sorted(known))}"
+        )
+
+
+class DuplicateNameError(GraphError):
+    """Two elements, bonds or symbols share a name."""
+
+    def __init__(self, name: str, what: str):
+        self.name = name
+        super().__init__(f"duplicate name {name!r}: {what}")
+
+
+class PortError(GraphError):
+    """A bond refers to a missing port, or a port is used twice."""
+
+    def __init__(self, message: str, element: str | None = None, port: str | None = None):
+        self.element = element
+        self.port = port
+        super().__init__(message)
+
+
+class JunctionError(GraphError):
+    """A junction has fewer than two bonds, or an element has unconnected ports."""
+
+    def __init__(self, message: str, element: str | None = None, problems: list[str] | None = None):
+        self.element = element
+        super().__init__(message, problems)
+
+
+class ExpressionError(BondcosimError, ValueError):
+    """An expression does not parse or names unknown symbols.
+
+    Attributes
+    ----------
+    owner : str
+        What the expression belongs to (element, output or input name).
+    expression : str
+        The text as given.
+    unknown : list of str
+        Names the expression uses that the graph does not define.
+    """
+
+    def __init__(self, message: str, owner: str = "", expression: str = "",
+                 unknown: list[str] | None = None):
+        self.owner = owner
+        self.expression = expression
+        self.unknown = list(unknown or [])
+        super().__init__(message)
+
+
+class ParameterError(BondcosimError, ValueError):
+    """A parameter value that is not a finite real number, or an unknown parameter."""
+
+    def __init__(self, message: str, name: str = ""):
+        self.name = name
+        super().__init__(message)
+
+
+class CausalityError(BondcosimError, ValueError):
+    """Causality cannot be assigned: conflicts, named by element and bond.
+
+    Attributes
+    ----------
+    conflicts : list of Conflict-like objects
+        Each with ``element``, ``bonds`` and ``reason`` attributes.
+    """
+
+    def __init__(self, conflicts):
+        self.conflicts = list(conflicts)
+        lines = [f"  - {c}" for c in self.conflicts]
+        n = len(self.conflicts)
+        super().__init__(
+            f"{n} causal conflict{'s' if n != 1 else ''}:\n" + "\n".join(lines)
+        )
+
+
+class DerivationError(BondcosimError, ValueError):
+    """State equations cannot be derived for a structural reason named in the message."""
+
+    def __init__(self, message: str, element: str | None = None):
+        self.element = element
+        super().__init__(message)
+
+
+class SchemaError(GraphError):
+    """A JSON graph file does not match the documented schema.
+
+    Attributes
+    ----------
+    path : str
+        JSON path of the offending entry, e.g. ``elements[3].kind``.
+    """
+
+    def __init__(self, message: str, path: str = ""):
+        self.path = path
+        super().__init__(f"{path}: {message}" if path else message)
+
+
+class CompilationError(BondcosimError, RuntimeError):
+    """The system C compiler failed on generated code (its output is attached)."""
+
+    def __init__(self, message: str, output: str = ""):
+        self.output = output
+        super().__init__(message + (f"\n{output}" if output else ""))
+
+
+class SimulationError(BondcosimError, RuntimeError):
+    """A simulation failed (solver failure, NaN state, unsolvable algebraic loop)."""
+
+    def __init__(self, message: str, time: float | None = None):
+        self.time = time
+        super().__init__(message)

@@ -28,14 +28,23 @@ __all__ = ["assign_causality", "CausalAssignment", "Conflict"]
 
 @dataclass(frozen=True)
 class Conflict:
-    """One causal conflict: the element where it shows, its bonds, and why."""
+    """One causal conflict: the elements involved, their bonds, and why.
+
+    ``element`` is the element where the conflict showed; ``elements`` adds
+    the one at the other end of the bond when two ends disagree.
+    """
 
     element: str
     bonds: tuple
     reason: str
+    elements: tuple = ()
+
+    def __post_init__(self):
+        if not self.elements:
+            object.__setattr__(self, "elements", (self.element,))
 
     def __str__(self) -> str:
-        return f"{self.element} (bond{'s' if len(self.bonds) != 1 else ''} {', '.join(self.bonds)}): {self.reason}"
+        return f"{' / '.join(self.elements)} (bond{'s' if len(self.bonds) != 1 else ''} {', '.join(self.bonds)}): {self.reason}"
 
 
 @dataclass
@@ -88,11 +97,12 @@ class _Scap:
             out[key] = None if by is None else (EFFORT if by == end else FLOW)
         return out
 
-    def conflict(self, element: str, bonds, reason: str):
+    def conflict(self, element: str, bonds, reason: str, other: str | None = None):
         if element in self.conflicted:
             return
         self.conflicted.add(element)
-        self.conflicts.append(Conflict(element, tuple(bonds), reason))
+        elements = (element,) if other is None else (element, other)
+        self.conflicts.append(Conflict(element, tuple(bonds), reason, elements))
 
     def set_role(self, name: str, key: str, role: str, queue: deque) -> None:
         for k, bond, end in self.ports[name]:
@@ -109,7 +119,7 @@ class _Scap:
                 word = "effort" if role == EFFORT else "flow"
                 self.conflict(name, [bond.name],
                               f"{_kind(self.graph, name)} {name} must set the {word} on bond {bond.name}, "
-                              f"but {_kind(self.graph, other)} {other} at its other end already does")
+                              f"but {_kind(self.graph, other)} {other} at its other end already does", other)
             return
 
     def impose(self, name: str, roles: dict) -> None:
@@ -128,12 +138,20 @@ class _Scap:
             try:
                 completed = element.complete_roles(roles)
             except RoleConflict as exc:
-                bonds = [b.name for _, b, _ in self.ports[name]]
-                self.conflict(name, bonds, f"{element.kind} {name}: {exc}")
+                self._role_conflict(name, exc)
                 continue
             for key, role in completed.items():
                 if roles.get(key) is None and role is not None:
                     self.set_role(name, key, role, queue)
+
+    def _role_conflict(self, name: str, exc: RoleConflict) -> None:
+        ports = self.ports[name]
+        other = None
+        if len(ports) == 1:  # a one-port: the element across its bond is the other party
+            _, bond, end = ports[0]
+            other = bond.head.element if end == "tail" else bond.tail.element
+        element = self.graph.elements[name]
+        self.conflict(name, [b.name for _, b, _ in ports], f"{element.kind} {name}: {exc}", other)
 
     def run(self) -> CausalAssignment:
         g = self.graph
@@ -169,7 +187,7 @@ class _Scap:
             try:
                 e.complete_roles(self.roles_of(e.name))
             except RoleConflict as exc:
-                self.conflict(e.name, [b.name for _, b, _ in self.ports[e.name]], f"{e.kind} {e.name}: {exc}")
+                self._role_conflict(e.name, exc)
         if self.conflicts:
             raise CausalityError(self.conflicts)
         return self.result

@@ -25,12 +25,13 @@ from __future__ import annotations
 
 import networkx as nx
 import sympy as sp
+from sympy.solvers.solveset import NonlinearError
 
 from .causality import assign_causality
 from .elements.base import PortVars
 from .errors import DerivationError
 from .graph import BondGraph, _prepare_all
-from .symbols import TIME, as_expression, sym
+from .symbols import STEP, TIME, as_expression, sym
 from .system import CausalityReport, StateEquations
 
 __all__ = ["derive"]
@@ -80,7 +81,7 @@ def derive(graph: BondGraph) -> StateEquations:
     algebraic = tuple(resolver.algebraic)
     residuals = tuple(resolver.residuals)
     allowed = set(x) | {names[i.name] for i in inputs} | {names[p] for p in params} | set(algebraic) \
-        | {d.symbol for d in held_decls} | {TIME, sym("h_step")}
+        | {d.symbol for d in held_decls} | {TIME}
     _check_free_symbols(graph, rates, h, residuals, allowed, state_decls, outputs)
 
     units = {s.symbol.name: s.unit for s in state_decls}
@@ -108,7 +109,7 @@ def derive(graph: BondGraph) -> StateEquations:
     op = graph.operating_point
     report = CausalityReport(
         derivative_storage=tuple(assignment.derivative),
-        algebraic_loops=tuple(tuple(str(v) for v in loop) for loop in resolver.loops),
+        algebraic_loops=tuple(_bonds_of(loop) for loop in resolver.loops),
         loops_solved_symbolically=tuple(resolver.loop_linear),
         arbitrary=tuple(assignment.arbitrary),
     )
@@ -117,7 +118,7 @@ def derive(graph: BondGraph) -> StateEquations:
         params=tuple(names[p] for p in params), outputs=tuple(outputs), f=tuple(rates), h=tuple(h),
         algebraic=algebraic, residuals=residuals,
         held=tuple(d.symbol for d in held_decls), held_update=tuple(held_update),
-        step=sym("h_step"), fixed_step=min(steps) if steps else None,
+        step=STEP, fixed_step=min(steps) if steps else None,
         param_values={p.name: p.value for p in params.values()},
         initial_state={s.symbol.name: op.get(s.symbol.name, s.initial) for s in state_decls},
         input_defaults={i.name: op.get(i.name, i.default) for i in inputs},
@@ -188,7 +189,7 @@ class _Resolver:
         try:
             A, b = sp.linear_eq_to_matrix(residuals, tears)
             linear = not any(A.has(t) or b.has(t) for t in tears)
-        except (sp.polys.polyerrors.NonlinearError, ValueError):
+        except (NonlinearError, ValueError):
             linear = False
         self.loop_linear.append(linear)
         if linear:
@@ -240,11 +241,14 @@ def _eliminate_dependent(dependent, resolver, x, rates, names, graph):
                 f"{'momentum' if decl.state_name.startswith('p') else 'state'} follows input(s) "
                 f"{', '.join(bad_inputs)} directly, which would need their time derivative; "
                 "add compliance or resistance between the source and the element", element=decl.element)
-        unsupported = [s for s in S.free_symbols if s in dependent or s in set(resolver.algebraic)]
+        dependent_states = {names[d.state_name] for d in dependent.values()}
+        unsupported = [s for s in S.free_symbols
+                       if s in dependent or s in dependent_states or s in set(resolver.algebraic)]
         if unsupported:
-            raise DerivationError(f"{decl.element} is in derivative causality inside an algebraic loop "
-                                  f"({', '.join(map(str, unsupported))}); this structure is not supported",
-                                  element=decl.element)
+            raise DerivationError(
+                f"{decl.element} is in derivative causality (bond {decl.bond}) and its stored quantity "
+                f"depends on {', '.join(sorted(map(str, unsupported)))}, an eliminated state or an algebraic "
+                "unknown; this structure is not supported", element=decl.element)
         stored_exprs[decl.state_name] = S
         rhs = sum((sp.diff(S, xj) * fj for xj, fj in zip(x, rates) if S.has(xj)), sp.Integer(0))
         rhs += sp.diff(S, TIME)
@@ -253,7 +257,7 @@ def _eliminate_dependent(dependent, resolver, x, rates, names, graph):
     try:
         A, b = sp.linear_eq_to_matrix(equations, unknowns)
         linear = not any(A.has(u) or b.has(u) for u in unknowns)
-    except (sp.polys.polyerrors.NonlinearError, ValueError):
+    except (NonlinearError, ValueError):
         linear = False
     if not linear:
         resolver.algebraic += unknowns
@@ -261,8 +265,22 @@ def _eliminate_dependent(dependent, resolver, x, rates, names, graph):
         return rates, stored_exprs, {}
     values = [b[0] / A[0, 0]] if len(unknowns) == 1 else list(A.LUsolve(b))
     solution = {u: sp.together(v) for u, v in zip(unknowns, values)}
-    rates = [r.xreplace(solution) for r in rates]
+    rates = [_tidy(r.xreplace(solution)) if r.has(*unknowns) else r for r in rates]
     return rates, stored_exprs, solution
+
+
+def _tidy(expr: sp.Expr, max_ops: int = 200) -> sp.Expr:
+    """Cancel a small rational expression (a local, bounded simplification;
+    the reduced rate of dependent storage reads ``(tau - b w)/(J1 + n^2 J2)``
+    instead of a difference of fractions).  Large expressions are left alone."""
+    if sp.count_ops(expr) > max_ops:
+        return expr
+    return sp.factor_terms(sp.cancel(expr))
+
+
+def _bonds_of(variables) -> tuple[str, ...]:
+    """Bond names of bond variables (``e_b3`` -> ``b3``), sorted and unique."""
+    return tuple(sorted({str(v)[2:] for v in variables}))
 
 
 def _outputs(graph, names, resolver, stored, state_decls):

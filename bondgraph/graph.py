@@ -14,7 +14,7 @@ from .elements import Element
 from .elements.base import InputDecl
 from .errors import DuplicateNameError, ExpressionError, GraphError, JunctionError, PortError
 from .params import Param
-from .symbols import TIME, sym
+from .symbols import STEP, TIME, sym
 
 __all__ = ["BondGraph", "Bond", "Port", "Output"]
 
@@ -144,7 +144,7 @@ class BondGraph:
             For a TF/GY the port is optional: a bond into it goes to port
             ``"1"``, a bond out of it leaves port ``"2"``.
         name : str, optional
-            Bond name (default ``b1``, ``b2``...).
+            Bond name (default ``bond1``, ``bond2``...).
 
         Returns
         -------
@@ -152,9 +152,9 @@ class BondGraph:
         """
         if name is None:
             k = len(self.bonds) + 1
-            while f"b{k}" in self.bonds or f"b{k}" in self.elements:
+            while f"bond{k}" in self.bonds or f"bond{k}" in self.elements:
                 k += 1
-            name = f"b{k}"
+            name = f"bond{k}"
         elif not isinstance(name, str) or not name.isidentifier():
             raise GraphError(f"bond name {name!r} is not a valid identifier")
         if name in self.bonds or name in self.elements:
@@ -246,13 +246,13 @@ class BondGraph:
     def names(self) -> dict[str, sp.Basic]:
         """The graph-wide symbol table (name -> symbol or expression).
 
-        Holds ``t``, every parameter, state, input and held variable, the
+        Holds ``t``, ``h_step`` (integration sub-step), every parameter, state, input and held variable, the
         bond variables ``e_<bond>``/``f_<bond>`` and, for one-port elements,
         ``e_<element>``/``f_<element>`` (flow in the element's natural
         direction).  Raises DuplicateNameError on a name used twice.
         """
-        table: dict[str, sp.Basic] = {"t": TIME}
-        kinds: dict[str, str] = {"t": "time"}
+        table: dict[str, sp.Basic] = {"t": TIME, "h_step": STEP}
+        kinds: dict[str, str] = {"t": "time", "h_step": "the integration sub-step"}
 
         def put(name, what, value=None):
             if name in table:

@@ -20,7 +20,7 @@ from sympy.parsing.sympy_parser import (
 
 from .errors import ExpressionError
 
-__all__ = ["sym", "parse", "as_expression", "FUNCTIONS", "TIME"]
+__all__ = ["sym", "parse", "as_expression", "FUNCTIONS", "TIME", "STEP"]
 
 #: Functions a user expression may call, by name.
 FUNCTIONS: dict[str, object] = {
@@ -50,6 +50,8 @@ def sym(name: str) -> sp.Symbol:
 
 #: Time, s.
 TIME = sym("t")
+#: Integration sub-step of held-variable updates, s.
+STEP = sym("h_step")
 
 
 def parse(text: str, names: Mapping[str, sp.Basic], *, owner: str) -> sp.Expr:

@@ -45,7 +45,7 @@ class CausalityReport:
         Storage elements in derivative causality (dependent storage), which the
         derivation eliminated.
     algebraic_loops : tuple of tuple of str
-        Each loop as the bond variables (``e_b3``, ``f_b7``...) on it.
+        Each loop as the bonds whose variables form it.
     loops_solved_symbolically : tuple of bool
         One flag per loop: linear loops are solved symbolically, the others
         numerically at each evaluation.
@@ -65,7 +65,7 @@ class CausalityReport:
             lines.append(f"derivative causality: {elem} on bond {bond} (dependent storage, eliminated)")
         for loop, sym in zip(self.algebraic_loops, self.loops_solved_symbolically):
             how = "solved symbolically" if sym else "solved numerically at each evaluation"
-            lines.append(f"algebraic loop through {', '.join(loop)} ({how})")
+            lines.append(f"algebraic loop through bonds {', '.join(loop)} ({how})")
         return "\n".join(lines) if lines else "integral causality throughout, no algebraic loops"
 
 
@@ -130,7 +130,7 @@ class StateEquations:
     residuals: tuple = ()
     held: tuple = ()
     held_update: tuple = ()
-    step: sp.Symbol = field(default_factory=lambda: sp.Symbol("h_step", positive=True))
+    step: sp.Symbol = field(default_factory=lambda: sp.Symbol("h_step", real=True))
     fixed_step: float | None = None
     param_values: Mapping = field(default_factory=dict)
     initial_state: Mapping = field(default_factory=dict)
@@ -183,3 +183,30 @@ class StateEquations:
     def is_smooth(self) -> bool:
         """True when an adaptive ODE solver may integrate the model."""
         return self.fixed_step is None and not self.held
+
+    # -- presentation and analysis -----------------------------------------
+    def pretty(self, *, simplify: bool = False) -> str:
+        """The equations as readable text (see :func:`bondgraph.printing.pretty`)."""
+        from .printing import pretty
+        return pretty(self, simplify=simplify)
+
+    def latex(self) -> str:
+        """The equations as a LaTeX ``aligned`` block."""
+        from .printing import latex
+        return latex(self)
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary (names, parameter values, expressions as strings)."""
+        from .printing import equations_to_dict
+        return equations_to_dict(self)
+
+    def linearize(self, operating_point=None, **kwargs):
+        """Linearise at `operating_point` (see :func:`bondgraph.linearize.linearize`)."""
+        from .linearize import linearize
+        return linearize(self, operating_point, **kwargs)
+
+    def __str__(self) -> str:
+        return self.pretty()
+
+    def _repr_latex_(self) -> str:
+        return "$" + self.latex() + "$"

@@ -190,9 +190,9 @@ class Element:
             return dict(roles)
         for port, role in roles.items():
             if role is not None and role != fixed[port]:
-                raise RoleConflict(
-                    f"must set the {_word(fixed[port])} at port {port or '(only)'}, "
-                    f"but the element at the other end of the bond sets it too")
+                where = f"at port {port}" if port else "on its bond"
+                raise RoleConflict(f"must set the {_word(fixed[port])} {where}, "
+                                   "but the element at the other end of the bond sets it too")
         return dict(fixed)
 
     # -- equations ---------------------------------------------------------

@@ -1,0 +1,58 @@
+"""Ready-made bond graphs, by name.
+
+``names()`` lists them, ``build(name)`` returns a fresh graph, ``describe(name)``
+gives one line.  Textbook graphs: ``mass-spring-damper``, ``dc-motor``,
+``rlc``, ``coupled-tanks``, ``geared-inertias`` (derivative causality),
+``resistor-loop`` and ``resistor-loop-nl`` (algebraic loops, linear and
+nonlinear), ``chain`` (the derivation benchmark, 5 stages).
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+from .chain import mass_spring_chain
+from .textbook import coupled_tanks, dc_motor, geared_inertias, mass_spring_damper, resistor_loop, rlc_series
+
+__all__ = ["build", "names", "describe", "register", "mass_spring_chain", "mass_spring_damper", "dc_motor",
+           "rlc_series", "coupled_tanks", "geared_inertias", "resistor_loop"]
+
+_MODELS: dict[str, tuple[Callable, str]] = {}
+
+
+def register(name: str, builder: Callable, description: str) -> None:
+    """Make `builder` (no-argument callable returning a BondGraph) available as `name`."""
+    _MODELS[name] = (builder, description)
+
+
+register("mass-spring-damper", mass_spring_damper, "force on a mass with spring and damper (2 states)")
+register("dc-motor", dc_motor, "DC motor, GY torque constant and TF gearbox to a damped load (2 states)")
+register("rlc", rlc_series, "series RLC circuit driven by a voltage source (2 states)")
+register("coupled-tanks", coupled_tanks, "two tanks with nonlinear Torricelli orifices (2 states)")
+register("geared-inertias", geared_inertias, "two rigidly geared inertias: derivative causality (1 state)")
+register("resistor-loop", resistor_loop, "resistive divider feeding an RC branch: linear algebraic loop")
+register("resistor-loop-nl", lambda: resistor_loop(nonlinear=True),
+         "the same with a cubic resistor: loop solved numerically")
+register("chain", mass_spring_chain, "5-stage mass-spring-damper chain (the derivation benchmark)")
+
+
+def names() -> list[str]:
+    """Names of the built-in models."""
+    return list(_MODELS)
+
+
+def describe(name: str) -> str:
+    """One line describing model `name`."""
+    return _lookup(name)[1]
+
+
+def build(name: str):
+    """A fresh copy of built-in model `name`."""
+    return _lookup(name)[0]()
+
+
+def _lookup(name: str):
+    try:
+        return _MODELS[name]
+    except KeyError:
+        from ..errors import GraphError
+        raise GraphError(f"no built-in model named {name!r}; available: {', '.join(_MODELS)}") from None

@@ -155,10 +155,6 @@ class Element:
         """(name, unit, initial, description) of held (discrete) variables."""
         return []
 
-    def local_names(self, ports: Mapping[str, PortVars]) -> dict[str, sp.Basic]:
-        """Names the element's own expressions may use besides the graph's."""
-        return {}
-
     @property
     def fixed_step(self) -> float | None:
         """Largest integration step this element honours, s (``None``: any)."""

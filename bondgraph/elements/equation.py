@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 
 from ..errors import DerivationError
+from ..symbols import sym
 from .base import EFFORT, FLOW, Contribution, Element, HeldDecl, RoleConflict, StateDecl, param_dict
 
 __all__ = ["EquationElement"]
@@ -122,12 +123,20 @@ class EquationElement(Element):
         return [(s, self.units.get(s, ""), self.initial.get(s, 0.0),
                  self.descriptions.get(s, f"held variable of {self.name}")) for s in self.held]
 
-    def local_names(self, ports):
+    def _placeholders(self) -> dict:
+        """Stand-ins for the port variables, replaced by the bond variables in :meth:`contribute`."""
         names = {}
-        for p, pv in ports.items():
-            names[f"e_{p}"] = pv.e
-            names[f"f_{p}"] = pv.flow
+        for p in self.ports:
+            names[f"e_{p}"] = sym(f"{self.name}.e_{p}")
+            names[f"f_{p}"] = sym(f"{self.name}.f_{p}")
         return names
+
+    def prepare(self, names):
+        local = dict(names)
+        local.update(self._placeholders())
+        self._outputs = {key: self._expr(text, local, f"output {key}") for key, text in self.outputs.items()}
+        self._rates = {s: self._expr(text, local, f"rate of {s}") for s, text in self.states.items()}
+        self._updates = {v: self._expr(text, local, f"update of {v}") for v, text in self.held.items()}
 
     def fixed_roles(self):
         return dict(self.roles)
@@ -140,24 +149,24 @@ class EquationElement(Element):
         return dict(self.roles)
 
     def contribute(self, ports, names):
-        local = dict(names)
-        local.update(self.local_names(ports))
+        actual = {}
+        for p, pv in ports.items():
+            actual[sym(f"{self.name}.e_{p}")] = pv.e
+            actual[sym(f"{self.name}.f_{p}")] = pv.flow
         out = Contribution()
-        for key, text in self.outputs.items():
+        for key, value in self._outputs.items():
             kind, _, port = key.partition("_")
             pv = ports[port]
-            value = self._expr(text, local, f"output {key}")
+            value = value.xreplace(actual)
             out.defs.append((pv.e, value) if kind == "e" else (pv.f, pv.sign * value))
-        for state, text in self.states.items():
-            out.states.append(StateDecl(names[state], self._expr(text, local, f"rate of {state}"),
-                                        self.initial.get(state, 0.0), self.units.get(state, ""),
-                                        self.descriptions.get(state, f"state of {self.name}"),
-                                        (self.name, state)))
-        for var, text in self.held.items():
-            out.held.append(HeldDecl(names[var], self._expr(text, local, f"update of {var}"),
-                                     self.initial.get(var, 0.0), self.units.get(var, ""),
-                                     self.descriptions.get(var, f"held variable of {self.name}"),
-                                     (self.name, var)))
+        for state, rate in self._rates.items():
+            out.states.append(StateDecl(names[state], rate.xreplace(actual), self.initial.get(state, 0.0),
+                                        self.units.get(state, ""),
+                                        self.descriptions.get(state, f"state of {self.name}"), (self.name, state)))
+        for var, update in self._updates.items():
+            out.held.append(HeldDecl(names[var], update.xreplace(actual), self.initial.get(var, 0.0),
+                                     self.units.get(var, ""),
+                                     self.descriptions.get(var, f"held variable of {self.name}"), (self.name, var)))
         return out
 
     def _spec(self):

@@ -107,9 +107,12 @@ class _Modulated(Element):
     def fixed_roles(self):
         return {"": self._role}
 
+    def prepare(self, names):
+        self._value = self._expr(self.expression, names, "modulation")
+
     def contribute(self, ports, names):
         port = ports[""]
-        value = self._expr(self.expression, names, "modulation")
+        value = self._value
         if self._role == EFFORT:
             return Contribution(defs=[(port.e, value)])
         return Contribution(defs=[(port.f, port.sign * value)])

@@ -20,18 +20,23 @@ __all__ = [
     "Zero", "One", "CField", "IField", "EquationElement",
     "BondcosimError", "GraphError", "CausalityError", "DerivationError", "DuplicateNameError",
     "ExpressionError", "JunctionError", "ParameterError", "PortError", "SchemaError",
-    "UnknownElementKindError", "simulate", "compile_model", "linearize",
+    "UnknownElementKindError", "simulate", "compile_model", "linearize", "LinearModel",
 ]
 
 
-def __getattr__(name):  # numerics are imported lazily: fast CLI start
-    if name == "simulate":
-        from .simulate import simulate
-        return simulate
-    if name == "compile_model":
-        from .evaluate import compile_model
-        return compile_model
-    if name == "linearize":
-        from .linearize import linearize
-        return linearize
-    raise AttributeError(f"module 'bondgraph' has no attribute {name!r}")
+_LAZY = {  # numerics are imported on first use: fast CLI start
+    "simulate": ("simulation", "simulate"),
+    "compile_model": ("evaluate", "compile_model"),
+    "linearize": ("linearization", "linearize"),
+    "LinearModel": ("linear_model", "LinearModel"),
+}
+
+
+def __getattr__(name):
+    if name not in _LAZY:
+        raise AttributeError(f"module 'bondgraph' has no attribute {name!r}")
+    import importlib
+    module, attr = _LAZY[name]
+    value = getattr(importlib.import_module(f".{module}", __name__), attr)
+    globals()[name] = value
+    return value

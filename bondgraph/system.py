@@ -201,8 +201,8 @@ class StateEquations:
         return equations_to_dict(self)
 
     def linearize(self, operating_point=None, **kwargs):
-        """Linearise at `operating_point` (see :func:`bondgraph.linearize.linearize`)."""
-        from .linearize import linearize
+        """Linearise at `operating_point` (see :func:`bondgraph.linearization.linearize`)."""
+        from .linearization import linearize
         return linearize(self, operating_point, **kwargs)
 
     def __str__(self) -> str:

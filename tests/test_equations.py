@@ -6,8 +6,7 @@ ch. 5 (SCAP), 7.3 (derivative causality); each stated in its test.
 import sympy as sp
 import pytest
 
-from bondgraph import BondGraph, C, CField, EquationElement, GY, I, IField, MGY, MSe, MSf, MTF, One, Param, R, \
-    Se, Sf, TF, Zero
+from bondgraph import BondGraph, C, CField, EquationElement, I, IField, MGY, MSe, MSf, MTF, One, R, Se, Sf
 from bondgraph import library
 
 

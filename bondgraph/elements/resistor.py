@@ -70,10 +70,12 @@ class R(Element):
                                  else (FLOW, self._e, self._f))
         law = self._expr(self.effort_law if given == EFFORT else self.flow_law, local, "law")
         self._laws = {given: law}
-        try:
-            solutions = sp.solve(sp.Eq(law, unknown), known)
-        except NotImplementedError:
-            solutions = []
+        solutions = []
+        if not law.has(sp.Piecewise, sp.Heaviside, sp.Max, sp.Min, sp.floor, sp.ceiling):
+            try:  # switched laws are not inverted: their causality stays as given
+                solutions = sp.solve(sp.Eq(law, unknown), known)
+            except NotImplementedError:
+                solutions = []
         if len(solutions) == 1 and not solutions[0].has(sp.Piecewise):
             self._laws[FLOW if given == EFFORT else EFFORT] = solutions[0]
 

@@ -9,7 +9,7 @@ bonds, and derive explicit state equations with :meth:`BondGraph.equations`
 from .elements import (C, CField, EquationElement, GY, I, IField, MGY, MSe, MSf, MTF, One, R, Se, Sf, TF,
                        Zero, Element, ELEMENT_KINDS)
 from .errors import (BondcosimError, CausalityError, DerivationError, DuplicateNameError, ExpressionError,
-                     GraphError, JunctionError, ParameterError, PortError, SchemaError, UnknownElementKindError)
+                     GraphError, JunctionError, ParameterError, PortError, SchemaError, UnknownElementKindError, UnknownNameError)
 from .graph import Bond, BondGraph, Output, Port
 from .params import DOMAINS, Param
 from .system import CausalityReport, StateEquations
@@ -20,7 +20,7 @@ __all__ = [
     "Zero", "One", "CField", "IField", "EquationElement",
     "BondcosimError", "GraphError", "CausalityError", "DerivationError", "DuplicateNameError",
     "ExpressionError", "JunctionError", "ParameterError", "PortError", "SchemaError",
-    "UnknownElementKindError", "simulate", "compile_model", "linearize", "LinearModel",
+    "UnknownElementKindError", "UnknownNameError", "simulate", "compile_model", "linearize", "LinearModel",
 ]
 
 

@@ -21,6 +21,7 @@ __all__ = [
     "SchemaError",
     "CompilationError",
     "SimulationError",
+    "UnknownNameError",
 ]
 
 
@@ -161,3 +162,23 @@ class SimulationError(BondcosimError, RuntimeError):
     def __init__(self, message: str, time: float | None = None):
         self.time = time
         super().__init__(message)
+
+
+class UnknownNameError(BondcosimError, ValueError):
+    """A name (input, state) the model does not have.
+
+    Attributes
+    ----------
+    kind : str
+        ``"input"`` or ``"state"``.
+    name : str
+        The unknown name.
+    known : list of str
+        The names the model has.
+    """
+
+    def __init__(self, kind: str, name: str, known, model: str = ""):
+        self.kind, self.name, self.known = kind, name, list(known)
+        where = f" of model {model!r}" if model else ""
+        super().__init__(f"unknown {kind} {name!r}{where}; known {kind}s are "
+                         f"{', '.join(self.known) or '(none)'}")

@@ -1,0 +1,457 @@
+"""Simulation of state equations over a time span.
+
+:func:`simulate` integrates :math:`\\dot x = f(t, x, u, z, d, p)` from a
+:class:`~bondgraph.system.StateEquations` (compiled by
+:func:`bondgraph.evaluate.compile_model`) and returns a
+:class:`~bondgraph.results.SimulationResult` with every state, algebraic
+unknown, held variable, input and output by name.
+
+Two integration regimes
+-----------------------
+Smooth models (``eqs.is_smooth``: no held variables, no ``fixed_step``)
+    :func:`scipy.integrate.solve_ivp`.  ``method="auto"`` evaluates the
+    compiled Jacobian at the initial point and takes the fastest decay rate
+    :math:`\\lambda_f = \\max_i(-\\mathrm{Re}\\,\\lambda_i)`; if
+    :math:`\\lambda_f (t_1 - t_0) > 10^3` the model is stiff and ``"Radau"``
+    (up to 200 states; ``"BDF"`` above, cheaper per step) is used with the
+    compiled Jacobian, otherwise ``"LSODA"`` (which still switches to BDF by
+    itself should stiffness appear later; it is given the Jacobian too).
+    Above 400 states the eigenvalue test is skipped and ``"LSODA"`` is used.
+    Any ``solve_ivp`` method may be passed instead; ``"RK4"`` integrates a
+    smooth model with the fixed-step scheme below.  Zero-order-hold table
+    inputs are piecewise constant, so the solver is restarted at each table
+    breakpoint instead of stepping over the jump.
+Non-smooth models (held variables or ``fixed_step``)
+    Classic fixed-step RK4.  Each output interval is divided into equal
+    sub-steps no longer than ``min(dt, fixed_step)`` (whichever are given).
+    At the start of every sub-step the held variables are replaced by
+    ``held_update`` (with ``step`` = the sub-step) and held over it.  Inputs
+    are zero-order held over each output interval (as a co-simulation master
+    holds them over a communication step).
+
+Inputs
+------
+``inputs`` maps input names to a float, a callable ``t -> float``, a string
+expression in ``t`` (e.g. ``"0.5*sin(2*pi*t)"``), a sympy expression in ``t``,
+or a table ``(times, values)``.  Tables are **zero-order hold**: the value
+at ``t`` is ``values[k]`` for ``times[k] <= t < times[k+1]``, ``values[0]``
+before the first time and ``values[-1]`` after the last.  (For linear
+interpolation pass ``lambda t: numpy.interp(t, times, values)``.)  An input
+not given takes its ``input_functions`` entry, else its ``input_defaults``.
+
+Recorded values
+---------------
+At each output time: the states, the algebraic unknowns (solved there), the
+held values in effect over the last sub-step (``held_initial`` at the start),
+the inputs (tables right-continuous) and the outputs ``h`` of those.  An
+output whose name is also a state (or another signal) gets the suffix
+``_output``.
+"""
+from __future__ import annotations
+
+import math
+import numbers
+import sys
+import time as _time
+
+import numpy as np
+import sympy as sp
+
+from .errors import ExpressionError, SimulationError, UnknownNameError
+from .evaluate import compile_model
+from .results import SimulationResult
+from .symbols import as_expression
+from .system import StateEquations
+
+__all__ = ["simulate", "IVP_METHODS"]
+
+#: Methods of :func:`scipy.integrate.solve_ivp` accepted by name.
+IVP_METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
+_IMPLICIT = ("Radau", "BDF", "LSODA")
+_STIFF_RATIO = 1e3          # lambda_f * span above which "auto" picks an implicit method
+_EIG_MAX_STATES = 400        # above: no eigenvalue test, LSODA detects stiffness itself
+_RADAU_MAX_STATES = 200
+_DEFAULT_POINTS = 1000       # output intervals when output_interval is not given (smooth)
+_MAX_DEFAULT_POINTS = 10000  # cap for non-smooth models
+
+
+def simulate(system, t_span, *, inputs=None, x0=None, params=None, method="auto", dt=None,
+             output_interval=None, backend="auto", rtol=1e-8, atol=1e-10,
+             progress=False) -> SimulationResult:
+    """Simulate a model over a time span.
+
+    Parameters
+    ----------
+    system : StateEquations or object with ``equations()``
+        The model.
+    t_span : (float, float)
+        Start and end time ``(t0, t1)``, s, with ``t1 > t0``.
+    inputs : dict str -> float | callable | str | sympy.Expr | (times, values), optional
+        Input signals (see the module docstring; tables are zero-order hold).
+    x0 : array_like, shape (n_states,), or dict str -> float, optional
+        Initial state; a dict overrides ``initial_state`` by name.  Default
+        ``initial_state`` (0 for states without an entry).
+    params : dict str -> float or array_like, shape (n_params,), optional
+        Parameters; a dict overrides ``param_values`` by name.
+    method : str or scipy OdeSolver class
+        ``"auto"`` (see the module docstring), ``"RK4"`` (fixed step), or a
+        :func:`~scipy.integrate.solve_ivp` method (smooth models only).
+    dt : float, s, optional
+        Largest fixed step (non-smooth models and ``"RK4"``); for the
+        ``solve_ivp`` methods, their ``max_step``.
+    output_interval : float, s, optional
+        Spacing of the recorded time points (the last one is ``t1``).
+        Default: span/1000 for smooth models; for fixed-step integration the
+        smallest multiple of the sub-step giving at most 10000 points.
+    backend : {"auto", "c", "numpy"}
+        Evaluator backend (:func:`bondgraph.evaluate.compile_model`).
+    rtol, atol : float
+        Tolerances of the ``solve_ivp`` methods (states in SI units).
+    progress : bool
+        Print a progress line to stderr.
+
+    Returns
+    -------
+    SimulationResult
+        ``info`` holds ``method``, ``backend``, ``nfev`` and ``sub_step`` (s,
+        fixed-step) or ``stiffness`` (:math:`\\lambda_f (t_1 - t_0)`, auto).
+
+    Raises
+    ------
+    UnknownNameError
+        An input (or ``x0`` state) name the model does not have; lists the known ones.
+    ExpressionError
+        An input string that does not parse or uses names other than ``t``,
+        or an input callable that fails at ``t0``.
+    ParameterError
+        An unknown parameter name or a non-finite parameter value.
+    ValueError
+        A wrong shape, span, step or method.
+    SimulationError
+        Solver failure, non-finite state (named), or an unsolvable algebraic loop.
+    """
+    eqs = system if isinstance(system, StateEquations) else system.equations()
+    model = compile_model(eqs, backend=backend)
+    t0, t1 = _span(t_span)
+    plan = _InputPlan(eqs, inputs, t0)
+    x_init = _initial_state(model, x0)
+    p = model.param_vector(params)
+    d0 = model.default_held.reshape(1, -1)
+    fixed = (not eqs.is_smooth) or method == "RK4"
+    if not eqs.is_smooth and method not in ("auto", "RK4"):
+        raise ValueError(f"model {eqs.name!r} is not smooth (held variables or fixed_step="
+                         f"{eqs.fixed_step}); it is integrated with fixed-step 'RK4', so method "
+                         f"must be 'auto' or 'RK4'; found {method!r}")
+    for label, value in (("dt", dt), ("output_interval", output_interval)):
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise ValueError(f"{label}: expected a positive number of seconds; found {value!r}")
+    bar = _Progress(progress, t0, t1, eqs.name)
+    try:
+        if fixed:
+            h_max = min([v for v in (dt, eqs.fixed_step) if v] or [output_interval or (t1 - t0) / _DEFAULT_POINTS])
+            if output_interval is None:
+                output_interval = h_max * max(1, math.ceil((t1 - t0) / _MAX_DEFAULT_POINTS / h_max - 1e-9))
+            times = _grid(t0, t1, output_interval)
+            X, D, info = _integrate_fixed(model, plan, x_init, d0, p, times, h_max, bar)
+        else:
+            times = _grid(t0, t1, output_interval or (t1 - t0) / _DEFAULT_POINTS)
+            X, info = _integrate_smooth(model, plan, x_init, p, d0, times, method, dt, rtol, atol, bar)
+            D = np.repeat(d0, times.size, axis=0)
+    finally:
+        bar.close()
+    info = {"backend": model.backend, **info}
+    return _assemble(model, plan, times, X, D, p, info)
+
+
+# -- arguments ------------------------------------------------------------------------
+
+def _span(t_span):
+    try:
+        t0, t1 = (float(v) for v in t_span)
+    except (TypeError, ValueError):
+        raise ValueError(f"t_span: expected (t0, t1) in seconds; found {t_span!r}") from None
+    if not (math.isfinite(t0) and math.isfinite(t1) and t1 > t0):
+        raise ValueError(f"t_span: expected finite t0 < t1; found ({t0}, {t1})")
+    return t0, t1
+
+
+def _grid(t0, t1, interval):
+    n = int(math.floor((t1 - t0) / interval + 1e-9))
+    times = t0 + interval * np.arange(n + 1)
+    if t1 - times[-1] > 1e-9 * interval:
+        times = np.append(times, t1)
+    else:
+        times[-1] = t1
+    return times
+
+
+def _initial_state(model, x0):
+    names = model.state_names
+    if x0 is None:
+        x = model.default_state.copy()
+    elif isinstance(x0, dict):
+        x = model.default_state.copy()
+        for name, value in x0.items():
+            if name not in model.state_index:
+                raise UnknownNameError("state", name, names, model.equations.name)
+            x[model.state_index[name]] = float(value)
+    else:
+        x = np.array(x0, dtype=float)
+        if x.shape != (len(names),):
+            raise ValueError(f"x0: expected shape ({len(names)},) (states {', '.join(names)}); "
+                             f"found {x.shape}")
+    bad = [n for n, v in zip(names, x) if not math.isfinite(v)]
+    if bad:
+        raise ValueError(f"x0: non-finite initial value of state(s) {', '.join(bad)}")
+    return x
+
+
+class _InputPlan:
+    """Input vector u(t) from constants, functions of t and zero-order-hold tables."""
+
+    def __init__(self, eqs, inputs, t0):
+        names = eqs.input_names
+        given = dict(inputs or {})
+        for name in given:
+            if name not in names:
+                raise UnknownNameError("input", name, names, eqs.name)
+        self._t = eqs.t
+        self.base = np.array([float(eqs.input_defaults.get(n, 0.0)) for n in names])
+        self.funcs, self.tables = [], []
+        for i, name in enumerate(names):
+            if name in given:
+                spec = given[name]
+            else:
+                spec = eqs.input_functions.get(name, eqs.input_defaults.get(name, 0.0))
+            self._add(i, name, spec, t0)
+        self.breakpoints = sorted({float(b) for _, tt, _ in self.tables for b in tt[1:]})
+
+    def _add(self, i, name, spec, t0):
+        owner = f"input {name!r}"
+        if isinstance(spec, bool) or spec is None:
+            raise ExpressionError(f"{owner}: expected a number, callable, expression or "
+                                  f"(times, values) table; found {spec!r}", owner=name)
+        if isinstance(spec, numbers.Real):
+            self.base[i] = float(spec)
+            return
+        if isinstance(spec, (str, sp.Basic)):
+            expr = as_expression(spec, {"t": self._t}, owner=owner)
+            if not expr.free_symbols:
+                self.base[i] = float(expr)
+                return
+            fn = sp.lambdify(self._t, expr, modules="numpy")
+            self.funcs.append((i, lambda t, fn=fn: float(fn(t)), name, spec))
+        elif callable(spec):
+            self.funcs.append((i, lambda t, fn=spec: float(fn(t)), name, spec))
+        elif isinstance(spec, (tuple, list)) and len(spec) == 2:
+            self.tables.append((i, *_table(name, spec)))
+            return
+        else:
+            raise ExpressionError(f"{owner}: expected a number, callable, string in t, sympy "
+                                  f"expression or (times, values) table; found "
+                                  f"{type(spec).__name__}", owner=name)
+        i, fn, _, text = self.funcs[-1]
+        try:
+            value = fn(t0)
+        except Exception as exc:   # a user callable may raise anything
+            raise ExpressionError(f"{owner}: evaluating {text!r} at t = {t0} failed: "
+                                  f"{exc.__class__.__name__}: {exc}", owner=name,
+                                  expression=str(text)) from None
+        if not math.isfinite(value):
+            raise ExpressionError(f"{owner}: {text!r} is {value} at t = {t0}", owner=name,
+                                  expression=str(text))
+
+    def vector(self, t, hold_from=None):
+        """u at time t, shape (1, n_inputs); tables evaluated at `hold_from` if given."""
+        u = self.base.copy()
+        for i, fn, _, _ in self.funcs:
+            u[i] = fn(t)
+        tt = t if hold_from is None else hold_from
+        for i, times, values in self.tables:
+            u[i] = values[max(0, np.searchsorted(times, tt, side="right") - 1)]
+        return u.reshape(1, -1)
+
+    def matrix(self, times):
+        """u at each time, shape (n_times, n_inputs)."""
+        U = np.repeat(self.base.reshape(1, -1), times.size, axis=0)
+        for i, fn, _, _ in self.funcs:
+            U[:, i] = [fn(t) for t in times]
+        for i, tt, values in self.tables:
+            U[:, i] = values[np.maximum(0, np.searchsorted(tt, times, side="right") - 1)]
+        return U
+
+
+def _table(name, spec):
+    times, values = (np.asarray(v, dtype=float) for v in spec)
+    if times.ndim != 1 or times.shape != values.shape or times.size == 0:
+        raise ValueError(f"input {name!r}: a table must be (times, values), two 1-D arrays of "
+                         f"equal length; found shapes {times.shape} and {values.shape}")
+    if not (np.isfinite(times).all() and np.isfinite(values).all()):
+        raise ValueError(f"input {name!r}: table contains non-finite numbers")
+    if np.any(np.diff(times) <= 0):
+        raise ValueError(f"input {name!r}: table times must be strictly increasing")
+    return times, values
+
+
+# -- integration ------------------------------------------------------------------------
+
+def _check_finite(model, x, t, what="state"):
+    if not np.isfinite(x).all():
+        bad = [n for n, v in zip(model.state_names, np.ravel(x)) if not math.isfinite(v)]
+        raise SimulationError(f"model {model.equations.name!r}: non-finite {what} of "
+                              f"{', '.join(bad)} at t = {t:.9g} s", time=float(t))
+
+
+def _choose_method(model, plan, x, p, d, t0, span):
+    nx = x.size
+    if nx > _EIG_MAX_STATES:
+        return "LSODA", None
+    J = model.jac_x(x, plan.vector(t0)[0], t=t0, p=p, d=d)
+    if not np.isfinite(J).all():
+        return "LSODA", None
+    fast = max(0.0, float(np.max(-np.linalg.eigvals(J).real)))
+    ratio = float(fast * span)
+    if ratio > _STIFF_RATIO:
+        return ("Radau" if nx <= _RADAU_MAX_STATES else "BDF"), ratio
+    return "LSODA", ratio
+
+
+def _integrate_smooth(model, plan, x0, p, d, times, method, dt, rtol, atol, bar):
+    from scipy.integrate import solve_ivp
+
+    t0, t1 = times[0], times[-1]
+    X = np.empty((times.size, x0.size))
+    X[0] = x0
+    info = {"method": method}
+    if x0.size == 0:
+        return X, {"method": None, "nfev": 0}
+    if method == "auto":
+        method, info["stiffness"] = _choose_method(model, plan, x0, p, d, t0, t1 - t0)
+    elif isinstance(method, str) and method not in IVP_METHODS:
+        raise ValueError(f"method: expected 'auto', 'RK4' or one of {', '.join(IVP_METHODS)}; "
+                         f"found {method!r}")
+    info["method"] = method if isinstance(method, str) else getattr(method, "__name__", str(method))
+    hold = [t0]
+    counts = {"nfev": 0, "njev": 0}
+
+    def rhs(t, x):
+        bar.update(t)
+        _check_finite(model, x, t)
+        x2 = np.ascontiguousarray(x, dtype=float).reshape(1, -1)
+        dx = model._call("f", np.array([t]), x2, plan.vector(t, hold[0]), p, d)[0]
+        _check_finite(model, dx, t, "time derivative")
+        counts["nfev"] += 1
+        return dx
+
+    def jac(t, x):
+        counts["njev"] += 1
+        return model.jac_x(x, plan.vector(t, hold[0])[0], t=t, p=p, d=d)
+
+    options = {"rtol": rtol, "atol": atol}
+    if dt is not None:
+        options["max_step"] = dt
+    if info["method"] in _IMPLICIT:
+        options["jac"] = jac
+    cuts = [t0, *[b for b in plan.breakpoints if t0 < b < t1], t1]
+    x = x0
+    for a, b in zip(cuts[:-1], cuts[1:]):
+        hold[0] = a   # tables keep their value at a over [a, b]
+        mask = (times > a) & (times <= b)
+        t_eval = times[mask]
+        if not t_eval.size or t_eval[-1] != b:
+            t_eval = np.append(t_eval, b)
+        sol = solve_ivp(rhs, (a, b), x, method=method, t_eval=t_eval, **options)
+        if sol.status < 0 or sol.y.shape[1] != t_eval.size:
+            tf = float(sol.t[-1]) if sol.t.size else a
+            raise SimulationError(f"model {model.equations.name!r}: {info['method']} failed at "
+                                  f"t = {tf:.9g} s: {sol.message}", time=tf)
+        X[mask] = sol.y.T[:mask.sum()]
+        x = sol.y[:, -1]
+    info.update(counts)
+    return X, info
+
+
+def _integrate_fixed(model, plan, x0, d0, p, times, h_max, bar):
+    """Classic RK4 with held variables updated at each sub-step start; one
+    compiled call per output interval (``bc_rk4``)."""
+    X = np.empty((times.size, x0.size))
+    D = np.empty((times.size, d0.shape[1]))
+    X[0], D[0] = x0, d0[0]
+    x, d = x0.reshape(1, -1).copy(), d0.copy()
+    nfev, h = 0, h_max
+    for k in range(times.size - 1):
+        ta, tb = times[k], times[k + 1]
+        bar.update(ta)
+        u = plan.vector(ta)   # zero-order hold over the output interval
+        m = max(1, math.ceil((tb - ta) / h_max - 1e-9))
+        h = (tb - ta) / m
+        model._rk4(ta, h, m, x, u, p, d)
+        nfev += 4 * m
+        _check_finite(model, x, tb)
+        X[k + 1], D[k + 1] = x[0], d[0]
+    return X, D, {"method": "RK4", "sub_step": float(h), "nfev": nfev}
+
+
+# -- result ---------------------------------------------------------------------------
+
+def _algebraic_along(model, times, X, U, D, p):
+    if not model.algebraic_names:
+        return np.empty((times.size, 0))
+    try:
+        return model.solve_algebraic(X, U, t=times, p=p, d=D)
+    except SimulationError:
+        pass
+    # batch start from the initial guess failed somewhere: continue row by row
+    Z = np.empty((times.size, len(model.algebraic_names)))
+    z = None
+    for k in range(times.size):
+        z = model.solve_algebraic(X[k], U[k], t=times[k], p=p, d=D[k], z0=z)
+        Z[k] = z
+    return Z
+
+
+def _assemble(model, plan, times, X, D, p, info):
+    eqs = model.equations
+    U = plan.matrix(times)
+    Z = _algebraic_along(model, times, X, U, D, p)
+    Y = (model.h(X, U, t=times, p=p, d=D, z=Z) if model.output_names
+         else np.empty((times.size, 0)))
+    signals, units, kinds = {}, {}, {}
+    for names, values, kind in ((model.state_names, X, "state"),
+                                (model.algebraic_names, Z, "algebraic"),
+                                (model.held_names, D, "held"),
+                                (model.input_names, U, "input"),
+                                (model.output_names, Y, "output")):
+        for j, name in enumerate(names):
+            key = name if name not in signals else f"{name}_{kind}"
+            signals[key], units[key], kinds[key] = values[:, j], eqs.units.get(name, ""), kind
+    info = {"model": eqs.name, **info}
+    return SimulationResult(times, signals, units=units, kinds=kinds, info=info)
+
+
+class _Progress:
+    """One self-overwriting line on stderr, at most every 0.2 s."""
+
+    def __init__(self, enabled, t0, t1, name):
+        self.enabled, self.t0, self.span, self.name = enabled, t0, t1 - t0, name
+        self._last = 0.0
+        if enabled:
+            self._write(t0)
+
+    def _write(self, t):
+        pct = 100.0 * min(1.0, max(0.0, (t - self.t0) / self.span))
+        sys.stderr.write(f"\rsimulate {self.name}: {pct:5.1f} %  t = {t:.6g} s")
+        sys.stderr.flush()
+
+    def update(self, t):
+        if self.enabled:
+            now = _time.monotonic()
+            if now - self._last >= 0.2:
+                self._last = now
+                self._write(t)
+
+    def close(self):
+        if self.enabled:
+            self._write(self.t0 + self.span)
+            sys.stderr.write("\n")
+            sys.stderr.flush()

@@ -111,7 +111,8 @@ class BondGraph:
             raise GraphError(f"input name {name!r} is not a valid identifier")
         if name in self.extra_inputs:
             raise DuplicateNameError(name, "input declared twice")
-        self.extra_inputs[name] = InputDecl(name, unit, float(default), None, description, (self.name, "input"))
+        default = Param(name, default).value  # a finite number, or a ParameterError naming the input
+        self.extra_inputs[name] = InputDecl(name, unit, default, None, description, (self.name, "input"))
         self._changed()
 
     def add_parameter(self, param: Param):

@@ -137,3 +137,34 @@ def test_bad_output_expression_names_the_output():
     g.add_output("speed", "p_m/mm")
     with pytest.raises(ExpressionError, match="output 'speed'.*mm"):
         g.equations()
+
+
+def test_non_numeric_source_value_and_input_default():
+    with pytest.raises(ParameterError, match="'F'"):
+        Se("F", [1.0])
+    g = BondGraph("inputs")
+    with pytest.raises(ParameterError, match="'u'"):
+        g.add_input("u", default="abc")
+
+
+def test_param_object_keeps_its_unit_and_description():
+    m = I("m", Param("m", 2.0, "kg", "cart mass"))
+    (param,) = m.parameters()
+    assert (param.value, param.unit, param.description) == (2.0, "kg", "cart mass")
+
+
+def test_field_initial_value_for_a_missing_port():
+    from bondgraph import CField, DerivationError
+    with pytest.raises(DerivationError, match="spring2.*for c, which are not ports"):
+        CField("spring2", ["a", "b"], energy="q_a**2 + q_b**2", initial={"c": 1.0})
+
+
+def test_source_value_of_numpy_type_round_trips_as_a_number():
+    import numpy as np
+    from bondgraph.io_json import graph_from_dict, graph_to_dict
+    g = BondGraph("np_value")
+    g.add(Se("F", np.int64(3)))
+    g.add(I("m", 1.0))
+    g.connect("F", "m")
+    again = graph_from_dict(graph_to_dict(g)).equations()
+    assert dict(again.input_defaults) == {"F": 3.0} and not again.input_functions

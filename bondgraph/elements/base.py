@@ -249,5 +249,17 @@ def param_dict(params, owner: str) -> dict[str, Param]:
     return out
 
 
+def element_param(value, name: str, unit: str | None, default_unit: str, description: str) -> Param:
+    """The parameter an element owns under its own name.
+
+    `value` is a number or a :class:`Param`, whose unit and description are
+    kept (an explicit `unit` wins, then the Param's, then `default_unit`).
+    """
+    if isinstance(value, Param):
+        return Param(name, value.value, unit if unit is not None else (value.unit or default_unit),
+                     value.description or description)
+    return Param(name, value, unit if unit is not None else default_unit, description)
+
+
 def unit_of(domain_name: str, quantity: str) -> str:
     return getattr(domain(domain_name), quantity)

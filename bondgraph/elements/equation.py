@@ -87,8 +87,8 @@ class EquationElement(Element):
                                   f"{', '.join(missing)}", element=name)
         if held and fixed_step is None:
             raise DerivationError(f"Eq {name!r}: held variables need fixed_step=", element=name)
-        if fixed_step is not None and not (isinstance(fixed_step, (int, float)) and math.isfinite(fixed_step)
-                                           and fixed_step > 0):
+        if fixed_step is not None and (isinstance(fixed_step, bool) or not isinstance(fixed_step, (int, float))
+                                       or not math.isfinite(fixed_step) or fixed_step <= 0):
             raise DerivationError(f"Eq {name!r}: fixed_step must be a positive number of seconds",
                                   element=name)
         self.ports = tuple(ports)
@@ -102,10 +102,11 @@ class EquationElement(Element):
         self.descriptions = dict(descriptions or {})
         self._fixed_step = None if fixed_step is None else float(fixed_step)
         self.params = param_dict(params, f"Eq {name!r}")
-        unknown = [k for k in list(self.initial) + list(self.units)
+        unknown = [k for k in list(self.initial) + list(self.units) + list(self.descriptions)
                    if k not in self.states and k not in self.held]
         if unknown:
-            raise DerivationError(f"Eq {name!r}: initial/units given for {', '.join(sorted(set(unknown)))}, "
+            raise DerivationError(f"Eq {name!r}: initial/units/descriptions given for "
+                                  f"{', '.join(sorted(set(unknown)))}, "
                                   "which are neither states nor held variables", element=name)
 
     @property

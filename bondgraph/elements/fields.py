@@ -37,9 +37,13 @@ class _Field(Element):
         if laws is not None and set(laws) != set(ports):
             raise DerivationError(f"{self.kind} {name!r}: laws given for {sorted(laws)}, ports are "
                                   f"{sorted(ports)}", element=name)
+        unknown = sorted(set(initial or {}) - set(ports))
+        if unknown:
+            raise DerivationError(f"{self.kind} {name!r}: initial values for {', '.join(unknown)}, which are not "
+                                  f"ports (ports: {', '.join(ports)})", element=name)
         self.ports = ports
         self.directions = {p: "in" for p in ports}
-        self.laws, self.energy = laws, energy
+        self.laws, self.energy = (dict(laws) if laws is not None else None), energy
         self.params = param_dict(params, f"{self.kind} {name!r}")
         self.initial = {p: float((initial or {}).get(p, 0.0)) for p in ports}
         self.domain = domain

@@ -4,9 +4,8 @@ from __future__ import annotations
 import sympy as sp
 
 from ..errors import DerivationError
-from ..params import Param
 from ..symbols import sym
-from .base import EFFORT, FLOW, Contribution, Element, RoleConflict, param_dict, unit_of
+from .base import EFFORT, FLOW, Contribution, Element, RoleConflict, element_param, param_dict, unit_of
 
 __all__ = ["R"]
 
@@ -45,10 +44,8 @@ class R(Element):
             raise DerivationError(f"R {name!r}: give exactly one of value, effort= or flow=", element=name)
         self.domain = domain
         self.params = param_dict(params, f"R {name!r}")
-        self.value = None if value is None else Param(
-            name, value.value if isinstance(value, Param) else value,
-            unit if unit is not None else unit_of(domain, "resistance"),
-            description or f"resistance of {name}")
+        self.value = None if value is None else element_param(
+            value, name, unit, unit_of(domain, "resistance"), f"resistance of {name}")
         if self.value is not None:
             self.params[name] = self.value
         self.effort_law, self.flow_law = effort, flow

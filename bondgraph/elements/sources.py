@@ -1,8 +1,12 @@
 """Sources: Se, Sf (named inputs or given functions of time) and modulated MSe, MSf."""
 from __future__ import annotations
 
+import math
+import numbers
+
 import sympy as sp
 
+from ..errors import ParameterError
 from .base import EFFORT, FLOW, Contribution, Element, InputDecl, unit_of
 
 __all__ = ["Se", "Sf", "MSe", "MSf"]
@@ -31,6 +35,10 @@ class _Source(Element):
             Energy domain, for the default unit.
         """
         super().__init__(name, description=description)
+        if value is not None and not isinstance(value, (str, sp.Basic)):
+            if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
+                raise ParameterError(f"{self.kind} {name!r}: value {value!r} is not a finite number, "
+                                     "nor an expression of t", name=name)
         self.input = input or name
         self.domain = domain
         self.unit = unit if unit is not None else unit_of(domain, "effort" if self._role == EFFORT else "flow")
@@ -60,7 +68,8 @@ class _Source(Element):
         if self.input != self.name:
             spec["input"] = self.input
         if self.value is not None:
-            spec["value"] = self.value if isinstance(self.value, (int, float)) else str(self.value)
+            numeric = isinstance(self.value, numbers.Real) and not isinstance(self.value, bool)
+            spec["value"] = float(self.value) if numeric else str(self.value)
         return spec
 
 

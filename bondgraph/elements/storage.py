@@ -4,8 +4,7 @@ from __future__ import annotations
 import sympy as sp
 
 from ..errors import DerivationError
-from ..params import Param
-from .base import EFFORT, FLOW, Contribution, DerivativeDecl, Element, StateDecl, param_dict, unit_of
+from .base import EFFORT, FLOW, Contribution, DerivativeDecl, Element, StateDecl, element_param, param_dict, unit_of
 
 __all__ = ["I", "C"]
 
@@ -28,10 +27,8 @@ class _Storage(Element):
         self.state = state or f"{self._state_prefix}_{name}"
         self.initial = float(initial)
         self.params = param_dict(params, f"{self.kind} {name!r}")
-        self.value = None if value is None else Param(
-            name, value.value if isinstance(value, Param) else value,
-            unit if unit is not None else unit_of(domain, self._param_quantity),
-            description or f"{self._param_quantity} of {name}")
+        self.value = None if value is None else element_param(
+            value, name, unit, unit_of(domain, self._param_quantity), f"{self._param_quantity} of {name}")
         if self.value is not None:
             self.params[name] = self.value
         self.law = law

@@ -11,8 +11,7 @@ expression of states, inputs, parameters, held or bond variables.
 """
 from __future__ import annotations
 
-from ..params import Param
-from .base import EFFORT, Contribution, Element, RoleConflict, other, param_dict
+from .base import EFFORT, Contribution, Element, RoleConflict, element_param, other, param_dict
 
 __all__ = ["TF", "GY", "MTF", "MGY"]
 
@@ -29,8 +28,8 @@ class _TwoPort(Element):
         self.unit = unit
         self._modulus_param = None
         if self.kind in ("TF", "GY"):
-            self._modulus_param = Param(name, modulus.value if isinstance(modulus, Param) else modulus,
-                                        unit, description or f"modulus of {self.kind} {name}")
+            self._modulus_param = element_param(modulus, name, unit or None, "",
+                                                f"modulus of {self.kind} {name}")
             self.params[name] = self._modulus_param
         self._m = None
 
@@ -49,8 +48,9 @@ class _TwoPort(Element):
             spec["modulus"] = self._modulus_param.value
         else:
             spec["modulus"] = str(self.modulus)
-        if self.unit:
-            spec["unit"] = self.unit
+        unit = self._modulus_param.unit if self._modulus_param is not None else self.unit
+        if unit:
+            spec["unit"] = unit
         extra = {k: p.to_dict() for k, p in self.params.items() if p is not self._modulus_param}
         if extra:
             spec["params"] = extra

@@ -1,0 +1,158 @@
+"""The ``bondcosim`` console script: one subcommand per library call.
+
+Examples
+--------
+  bondcosim list
+  bondcosim equations mass-spring-damper
+  bondcosim equations my_graph.json --json
+  bondcosim draw dc-motor -o dc_motor.png
+  bondcosim simulate rlc --stop-time 0.2 --input "V=sin(100*t)" -o rlc.csv --plot rlc.png
+  bondcosim demo
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import sys
+
+from bondgraph.errors import BondcosimError, ExpressionError, ParameterError
+
+from . import __version__
+
+__all__ = ["main"]
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="bondcosim", description="Bond-graph modelling, FMU export and co-simulation.",
+        epilog=__doc__.split("Examples\n--------\n", 1)[1]
+        + f"\nbondcosim {__version__}, Python {platform.python_version()} on {platform.platform()}",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"bondcosim {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    sub.add_parser("list", help="name the built-in models, one line each")
+
+    p = sub.add_parser("equations", help="derive and print the state equations of MODEL")
+    p.add_argument("model", help="built-in name, graph .json file, or .py file with build()")
+    fmt = p.add_mutually_exclusive_group()
+    fmt.add_argument("--json", action="store_true",
+                     help="print states, inputs, outputs, parameters, f, h and A-D (linearised at the "
+                          "model's default operating point) as JSON")
+    fmt.add_argument("--latex", action="store_true", help="print a LaTeX aligned block")
+
+    p = sub.add_parser("draw", help="draw MODEL with power half-arrows and causal strokes")
+    p.add_argument("model")
+    p.add_argument("-o", "--output", required=True, help="output file (.png, .svg or .pdf)")
+
+    p = sub.add_parser("simulate", help="simulate MODEL and write a CSV (and optionally a plot)")
+    p.add_argument("model")
+    p.add_argument("--stop-time", type=float, required=True, help="end time, s")
+    p.add_argument("--start-time", type=float, default=0.0, help="start time, s (default 0)")
+    p.add_argument("--input", action="append", default=[], metavar="NAME=EXPR",
+                   help="input as a number or an expression of t, e.g. 'V=12*Heaviside(t-0.1)' (repeatable)")
+    p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                   help="override a parameter value, SI units (repeatable)")
+    p.add_argument("--output-interval", type=float, default=None, help="sample interval of the results, s")
+    p.add_argument("-o", "--output", required=True, help="results CSV file")
+    p.add_argument("--plot", default=None, help="also save a plot (.png/.svg/.pdf)")
+
+    p = sub.add_parser("demo", help="the main job on built-in defaults: equations, drawings, a simulation")
+    p.add_argument("--output-dir", default="demo-output", help="where figures and CSVs go (default demo-output)")
+    return parser
+
+
+def _pairs(items, what: str) -> dict[str, str]:
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        name = name.strip()
+        if not sep or not name or not value.strip():
+            raise ExpressionError(f"{what} {item!r} is not NAME=VALUE", owner=what, expression=item)
+        out[name] = value.strip()
+    return out
+
+
+def _cmd_list(args) -> int:
+    from bondgraph import library
+    width = max(len(n) for n in library.names())
+    for name in library.names():
+        print(f"{name:<{width}}  {library.describe(name)}")
+    return 0
+
+
+def _cmd_equations(args) -> int:
+    from .models import load_model
+    eqs = load_model(args.model).equations()
+    if args.latex:
+        print(eqs.latex())
+    elif args.json:
+        data = eqs.to_dict()
+        lin = eqs.linearize()
+        result = {key: data[key] for key in ("states", "inputs", "outputs", "parameters", "f", "h")}
+        result.update({k: getattr(lin, k).tolist() for k in ("A", "B", "C", "D")})
+        print(json.dumps(result, indent=2))
+    else:
+        print(eqs.pretty())
+    return 0
+
+
+def _cmd_draw(args) -> int:
+    from .models import load_model
+    load_model(args.model).draw(args.output)
+    print(f"wrote {args.output}")
+    return 0
+
+
+def _cmd_simulate(args) -> int:
+    from bondgraph.simulation import simulate
+    from .models import load_model
+    graph = load_model(args.model)
+    params = {}
+    for name, text in _pairs(args.param, "--param").items():
+        try:
+            params[name] = float(text)
+        except ValueError:
+            raise ParameterError(f"--param {name}={text!r}: not a number", name=name) from None
+    inputs = {}
+    for name, text in _pairs(args.input, "--input").items():
+        try:
+            inputs[name] = float(text)
+        except ValueError:
+            inputs[name] = text
+    result = simulate(graph, (args.start_time, args.stop_time), inputs=inputs, params=params or None,
+                      output_interval=args.output_interval, progress=sys.stderr.isatty())
+    result.to_csv(args.output)
+    print(f"wrote {args.output} ({len(result.t)} samples)")
+    if args.plot:
+        result.plot().savefig(args.plot, dpi=150)
+        print(f"wrote {args.plot}")
+    return 0
+
+
+def _cmd_demo(args) -> int:
+    from .demo import run_demo
+    run_demo(args.output_dir)
+    return 0
+
+
+_COMMANDS = {"list": _cmd_list, "equations": _cmd_equations, "draw": _cmd_draw,
+             "simulate": _cmd_simulate, "demo": _cmd_demo}
+
+
+def main(argv=None) -> int:
+    """Run the console script; returns the exit status (0 on success, 1 on a reported error)."""
+    args = _parser().parse_args(argv)
+    try:
+        return _COMMANDS[args.command](args)
+    except BondcosimError as exc:
+        print(f"bondcosim {args.command}: error: {exc}", file=sys.stderr)
+        return 1
+    except OSError as exc:
+        print(f"bondcosim {args.command}: error: {exc}", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -70,7 +70,7 @@ class BondGraph:
     ...     _ = g.add(e)
     >>> _ = g.connect("F", "j"); _ = g.connect("j", "m"); _ = g.connect("j", "b")
     >>> print(g.equations().f[0])
-    F - 0.25*p_m
+    F - b*p_m/m
     """
 
     def __init__(self, name: str = "model", *, description: str = ""):

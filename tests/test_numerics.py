@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from bondgraph import codegen_c
+from bondgraph import c_build, codegen_c
 from bondgraph.errors import CompilationError, ExpressionError, ParameterError, SimulationError
 from bondgraph.evaluate import compile_model
 from bondgraph.system import StateEquations
 
 BACKENDS = ["c", "numpy"]
-needs_cc = pytest.mark.skipif(codegen_c.find_compiler() is None, reason="no C compiler")
+needs_cc = pytest.mark.skipif(c_build.find_compiler() is None, reason="no C compiler")
 
 
 def R(name):
@@ -261,11 +261,11 @@ def test_undeclared_symbol_is_named():
 @needs_cc
 def test_compiler_errors_carry_output_and_cache_is_reused(tmp_path):
     with pytest.raises(CompilationError) as info:
-        codegen_c.compile_source("this is not C;\n")
+        c_build.compile_source("this is not C;\n")
     assert "error" in info.value.output
     src = "double bc_probe(double a) { return 2.0 * a; }\n"
-    first = codegen_c.compile_source(src)
+    first = c_build.compile_source(src)
     mtime = first.stat().st_mtime_ns
-    second = codegen_c.compile_source(src)
+    second = c_build.compile_source(src)
     assert first == second and second.stat().st_mtime_ns == mtime
-    assert first.parent == codegen_c.cache_dir()
+    assert first.parent == c_build.cache_dir()

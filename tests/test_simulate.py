@@ -12,14 +12,14 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bondgraph import codegen_c
+from bondgraph import c_build
 from bondgraph.errors import ExpressionError, ParameterError, SimulationError
 from bondgraph.results import SimulationResult
 from bondgraph.errors import UnknownNameError
 from bondgraph.simulation import simulate
 from bondgraph.system import StateEquations
 
-needs_cc = pytest.mark.skipif(codegen_c.find_compiler() is None, reason="no C compiler")
+needs_cc = pytest.mark.skipif(c_build.find_compiler() is None, reason="no C compiler")
 
 
 def R(name):

@@ -1,0 +1,200 @@
+"""Compiling, caching and loading the generated C of :mod:`bondgraph.codegen_c`.
+
+:func:`compile_source` turns a C translation unit into a shared library with
+the system compiler (:func:`find_compiler`), cached in :func:`cache_dir` by the
+sha256 of source, compiler and flags; :func:`build_library` generates
+(:func:`bondgraph.codegen_c.generate_source`), compiles and loads one library
+of a :class:`~bondgraph.system.StateEquations`, skipping generation too when
+the same equations were built before (an index file ``idx_<key>`` in the cache
+maps a hash of the equations to the library); :class:`CLibrary` is the 1:1
+ctypes binding of the functions of the C contract documented in
+:mod:`bondgraph.codegen_c`, which re-exports every name of this module.
+
+Compiler flags
+--------------
+:data:`CFLAGS`.  The SLP vectoriser is switched off
+(``-fno-tree-slp-vectorize``): on straight-line generated code it dominated
+compile time and gains nothing.
+"""
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+import sympy as sp
+
+from . import codegen_c
+from .codegen_c import PARTS, generate_source
+from .errors import CompilationError
+
+__all__ = ["compile_source", "build_library", "find_compiler", "cache_dir", "CLibrary", "CFLAGS"]
+
+#: Compiler flags (besides ``-o``, source and ``-lm``).
+CFLAGS = ("-O2", "-fno-tree-slp-vectorize", "-shared", "-fPIC")
+
+
+def find_compiler() -> str | None:
+    """Path of the C compiler: ``$CC`` if set, else the first of cc, gcc, clang on PATH."""
+    for name in ([os.environ["CC"]] if os.environ.get("CC") else []) + ["cc", "gcc", "clang"]:
+        path = shutil.which(name)
+        if path:
+            return path
+    return None
+
+
+def cache_dir() -> Path:
+    """Directory of compiled libraries: ``$BONDCOSIM_CACHE``, else ``~/.cache/bondcosim``."""
+    env = os.environ.get("BONDCOSIM_CACHE")
+    return Path(env).expanduser() if env else Path.home() / ".cache" / "bondcosim"
+
+
+def compile_source(source: str, *, compiler: str | None = None) -> Path:
+    """Compile C source to a shared library, or reuse the cached one.
+
+    The library is ``<cache>/bc_<sha256>.so``, where the hash covers the
+    source, compiler path and flags.  It is built in a temporary file of the
+    cache directory and renamed into place (atomic on POSIX), so concurrent
+    processes compiling the same model never load a half-written file.
+
+    Parameters
+    ----------
+    source : str
+        C translation unit.
+    compiler : str, optional
+        Compiler executable; default :func:`find_compiler`.
+
+    Returns
+    -------
+    pathlib.Path
+        Path of the shared library.
+
+    Raises
+    ------
+    CompilationError
+        No compiler found, or it failed (its output is in ``.output``).
+    """
+    compiler = compiler or find_compiler()
+    if compiler is None:
+        raise CompilationError("no C compiler found: set $CC or put cc/gcc/clang on PATH "
+                               "(or use backend='numpy')")
+    key = hashlib.sha256("\0".join([source, compiler, *CFLAGS]).encode()).hexdigest()
+    directory = cache_dir()
+    target = directory / f"bc_{key[:40]}.so"
+    if target.exists():
+        return target
+    directory.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=directory, prefix=".build-") as tmp:
+        src = Path(tmp) / f"bc_{key[:40]}.c"
+        src.write_text(source)
+        lib = Path(tmp) / "lib.so"
+        cmd = [compiler, *CFLAGS, "-o", str(lib), str(src), "-lm"]
+        try:
+            proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
+        except (OSError, subprocess.TimeoutExpired) as exc:
+            raise CompilationError(f"could not run {' '.join(cmd)}: {exc}") from None
+        if proc.returncode != 0:
+            raise CompilationError(
+                f"C compiler failed (exit {proc.returncode}): {' '.join(cmd)}",
+                output=(proc.stdout + proc.stderr).strip())
+        os.replace(src, directory / src.name)   # keep the source next to the library
+        os.replace(lib, target)
+    return target
+
+
+def _equations_key(eqs, part: str, compiler: str) -> str:
+    """sha256 of everything the generated source depends on (cheap: no cse)."""
+    parts = [codegen_c.GENERATOR_VERSION, part, compiler, *CFLAGS,
+             str(codegen_c.SPLIT_STATEMENTS), eqs.name]
+    for field in ("t", "step"):
+        parts.append(sp.srepr(getattr(eqs, field)))
+    for field in ("states", "inputs", "params", "algebraic", "held",
+                  "f", "h", "residuals", "held_update"):
+        parts.append("|".join(sp.srepr(e) for e in getattr(eqs, field)))
+    return hashlib.sha256("\0".join(parts).encode()).hexdigest()
+
+
+def build_library(eqs, *, part: str = "main") -> "CLibrary":
+    """Generate, compile (or reuse) and load one library of `eqs`.
+
+    A small index file ``idx_<key>`` in the cache maps a hash of the
+    equations themselves to the library, so a later process skips code
+    generation as well as compilation.
+
+    Parameters
+    ----------
+    eqs : StateEquations
+    part : {"main", "jacobian"}
+        See :func:`bondgraph.codegen_c.generate_source`.
+
+    Returns
+    -------
+    CLibrary
+
+    Raises
+    ------
+    CompilationError
+        No compiler, or it failed.
+    """
+    compiler = find_compiler()
+    if compiler is None:
+        raise CompilationError("no C compiler found: set $CC or put cc/gcc/clang on PATH "
+                               "(or use backend='numpy')")
+    index = cache_dir() / f"idx_{_equations_key(eqs, part, compiler)[:40]}"
+    try:
+        cached = cache_dir() / index.read_text().strip()
+        if cached.exists():
+            return CLibrary(cached)
+    except OSError:
+        pass
+    path = compile_source(generate_source(eqs, part=part), compiler=compiler)
+    fd, tmp = tempfile.mkstemp(dir=index.parent, prefix=".idx-")
+    with os.fdopen(fd, "w") as fh:
+        fh.write(path.name)
+    os.replace(tmp, index)
+    return CLibrary(path)
+
+
+class CLibrary:
+    """1:1 ctypes binding of a library made by :func:`bondgraph.codegen_c.generate_source`.
+
+    Attributes
+    ----------
+    path : pathlib.Path
+    dims : dict str -> int
+        ``NX NU NP NZ ND NY``.
+    kernels : list of str
+        Names of the ``bc_*`` functions the library holds; each is an attribute
+        (``lib.f``, ``lib.jac_fx``, ``lib.solve``...) taking ``int``,
+        ``c_void_p`` and ``double`` arguments as in the C contract of
+        :mod:`bondgraph.codegen_c`.
+        ``solve`` returns the number of failed rows.
+    """
+
+    def __init__(self, path: Path):
+        self.path = Path(path)
+        self._dll = ctypes.CDLL(str(self.path))
+        dims = (ctypes.c_int * 6)()
+        self._dll.bc_dims(dims)
+        self.dims = dict(zip(("NX", "NU", "NP", "NZ", "ND", "NY"), list(dims)))
+        vp, i, dbl = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
+        batch = [i, vp, i, vp, vp, i, vp, vp, i, vp, i, dbl]
+        self.kernels = []
+        for name in (*PARTS["main"], *PARTS["jacobian"], "solve"):
+            try:
+                fn = getattr(self._dll, f"bc_{name}")
+            except AttributeError:
+                continue
+            fn.argtypes = batch + [vp]
+            fn.restype = ctypes.c_int if name == "solve" else None
+            setattr(self, name, fn)
+            self.kernels.append(name)
+        if hasattr(self._dll, "bc_rk4"):
+            self.rk4 = self._dll.bc_rk4
+            self.rk4.argtypes = [i, dbl, dbl, i, vp, vp, i, vp, vp, vp, vp, i, vp]
+            self.rk4.restype = ctypes.c_int
+            self.kernels.append("rk4")

@@ -4,16 +4,18 @@
 gives one line.  Textbook graphs: ``mass-spring-damper``, ``dc-motor``,
 ``rlc``, ``coupled-tanks``, ``geared-inertias`` (derivative causality),
 ``resistor-loop`` and ``resistor-loop-nl`` (algebraic loops, linear and
-nonlinear), ``chain`` (the derivation benchmark, 5 stages).
+nonlinear), ``chain`` (the derivation benchmark, 5 stages).  Seed plants:
+``exoskeleton`` (seed 004, Fig. 6).
 """
 from __future__ import annotations
 
 from typing import Callable
 
 from .chain import mass_spring_chain
+from .exoskeleton import exoskeleton
 from .textbook import coupled_tanks, dc_motor, geared_inertias, mass_spring_damper, resistor_loop, rlc_series
 
-__all__ = ["build", "names", "describe", "register", "mass_spring_chain", "mass_spring_damper", "dc_motor",
+__all__ = ["build", "names", "describe", "register", "exoskeleton", "mass_spring_chain", "mass_spring_damper", "dc_motor",
            "rlc_series", "coupled_tanks", "geared_inertias", "resistor_loop"]
 
 _MODELS: dict[str, tuple[Callable, str]] = {}
@@ -32,6 +34,7 @@ register("geared-inertias", geared_inertias, "two rigidly geared inertias: deriv
 register("resistor-loop", resistor_loop, "resistive divider feeding an RC branch: linear algebraic loop")
 register("resistor-loop-nl", lambda: resistor_loop(nonlinear=True),
          "the same with a cubic resistor: loop solved numerically")
+register("exoskeleton", exoskeleton, "back-support exoskeleton drive, Fig. 6 of seed 004 (7 states)")
 register("chain", mass_spring_chain, "5-stage mass-spring-damper chain (the derivation benchmark)")
 
 

@@ -7,6 +7,7 @@ Examples
   bondcosim equations my_graph.json --json
   bondcosim draw dc-motor -o dc_motor.png
   bondcosim simulate rlc --stop-time 0.2 --input "V=sin(100*t)" -o rlc.csv --plot rlc.png
+  bondcosim compare exoskeleton --json --plot figures
   bondcosim demo
 """
 from __future__ import annotations
@@ -57,6 +58,12 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--output-interval", type=float, default=None, help="sample interval of the results, s")
     p.add_argument("-o", "--output", required=True, help="results CSV file")
     p.add_argument("--plot", default=None, help="also save a plot (.png/.svg/.pdf)")
+
+    p = sub.add_parser("compare", help="a seed plant's bond graph against its block-diagram model")
+    p.add_argument("model", choices=["exoskeleton"])
+    p.add_argument("--json", action="store_true",
+                   help="print max_abs_error, rms_error per signal and matrices_equal as JSON")
+    p.add_argument("--plot", default=None, metavar="DIR", help="save the overlay/difference plots in DIR")
 
     p = sub.add_parser("demo", help="the main job on built-in defaults: equations, drawings, a simulation")
     p.add_argument("--output-dir", default="demo-output", help="where figures and CSVs go (default demo-output)")
@@ -131,6 +138,22 @@ def _cmd_simulate(args) -> int:
     return 0
 
 
+def _cmd_compare(args) -> int:
+    from .compare import compare
+    result = compare(args.model, plot_dir=args.plot)
+    if args.json:
+        print(json.dumps(result, indent=2))
+        return 0
+    print(f"{args.model}: bond graph vs block diagram")
+    for name, value in result["max_abs_error"].items():
+        print(f"  {name:<8} max |error| {value:.3g}   rms {result['rms_error'][name]:.3g}")
+    equal = result["matrices_equal"]
+    print("  matrices: " + ("n/a (nonlinear model)" if equal is None else "equal" if equal else "DIFFERENT"))
+    if args.plot:
+        print(f"  plots in {args.plot}")
+    return 0
+
+
 def _cmd_demo(args) -> int:
     from .demo import run_demo
     run_demo(args.output_dir)
@@ -138,7 +161,7 @@ def _cmd_demo(args) -> int:
 
 
 _COMMANDS = {"list": _cmd_list, "equations": _cmd_equations, "draw": _cmd_draw,
-             "simulate": _cmd_simulate, "demo": _cmd_demo}
+             "simulate": _cmd_simulate, "compare": _cmd_compare, "demo": _cmd_demo}
 
 
 def main(argv=None) -> int:

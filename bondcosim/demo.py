@@ -1,8 +1,9 @@
 """``bondcosim demo``: the main job on built-in defaults.
 
-For now (modelling core): derive and print the equations of every built-in
-textbook graph, draw each to PNG, simulate the mass-spring-damper step
-response and the DC motor start-up, and plot them.  Later stages extend it.
+Derive and print the equations of every built-in textbook graph, draw each
+to PNG, simulate the mass-spring-damper step response and the DC motor
+start-up and plot them, then compare the exoskeleton's bond graph with the
+paper's block diagram.  Later stages extend it.
 """
 from __future__ import annotations
 
@@ -58,6 +59,15 @@ def run_demo(output_dir="demo-output") -> dict:
     written["motor.png"] = out / "dc_motor_response.png"
     fig.savefig(written["motor.png"], dpi=150)
     print(f"   load speed after 0.5 s: {motor['w_L'][-1]:.2f} rad/s")
+
+    _step("exoskeleton (seed 004): bond graph vs the paper's block diagram, Sec. 5.1 test")
+    from .compare import compare
+    result = compare("exoskeleton", plot_dir=out)
+    written["exo.png"] = out / "exoskeleton_section_5_1.png"
+    library.build("exoskeleton").draw(out / "exoskeleton.png")
+    written["exo_graph.png"] = out / "exoskeleton.png"
+    print(f"   A, B, C, D equal eq. (3): {result['matrices_equal']}; max |error| "
+          + ", ".join(f"{k} {v:.2g}" for k, v in result["max_abs_error"].items()))
 
     _step(f"done in {time.perf_counter() - start:.1f} s; files in {out.resolve()}")
     for key, path in written.items():

@@ -96,3 +96,13 @@ def test_version(capsys):
     with pytest.raises(SystemExit) as info:
         main(["--version"])
     assert info.value.code == 0 and "bondcosim" in capsys.readouterr().out
+
+
+def test_compare_exoskeleton_json(capsys, tmp_path):
+    assert main(["compare", "exoskeleton", "--json", "--plot", str(tmp_path)]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert set(data) == {"max_abs_error", "rms_error", "matrices_equal"}
+    assert data["matrices_equal"] is True
+    # same linear model on both sides: agreement to solver tolerance (Sec. 5.1 run)
+    assert data["max_abs_error"]["tau_s"] < 1e-6 and data["max_abs_error"]["w_m"] < 1e-6
+    assert (tmp_path / "exoskeleton_section_5_1.png").stat().st_size > 10000

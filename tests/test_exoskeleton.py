@@ -143,3 +143,8 @@ def test_section_5_1_bond_graph_matches_block_diagram(section_5_1):
 def test_compare_plot_writes_figure(section_5_1, tmp_path):
     path = section_5_1.plot(tmp_path / "exoskeleton_5_1.png")
     assert path.exists() and path.stat().st_size > 10_000
+
+
+def test_matrix_difference_summary_used_by_the_cli():
+    assert bd.matrix_difference() < MATRIX_RTOL
+    assert bd.matrix_difference(ALL_TERMS) < MATRIX_RTOL

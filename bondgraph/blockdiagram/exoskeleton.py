@@ -28,7 +28,7 @@ import numpy as np
 
 from ..errors import ParameterError
 
-__all__ = ["STATES", "INPUTS", "OUTPUTS", "PARAMETER_NAMES", "state_space", "simulate_zoh",
+__all__ = ["STATES", "INPUTS", "OUTPUTS", "PARAMETER_NAMES", "state_space", "simulate_zoh", "matrix_difference",
            "section_5_1_inputs", "bond_graph_state_map", "compare_section_5_1", "Comparison", "compare_plot"]
 
 STATES = ("theta_m", "dtheta_m", "theta_sint", "dtheta_sint", "theta_sext", "dtheta_sext", "theta_h")
@@ -236,6 +236,29 @@ def compare_section_5_1(*, params: Mapping[str, float] | None = None, t_end: flo
     err = {k: bg[k] - bd[k] for k in bd}
     return Comparison(t, bd, bg, {k: float(np.max(np.abs(v))) for k, v in err.items()},
                       {k: float(np.sqrt(np.mean(v**2))) for k, v in err.items()})
+
+
+def matrix_difference(params: Mapping[str, float] | None = None) -> float:
+    """Largest relative difference between the bond graph's (A, B, C, D) and eq. (3).
+
+    The bond graph is linearised and mapped to the paper's states with
+    :func:`bond_graph_state_map` (``A_paper = T A_bg T^-1``, ``B = T B_bg``,
+    ``C = C_bg T^-1``).  Entries that are zero in eq. (3) are measured
+    against the matrix's largest entry.
+    """
+    from ..library.exoskeleton import exoskeleton, parameter_values
+
+    overrides = dict(params or {})
+    lm = exoskeleton(params=overrides).equations().linearize()
+    values = parameter_values(overrides)
+    T = bond_graph_state_map(values)
+    Ti = np.linalg.solve(T, np.eye(T.shape[0]))
+    mapped = (T @ lm.A @ Ti, T @ lm.B, lm.C @ Ti, lm.D)
+    worst = 0.0
+    for ref, other in zip(state_space(values), mapped):
+        scale = np.where(ref != 0, np.abs(ref), np.max(np.abs(ref)) if ref.any() else 1.0)
+        worst = max(worst, float(np.max(np.abs(other - ref) / scale)))
+    return worst
 
 
 def compare_plot(t, block_diagram: Mapping[str, np.ndarray], bond_graph: Mapping[str, np.ndarray], path):

@@ -5,7 +5,8 @@ gives one line.  Textbook graphs: ``mass-spring-damper``, ``dc-motor``,
 ``rlc``, ``coupled-tanks``, ``geared-inertias`` (derivative causality),
 ``resistor-loop`` and ``resistor-loop-nl`` (algebraic loops, linear and
 nonlinear), ``chain`` (the derivation benchmark, 5 stages).  Seed plants:
-``exoskeleton`` (seed 004, Fig. 6).
+``exoskeleton`` (seed 004, Fig. 6), ``pam``, ``pam-frictionless``,
+``pam-locked`` (seed 000).
 """
 from __future__ import annotations
 
@@ -13,9 +14,10 @@ from typing import Callable
 
 from .chain import mass_spring_chain
 from .exoskeleton import exoskeleton
+from .pam import pam
 from .textbook import coupled_tanks, dc_motor, geared_inertias, mass_spring_damper, resistor_loop, rlc_series
 
-__all__ = ["build", "names", "describe", "register", "exoskeleton", "mass_spring_chain", "mass_spring_damper", "dc_motor",
+__all__ = ["build", "names", "describe", "register", "exoskeleton", "pam", "mass_spring_chain", "mass_spring_damper", "dc_motor",
            "rlc_series", "coupled_tanks", "geared_inertias", "resistor_loop"]
 
 _MODELS: dict[str, tuple[Callable, str]] = {}
@@ -35,6 +37,9 @@ register("resistor-loop", resistor_loop, "resistive divider feeding an RC branch
 register("resistor-loop-nl", lambda: resistor_loop(nonlinear=True),
          "the same with a cubic resistor: loop solved numerically")
 register("exoskeleton", exoskeleton, "back-support exoskeleton drive, Fig. 6 of seed 004 (7 states)")
+register("pam", pam, "antagonistic PAM joint, seed 000 (4 states, held Kikuuwe friction, 1 ms / 4 RK4 sub-steps)")
+register("pam-frictionless", lambda: pam("frictionless"), "the PAM joint with T_f = 0 (smooth)")
+register("pam-locked", lambda: pam("locked"), "the PAM joint held at psi = 0, for torque tests (2 states)")
 register("chain", mass_spring_chain, "5-stage mass-spring-damper chain (the derivation benchmark)")
 
 

@@ -60,7 +60,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--plot", default=None, help="also save a plot (.png/.svg/.pdf)")
 
     p = sub.add_parser("compare", help="a seed plant's bond graph against its block-diagram model")
-    p.add_argument("model", choices=["exoskeleton"])
+    p.add_argument("model", choices=["exoskeleton", "pam"])
     p.add_argument("--json", action="store_true",
                    help="print max_abs_error, rms_error per signal and matrices_equal as JSON")
     p.add_argument("--plot", default=None, metavar="DIR", help="save the overlay/difference plots in DIR")

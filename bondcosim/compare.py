@@ -6,7 +6,7 @@ from pathlib import Path
 __all__ = ["compare", "MODELS"]
 
 #: Models that have a block-diagram twin.
-MODELS = ("exoskeleton",)
+MODELS = ("exoskeleton", "pam")
 
 #: Largest relative matrix difference that counts as equal.
 MATRIX_RTOL = 1e-9
@@ -21,6 +21,15 @@ def _exoskeleton(plot_dir):
     return run.max_abs_error, run.rms_error, bd.matrix_difference({"b_f": 0.0}) <= MATRIX_RTOL
 
 
+def _pam(plot_dir):
+    from bondgraph.blockdiagram.pam_compare import compare_fig8
+
+    run = compare_fig8(variant="full", duration=20.0)
+    if plot_dir is not None:
+        run.plot(Path(plot_dir) / "pam_fig8.png")
+    return run.max_abs_error, run.rms_error, None   # nonlinear: no matrices to compare
+
+
 def compare(model: str, *, plot_dir=None) -> dict:
     """Run the comparison of `model` and return its summary.
 
@@ -32,7 +41,7 @@ def compare(model: str, *, plot_dir=None) -> dict:
     """
     from bondgraph.errors import GraphError
 
-    runners = {"exoskeleton": _exoskeleton}
+    runners = {"exoskeleton": _exoskeleton, "pam": _pam}
     if model not in runners:
         raise GraphError(f"no block-diagram twin for {model!r}; compare one of {', '.join(MODELS)}")
     if plot_dir is not None:

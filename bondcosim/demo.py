@@ -2,8 +2,8 @@
 
 Derive and print the equations of every built-in textbook graph, draw each
 to PNG, simulate the mass-spring-damper step response and the DC motor
-start-up and plot them, then compare the exoskeleton's bond graph with the
-paper's block diagram.  Later stages extend it.
+start-up and plot them, then compare the exoskeleton's and the PAM joint's
+bond graphs with the papers' block-diagram / state-space models.
 """
 from __future__ import annotations
 
@@ -68,6 +68,13 @@ def run_demo(output_dir="demo-output") -> dict:
     written["exo_graph.png"] = out / "exoskeleton.png"
     print(f"   A, B, C, D equal eq. (3): {result['matrices_equal']}; max |error| "
           + ", ".join(f"{k} {v:.2g}" for k, v in result["max_abs_error"].items()))
+
+    _step("antagonistic PAM joint (seed 000): bond graph vs state-space model (11a), 20 s Fig. 8-like inputs")
+    result = compare("pam", plot_dir=out)
+    written["pam.png"] = out / "pam_fig8.png"
+    library.build("pam").draw(out / "pam.png")
+    written["pam_graph.png"] = out / "pam.png"
+    print("   max |error| " + ", ".join(f"{k} {v:.2g}" for k, v in result["max_abs_error"].items()))
 
     _step(f"done in {time.perf_counter() - start:.1f} s; files in {out.resolve()}")
     for key, path in written.items():

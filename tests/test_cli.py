@@ -106,3 +106,11 @@ def test_compare_exoskeleton_json(capsys, tmp_path):
     # same linear model on both sides: agreement to solver tolerance (Sec. 5.1 run)
     assert data["max_abs_error"]["tau_s"] < 1e-6 and data["max_abs_error"]["w_m"] < 1e-6
     assert (tmp_path / "exoskeleton_section_5_1.png").stat().st_size > 10000
+
+
+def test_compare_pam_json(capsys):
+    assert main(["compare", "pam", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["matrices_equal"] is None          # nonlinear model
+    assert set(data["max_abs_error"]) == {"psi", "P1", "P2", "tau"}
+    assert data["max_abs_error"]["P1"] < 1e-3      # Pa, on pressures of a few hundred kPa

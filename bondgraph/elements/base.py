@@ -17,6 +17,7 @@ the bond's half-arrow agrees with the natural direction.
 """
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import ClassVar, Mapping
 
@@ -114,7 +115,7 @@ class Contribution:
     held: list = field(default_factory=list)        # HeldDecl
 
 
-class Element:
+class Element(ABC):
     """Base class of bond-graph elements.
 
     Subclasses set ``kind`` (the JSON name), ``ports`` (fixed port names, or
@@ -192,8 +193,9 @@ class Element:
         return dict(fixed)
 
     # -- equations ---------------------------------------------------------
+    @abstractmethod
     def contribute(self, ports: Mapping[str, PortVars], names: Mapping[str, sp.Basic]) -> Contribution:
-        raise NotImplementedError  # pragma: no cover - every concrete kind implements it
+        """The element's equations given its ports' causal roles (see :class:`Contribution`)."""
 
     # -- serialisation -----------------------------------------------------
     def to_dict(self) -> dict:

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 from .errors import ParameterError
 
-__all__ = ["Param", "Domain", "DOMAINS", "domain", "as_param"]
+__all__ = ["Param", "Domain", "DOMAINS", "domain", "as_param", "values_with_overrides"]
 
 
 @dataclass(frozen=True)
@@ -97,3 +97,22 @@ def as_param(value, name: str, unit: str, description: str = "") -> Param:
     if isinstance(value, Param):
         return value
     return Param(name, value, unit, description)
+
+
+def values_with_overrides(params, overrides=None, *, owner: str) -> dict[str, float]:
+    """Values of `params` (mapping name -> Param) by name, with `overrides` applied.
+
+    Raises
+    ------
+    ParameterError
+        An override names no parameter (the message lists the known ones) or
+        is not a finite number.
+    """
+    values = {name: p.value for name, p in params.items()}
+    overrides = dict(overrides or {})
+    unknown = sorted(set(overrides) - set(values))
+    if unknown:
+        raise ParameterError(f"{owner} has no parameter(s) {', '.join(unknown)}; "
+                             f"expected one or more of {', '.join(values)}", name=unknown[0])
+    values.update({name: Param(name, value).value for name, value in overrides.items()})
+    return values

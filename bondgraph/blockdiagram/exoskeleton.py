@@ -276,13 +276,13 @@ def compare_plot(t, block_diagram: Mapping[str, np.ndarray], bond_graph: Mapping
     -------
     pathlib.Path
     """
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from pathlib import Path
 
+    from matplotlib.figure import Figure
+
     labels = {"tau_s": "sensor torque y_t [N m]", "w_m": "motor velocity [rad/s]"}
-    fig, axes = plt.subplots(2, 2, figsize=(11, 6), sharex=True)
+    fig = Figure(figsize=(11, 6))
+    axes = fig.subplots(2, 2, sharex=True)
     for col, key in enumerate(("tau_s", "w_m")):
         ax, axd = axes[0, col], axes[1, col]
         ax.plot(t, block_diagram[key], label="block diagram (eq. 3, exact ZOH)")
@@ -296,5 +296,4 @@ def compare_plot(t, block_diagram: Mapping[str, np.ndarray], bond_graph: Mapping
     fig.tight_layout()
     path = Path(path)
     fig.savefig(path)
-    plt.close(fig)
     return path

@@ -51,9 +51,8 @@ from types import MappingProxyType
 from typing import Mapping
 
 from ..elements import C, I, One, R, Se, Sf, TF, Zero
-from ..errors import ParameterError
 from ..graph import BondGraph
-from ..params import Param
+from ..params import Param, values_with_overrides
 
 __all__ = ["exoskeleton", "PARAMETERS", "parameter_values"]
 
@@ -88,15 +87,9 @@ def parameter_values(overrides: Mapping[str, float] | None = None) -> dict[str, 
     Raises
     ------
     ParameterError
-        An override names no parameter; the message lists the known ones.
+        An override names no parameter (the message lists the known ones) or is not finite.
     """
-    values = {name: p.value for name, p in PARAMETERS.items()}
-    unknown = sorted(set(overrides or {}) - set(values))
-    if unknown:
-        raise ParameterError(f"exoskeleton has no parameter(s) {', '.join(unknown)}; "
-                             f"expected one or more of {', '.join(values)}", name=unknown[0])
-    values.update({k: float(v) for k, v in (overrides or {}).items()})
-    return values
+    return values_with_overrides(PARAMETERS, overrides, owner="exoskeleton")
 
 
 def exoskeleton(*, params: Mapping[str, float] | None = None) -> BondGraph:

@@ -61,9 +61,8 @@ from types import MappingProxyType
 from typing import Literal, Mapping
 
 from ..elements import C, EquationElement, I, MSf, MTF, One
-from ..errors import ParameterError
 from ..graph import BondGraph
-from ..params import Param
+from ..params import Param, values_with_overrides
 
 __all__ = ["pam", "PARAMETERS", "KAPPA_KNOTS", "FRICTION_STEP", "DP_CLAMP", "parameter_values",
            "kappa_law", "orifice_flux_law", "valve_law"]
@@ -130,15 +129,9 @@ def parameter_values(overrides: Mapping[str, float] | None = None) -> dict[str, 
     Raises
     ------
     ParameterError
-        An override names no parameter; the message lists the known ones.
+        An override names no parameter (the message lists the known ones) or is not finite.
     """
-    values = {name: p.value for name, p in PARAMETERS.items()}
-    unknown = sorted(set(overrides or {}) - set(values))
-    if unknown:
-        raise ParameterError(f"pam has no parameter(s) {', '.join(unknown)}; "
-                             f"expected one or more of {', '.join(values)}", name=unknown[0])
-    values.update({k: float(v) for k, v in (overrides or {}).items()})
-    return values
+    return values_with_overrides(PARAMETERS, overrides, owner="pam")
 
 
 # -- constitutive laws, as expression text over the graph's names -------------------------

@@ -22,6 +22,9 @@ __all__ = [
     "CompilationError",
     "SimulationError",
     "UnknownNameError",
+    "FMUError",
+    "CosimError",
+    "AlgebraicLoopError",
 ]
 
 
@@ -182,3 +185,36 @@ class UnknownNameError(BondcosimError, ValueError):
         where = f" of model {model!r}" if model else ""
         super().__init__(f"unknown {kind} {name!r}{where}; known {kind}s are "
                          f"{', '.join(self.known) or '(none)'}")
+
+
+class FMUError(BondcosimError, RuntimeError):
+    """An FMU could not be exported, opened or run.
+
+    Attributes
+    ----------
+    path : str
+        The FMU file concerned ("" when there is none yet).
+    """
+
+    def __init__(self, message: str, path: str = ""):
+        self.path = str(path)
+        super().__init__(message)
+
+
+class CosimError(BondcosimError, ValueError):
+    """A co-simulation is set up wrongly: an unknown component or port, a
+    connection between ports of different units, an input driven twice."""
+
+    def __init__(self, message: str, ports=()):
+        self.ports = tuple(ports)
+        super().__init__(message)
+
+
+class AlgebraicLoopError(CosimError):
+    """Direct-feedthrough ports form a loop the master cannot order.
+
+    Attributes
+    ----------
+    ports : tuple of str
+        The loop as ``component.port`` names, in signal order.
+    """

@@ -1,5 +1,14 @@
 """fmus: bond graph -> FMU (generated C, compiled) and FMU loading helpers.
 
-Layer 2 of the design (imports only ``bondgraph``).  Its export arrives with the FMU issue.
+Layer 2 of the design (imports only ``bondgraph``).
+
+>>> import bondgraph.library as library
+>>> from fmus import export
+>>> path = export(library.build("mass-spring-damper"), tmp / "msd.fmu")   # doctest: +SKIP
+
+:func:`export` writes a binary FMU (FMI 2.0 or 3.0) offering Co-Simulation,
+and Model Exchange for smooth models.
 """
-__all__: list[str] = []
+from .export import default_solver_step, export
+
+__all__ = ["export", "default_solver_step"]

@@ -1,0 +1,179 @@
+"""The variables of an exported FMU: names, value references, causality, units.
+
+:func:`variable_layout` turns :class:`~bondgraph.system.StateEquations` into
+the list of :class:`FmuVariable` that both the model description
+(:mod:`fmus.model_description`) and the generated C header
+(:mod:`fmus.c_header`) are written from, so the two cannot disagree.
+
+Value references are positions in the C array ``v[]`` (see
+``fmus/c/bc_fmu_core.h``)::
+
+    states x | derivatives der(x) | inputs u | parameters p | held d | outputs y | solver_step
+
+FMI 3.0 adds ``time`` (causality ``independent``) after them.  An output that
+is one of the states under the same name (e.g. every output of ``chain``) is
+not a separate variable: the state itself gets causality ``output``.
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import sympy as sp
+
+from bondgraph.errors import FMUError
+
+__all__ = ["FmuVariable", "variable_layout", "derivative_unit", "model_identifier", "SOLVER_STEP"]
+
+#: Name of the parameter holding the internal fixed solver step of Co-Simulation.
+SOLVER_STEP = "solver_step"
+
+
+@dataclass(frozen=True)
+class FmuVariable:
+    """One scalar Real (FMI 2.0) / Float64 (FMI 3.0) variable.
+
+    Attributes
+    ----------
+    name : str
+    vr : int
+        Value reference (= index into the C array ``v[]``).
+    kind : str
+        ``"state"``, ``"derivative"``, ``"input"``, ``"parameter"``, ``"held"``,
+        ``"output"`` or ``"solver_step"``.
+    causality, variability : str
+        FMI attributes.
+    initial : str or None
+        ``"exact"`` or ``"calculated"``; None where FMI wants none (inputs).
+    start : float or None
+        Start value (None for calculated variables).
+    unit, description : str
+    state_vr : int or None
+        For a derivative, the value reference of its state.
+    dependencies : tuple of int or None
+        For an output, value references of the states and inputs it depends on.
+    """
+
+    name: str
+    vr: int
+    kind: str
+    causality: str
+    variability: str
+    initial: str | None
+    start: float | None
+    unit: str = ""
+    description: str = ""
+    state_vr: int | None = None
+    dependencies: tuple | None = None
+
+
+def derivative_unit(unit: str) -> str:
+    """Unit of the time derivative of a quantity in `unit` (``"N s"`` -> ``"N"``)."""
+    unit = unit.strip()
+    if not unit:
+        return "1/s"
+    if unit == "s":
+        return ""
+    if unit.endswith(" s"):
+        return unit[:-2].strip()
+    return f"({unit})/s" if "/" in unit else f"{unit}/s"
+
+
+def _output_dependencies(eqs, expr) -> set:
+    """States and inputs `expr` depends on, through the algebraic loops too."""
+    syms = set(sp.sympify(expr).free_symbols)
+    if syms & set(eqs.algebraic):
+        for r in eqs.residuals:
+            syms |= sp.sympify(r).free_symbols
+    return syms & (set(eqs.states) | set(eqs.inputs))
+
+
+def variable_layout(eqs, solver_step: float, *, fmi_version: int = 2) -> list[FmuVariable]:
+    """Every variable of the FMU of `eqs`, in value-reference order.
+
+    Parameters
+    ----------
+    eqs : StateEquations
+        With no inputs given as functions of time (see :func:`fmus.export.export`).
+    solver_step : float
+        Start value of the ``solver_step`` parameter, s.
+    fmi_version : {2, 3}
+        3 appends the ``time`` variable.
+
+    Returns
+    -------
+    list of FmuVariable
+
+    Raises
+    ------
+    FMUError
+        Two variables share a name (an output named like a state but computed
+        differently, or a parameter called ``solver_step``).
+    """
+    units, desc = eqs.units, eqs.descriptions
+    nx, nu, np_, nd = len(eqs.states), len(eqs.inputs), len(eqs.params), len(eqs.held)
+    vr_u = 2 * nx
+    vr_p = vr_u + nu
+    vr_d = vr_p + np_
+    vr_y = vr_d + nd
+    state_vr = {s.name: i for i, s in enumerate(eqs.states)}
+    dep_vr = {**{eqs.states[i]: i for i in range(nx)},
+              **{s: vr_u + i for i, s in enumerate(eqs.inputs)}}
+
+    merged = {}   # output index -> state name, for outputs that are just the state
+    for i, (name, expr) in enumerate(zip(eqs.outputs, eqs.h)):
+        if name in state_vr and sp.sympify(expr) == eqs.states[state_vr[name]]:
+            merged[i] = name
+    as_output = set(merged.values())
+
+    out: list[FmuVariable] = []
+    for i, s in enumerate(eqs.states):
+        is_out = s.name in as_output
+        out.append(FmuVariable(
+            s.name, i, "state", "output" if is_out else "local", "continuous", "exact",
+            float(eqs.initial_state.get(s.name, 0.0)), units.get(s.name, ""),
+            desc.get(s.name, "") or "state", dependencies=(i,) if is_out else None))
+    for i, s in enumerate(eqs.states):
+        out.append(FmuVariable(
+            f"der({s.name})", nx + i, "derivative", "local", "continuous", "calculated", None,
+            derivative_unit(units.get(s.name, "")), f"time derivative of {s.name}", state_vr=i))
+    for i, s in enumerate(eqs.inputs):
+        out.append(FmuVariable(
+            s.name, vr_u + i, "input", "input", "continuous", None,
+            float(eqs.input_defaults.get(s.name, 0.0)), units.get(s.name, ""), desc.get(s.name, "")))
+    for i, s in enumerate(eqs.params):
+        out.append(FmuVariable(
+            s.name, vr_p + i, "parameter", "parameter", "fixed", "exact",
+            float(eqs.param_values[s.name]), units.get(s.name, ""), desc.get(s.name, "")))
+    for i, s in enumerate(eqs.held):
+        out.append(FmuVariable(
+            s.name, vr_d + i, "held", "local", "discrete", "exact",
+            float(eqs.held_initial.get(s.name, 0.0)), units.get(s.name, ""),
+            desc.get(s.name, "") or "held over each solver sub-step"))
+    for i, (name, expr) in enumerate(zip(eqs.outputs, eqs.h)):
+        if i in merged:
+            continue
+        deps = tuple(sorted(dep_vr[s] for s in _output_dependencies(eqs, expr)))
+        out.append(FmuVariable(
+            name, vr_y + i, "output", "output", "continuous", "calculated", None,
+            units.get(name, ""), desc.get(name, ""), dependencies=deps))
+    out.append(FmuVariable(
+        SOLVER_STEP, vr_y + len(eqs.outputs), "solver_step", "parameter", "fixed", "exact",
+        float(solver_step), "s", "largest internal RK4 sub-step of Co-Simulation doStep"))
+    if fmi_version == 3:
+        out.append(FmuVariable("time", out[-1].vr + 1, "time", "independent", "continuous",
+                               None, None, "s", "simulation time"))
+
+    seen: dict[str, FmuVariable] = {}
+    for v in out:
+        if v.name in seen:
+            raise FMUError(f"model {eqs.name!r}: the {seen[v.name].kind} and the {v.kind} are both "
+                           f"named {v.name!r}; rename one before exporting")
+        seen[v.name] = v
+    return out
+
+
+def model_identifier(name: str) -> str:
+    """A C identifier and file name from a model name (``"pam-locked"`` -> ``"pam_locked"``)."""
+    ident = re.sub(r"\W", "_", name)
+    return ident if ident and not ident[0].isdigit() else f"m_{ident}"

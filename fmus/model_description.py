@@ -1,0 +1,170 @@
+"""``modelDescription.xml`` of an exported FMU, FMI 2.0 or 3.0, from its variable layout.
+
+Both versions list the same variables (:func:`fmus.layout.variable_layout`);
+they differ in spelling: FMI 2.0 has ``ScalarVariable``/``Real`` elements and
+refers to variables by 1-based index in the ModelStructure, FMI 3.0 has
+``Float64`` elements, a ``time`` variable and refers to value references.
+"""
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from datetime import datetime, timezone
+
+__all__ = ["model_description_xml"]
+
+_GENERATOR = "bondcosim"
+
+
+def _num(x: float) -> str:
+    return repr(float(x))
+
+
+def _common_root(version: int, name: str, token: str, description: str, date: str | None) -> ET.Element:
+    attrs = {"fmiVersion": "2.0" if version == 2 else "3.0", "modelName": name}
+    attrs["guid" if version == 2 else "instantiationToken"] = token
+    attrs.update({"description": description, "generationTool": _GENERATOR,
+                  "generationDateAndTime": date or datetime.now(timezone.utc)
+                  .replace(microsecond=0).isoformat().replace("+00:00", "Z"),
+                  "variableNamingConvention": "flat"})
+    if version == 2:
+        attrs["numberOfEventIndicators"] = "0"
+    return ET.Element("fmiModelDescription", attrs)
+
+
+def _interfaces(root, version: int, identifier: str, model_exchange: bool) -> None:
+    state = "canGetAndSetFMUstate" if version == 2 else "canGetAndSetFMUState"
+    serial = "canSerializeFMUstate" if version == 2 else "canSerializeFMUState"
+    flags = {state: "true", serial: "true"}
+    if version == 2:
+        flags["canNotUseMemoryManagementFunctions"] = "true"
+    if model_exchange:
+        ET.SubElement(root, "ModelExchange", {"modelIdentifier": identifier, **flags})
+    ET.SubElement(root, "CoSimulation", {"modelIdentifier": identifier,
+                                         "canHandleVariableCommunicationStepSize": "true", **flags})
+
+
+def _units_and_categories(root, variables) -> None:
+    units = sorted({v.unit for v in variables if v.unit})
+    if units:
+        defs = ET.SubElement(root, "UnitDefinitions")
+        for u in units:
+            ET.SubElement(defs, "Unit", {"name": u})
+    cats = ET.SubElement(root, "LogCategories")
+    for c in ("logStatusWarning", "logStatusError"):
+        ET.SubElement(cats, "Category", {"name": c})
+    ET.SubElement(root, "DefaultExperiment", {"startTime": "0.0"})
+
+
+def _fmi2_variables(root, variables) -> dict[int, int]:
+    """Write the ScalarVariables; return value reference -> 1-based index."""
+    mv = ET.SubElement(root, "ModelVariables")
+    index = {}
+    for k, v in enumerate(variables, start=1):
+        index[v.vr] = k
+        attrs = {"name": v.name, "valueReference": str(v.vr)}
+        if v.description:
+            attrs["description"] = v.description
+        attrs.update({"causality": v.causality, "variability": v.variability})
+        if v.initial:
+            attrs["initial"] = v.initial
+        sv = ET.SubElement(mv, "ScalarVariable", attrs)
+        real = {}
+        if v.state_vr is not None:
+            real["derivative"] = str(index[v.state_vr])
+        if v.unit:
+            real["unit"] = v.unit
+        if v.start is not None:
+            real["start"] = _num(v.start)
+        ET.SubElement(sv, "Real", real)
+    return index
+
+
+def _fmi2_structure(root, variables, index) -> None:
+    ms = ET.SubElement(root, "ModelStructure")
+    outputs = [v for v in variables if v.causality == "output"]
+    if outputs:
+        el = ET.SubElement(ms, "Outputs")
+        for v in outputs:
+            ET.SubElement(el, "Unknown", {"index": str(index[v.vr]),
+                                          "dependencies": " ".join(str(index[d]) for d in v.dependencies)})
+    derivatives = [v for v in variables if v.kind == "derivative"]
+    if derivatives:
+        el = ET.SubElement(ms, "Derivatives")
+        for v in derivatives:
+            ET.SubElement(el, "Unknown", {"index": str(index[v.vr])})
+    initial = sorted(index[v.vr] for v in variables
+                     if v.initial == "calculated" and v.kind in ("output", "derivative"))
+    if initial:
+        el = ET.SubElement(ms, "InitialUnknowns")
+        for k in initial:
+            ET.SubElement(el, "Unknown", {"index": str(k)})
+
+
+def _fmi3_variables(root, variables) -> None:
+    mv = ET.SubElement(root, "ModelVariables")
+    time = [v for v in variables if v.kind == "time"]
+    for v in time + [v for v in variables if v.kind != "time"]:
+        attrs = {"name": v.name, "valueReference": str(v.vr)}
+        if v.description:
+            attrs["description"] = v.description
+        attrs.update({"causality": v.causality, "variability": v.variability})
+        if v.initial:
+            attrs["initial"] = v.initial
+        if v.state_vr is not None:
+            attrs["derivative"] = str(v.state_vr)
+        if v.unit:
+            attrs["unit"] = v.unit
+        if v.start is not None:
+            attrs["start"] = _num(v.start)
+        ET.SubElement(mv, "Float64", attrs)
+
+
+def _fmi3_structure(root, variables) -> None:
+    ms = ET.SubElement(root, "ModelStructure")
+    for v in variables:
+        if v.causality == "output":
+            ET.SubElement(ms, "Output", {"valueReference": str(v.vr),
+                                         "dependencies": " ".join(map(str, v.dependencies))})
+    for v in variables:
+        if v.kind == "derivative":
+            ET.SubElement(ms, "ContinuousStateDerivative", {"valueReference": str(v.vr)})
+    for v in variables:
+        if v.initial == "calculated" and v.kind in ("output", "derivative"):
+            ET.SubElement(ms, "InitialUnknown", {"valueReference": str(v.vr)})
+
+
+def model_description_xml(variables, *, version: int, name: str, identifier: str, token: str,
+                          description: str = "", model_exchange: bool = True,
+                          date: str | None = None) -> str:
+    """The ``modelDescription.xml`` text.
+
+    Parameters
+    ----------
+    variables : list of FmuVariable
+        From :func:`fmus.layout.variable_layout` (with the same `version`).
+    version : {2, 3}
+    name, identifier : str
+        Model name and ``modelIdentifier`` (the shared library's name).
+    token : str
+        GUID (2.0) / instantiation token (3.0); the binary checks it.
+    description : str
+    model_exchange : bool
+        Offer Model Exchange besides Co-Simulation.
+    date : str, optional
+        ``generationDateAndTime`` (ISO 8601); default now.  Fix it for
+        reproducible files.
+
+    Returns
+    -------
+    str
+    """
+    root = _common_root(version, name, token, description, date)
+    _interfaces(root, version, identifier, model_exchange)
+    _units_and_categories(root, variables)
+    if version == 2:
+        _fmi2_structure(root, variables, _fmi2_variables(root, variables))
+    else:
+        _fmi3_variables(root, variables)
+        _fmi3_structure(root, variables)
+    ET.indent(root)
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"

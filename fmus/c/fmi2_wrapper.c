@@ -20,10 +20,26 @@ typedef struct {
   char msg[BC_MSG];
 } Instance;
 
+/* The logger takes a printf format, but importers written in other languages
+   (fmpy's Python callback) receive the format unformatted: pass the finished
+   text as the format, with every '%' doubled. */
+static void log_text(fmi2CallbackLogger logger, fmi2ComponentEnvironment env, const char *name,
+                     fmi2Status status, const char *text) {
+  char escaped[2 * BC_MSG + 256];
+  size_t k = 0;
+  for (const char *c = text; *c && k + 2 < sizeof(escaped); ++c) {
+    if (*c == '%') escaped[k++] = '%';
+    escaped[k++] = *c;
+  }
+  escaped[k] = '\0';
+  if (logger)
+    logger(env, name, status, status == fmi2Warning ? "logStatusWarning" : "logStatusError", escaped);
+}
+
 static fmi2Status fail(Instance *m, fmi2Status status, const char *function) {
-  if (m->logger)
-    m->logger(m->env, m->name, status, status == fmi2Warning ? "logStatusWarning" : "logStatusError",
-              "%s: %s", function, m->msg);
+  char text[BC_MSG + 128];
+  snprintf(text, sizeof(text), "%s: %s", function, m->msg);
+  log_text(m->logger, m->env, m->name, status, text);
   return status;
 }
 
@@ -64,16 +80,17 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
   fmi2CallbackLogger logger = functions ? functions->logger : NULL;
   fmi2ComponentEnvironment env = functions ? functions->componentEnvironment : NULL;
   const char *name = instanceName ? instanceName : "";
+  char text[BC_MSG];
   if (!fmuGUID || strcmp(fmuGUID, BC_TOKEN) != 0) {
-    if (logger) logger(env, name, fmi2Error, "logStatusError",
-                       "fmi2Instantiate: GUID %s does not match this FMU's %s",
-                       fmuGUID ? fmuGUID : "(null)", BC_TOKEN);
+    snprintf(text, sizeof(text), "fmi2Instantiate: GUID %s does not match this FMU's %s",
+             fmuGUID ? fmuGUID : "(null)", BC_TOKEN);
+    log_text(logger, env, name, fmi2Error, text);
     return NULL;
   }
   if (fmuType == fmi2ModelExchange && !BC_HAS_ME) {
-    if (logger) logger(env, name, fmi2Error, "logStatusError",
-                       "fmi2Instantiate: %s has held (sampled) variables and only offers "
-                       "Co-Simulation", BC_MODEL_NAME);
+    snprintf(text, sizeof(text), "fmi2Instantiate: %s has held (sampled) variables and only "
+             "offers Co-Simulation", BC_MODEL_NAME);
+    log_text(logger, env, name, fmi2Error, text);
     return NULL;
   }
   Instance *m = (Instance *)calloc(1, sizeof(Instance));

@@ -8,6 +8,8 @@ Examples
   bondcosim draw dc-motor -o dc_motor.png
   bondcosim simulate rlc --stop-time 0.2 --input "V=sin(100*t)" -o rlc.csv --plot rlc.png
   bondcosim compare exoskeleton --json --plot figures
+  bondcosim export-fmu pam -o pam.fmu --fmi 3
+  bondcosim fmu-info pam.fmu
   bondcosim demo
 """
 from __future__ import annotations
@@ -65,6 +67,20 @@ def _parser() -> argparse.ArgumentParser:
                    help="print max_abs_error, rms_error per signal and matrices_equal as JSON")
     p.add_argument("--plot", default=None, metavar="DIR", help="save the overlay/difference plots in DIR")
 
+    p = sub.add_parser("export-fmu", help="export MODEL as a binary FMU (Co-Simulation, and "
+                       "Model Exchange for smooth models)")
+    p.add_argument("model")
+    p.add_argument("-o", "--output", required=True, help="output .fmu file")
+    p.add_argument("--fmi", type=int, choices=[2, 3], default=2, help="FMI version (default 2)")
+    p.add_argument("--solver-step", type=float, default=None,
+                   help="largest internal RK4 sub-step of Co-Simulation, s (default from the model)")
+    p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                   help="parameter start value (repeatable)")
+
+    p = sub.add_parser("fmu-info", help="list an FMU's variables with causality, units and start values")
+    p.add_argument("fmu", help=".fmu file (any FMI 2.0/3.0 FMU)")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+
     p = sub.add_parser("demo", help="the main job on built-in defaults: equations, drawings, a simulation")
     p.add_argument("--output-dir", default="demo-output", help="where figures and CSVs go (default demo-output)")
     return parser
@@ -112,16 +128,21 @@ def _cmd_draw(args) -> int:
     return 0
 
 
-def _cmd_simulate(args) -> int:
-    from bondgraph.simulation import simulate
-    from .models import load_model
-    graph = load_model(args.model)
+def _numbers(items) -> dict[str, float]:
     params = {}
-    for name, text in _pairs(args.param, "--param").items():
+    for name, text in _pairs(items, "--param").items():
         try:
             params[name] = float(text)
         except ValueError:
             raise ParameterError(f"--param {name}={text!r}: not a number", name=name) from None
+    return params
+
+
+def _cmd_simulate(args) -> int:
+    from bondgraph.simulation import simulate
+    from .models import load_model
+    graph = load_model(args.model)
+    params = _numbers(args.param)
     inputs = {}
     for name, text in _pairs(args.input, "--input").items():
         try:
@@ -154,6 +175,25 @@ def _cmd_compare(args) -> int:
     return 0
 
 
+def _cmd_export_fmu(args) -> int:
+    from fmus import export
+    from fmus.info import fmu_info
+    from .models import load_model
+    path = export(load_model(args.model), args.output, fmi_version=args.fmi,
+                  solver_step=args.solver_step, params=_numbers(args.param) or None)
+    info = fmu_info(path)
+    print(f"wrote {path} (FMI {info['fmi_version']}: {', '.join(info['interfaces'])}; "
+          f"{len(info['variables'])} variables)")
+    return 0
+
+
+def _cmd_fmu_info(args) -> int:
+    from fmus.info import fmu_info, format_fmu_info
+    info = fmu_info(args.fmu)
+    print(json.dumps(info, indent=2) if args.json else format_fmu_info(info))
+    return 0
+
+
 def _cmd_demo(args) -> int:
     from .demo import run_demo
     run_demo(args.output_dir)
@@ -161,7 +201,8 @@ def _cmd_demo(args) -> int:
 
 
 _COMMANDS = {"list": _cmd_list, "equations": _cmd_equations, "draw": _cmd_draw,
-             "simulate": _cmd_simulate, "compare": _cmd_compare, "demo": _cmd_demo}
+             "simulate": _cmd_simulate, "compare": _cmd_compare, "export-fmu": _cmd_export_fmu,
+             "fmu-info": _cmd_fmu_info, "demo": _cmd_demo}
 
 
 def main(argv=None) -> int:

@@ -218,3 +218,55 @@ class AlgebraicLoopError(CosimError):
     ports : tuple of str
         The loop as ``component.port`` names, in signal order.
     """
+
+
+class EstimatorError(BondcosimError, ValueError):
+    """An estimator or controller is set up wrongly: a matrix of the wrong
+    shape, a non-finite entry, a covariance or weight that is not symmetric
+    positive (semi-)definite, a Riccati equation without a stabilising solution.
+
+    Attributes
+    ----------
+    name : str
+        The offending matrix or parameter (``"Q"``, ``"R"``, ``"P0"``), or "".
+    """
+
+    def __init__(self, message: str, name: str = ""):
+        self.name = str(name)
+        super().__init__(message)
+
+
+class UnobservableModeError(EstimatorError):
+    """A mode of ``A`` that the measurements ``C`` cannot see (and that is not
+    stable, so no observer can estimate it).
+
+    Attributes
+    ----------
+    eigenvalue : complex
+        The unobservable eigenvalue of ``A`` (continuous: rad/s; discrete: per step).
+    direction : ndarray, shape (n_states,)
+        Its eigenvector (unit 2-norm), the state combination that is invisible.
+    states : tuple of str
+        Names of the states that dominate `direction` (empty without names).
+    """
+
+    def __init__(self, message: str, eigenvalue: complex, direction, states=(), name: str = "C"):
+        self.eigenvalue = complex(eigenvalue)
+        self.direction = direction
+        self.states = tuple(states)
+        super().__init__(message, name=name)
+
+
+class UncontrollableModeError(EstimatorError):
+    """A mode of ``A`` that the inputs ``B`` cannot move (and that is not
+    stable, so no state feedback can stabilise it).  Attributes as
+    :class:`UnobservableModeError`."""
+
+    def __init__(self, message: str, eigenvalue: complex, direction, states=(), name: str = "B"):
+        self.eigenvalue = complex(eigenvalue)
+        self.direction = direction
+        self.states = tuple(states)
+        super().__init__(message, name=name)
+
+
+__all__ += ["EstimatorError", "UnobservableModeError", "UncontrollableModeError"]

@@ -22,10 +22,9 @@ class Slave:
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.messages: list[str] = []
         cls = FMU2Slave if self.version == 2 else FMU3Slave
-        kwargs = {"guid": self.md.guid} if self.version == 2 else {
-            "instantiationToken": self.md.instantiationToken}
-        self.fmu = cls(unzipDirectory=self.dir, modelIdentifier=self.md.coSimulation.modelIdentifier,
-                       instanceName="test", **kwargs)
+        # fmpy passes FMI 3.0's instantiationToken as ``guid`` too
+        self.fmu = cls(guid=self.md.guid, unzipDirectory=self.dir,
+                       modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName="test")
         if self.version == 2:
             def logger(env, name, status, category, message):
                 self.messages.append(message.decode())

@@ -9,7 +9,10 @@ Components
     through fmpy's raw C functions).
 Blocks
     :class:`Constant`, :class:`Step`, :class:`Function`, :class:`Table`,
-    :class:`PI` (discrete, with limits and anti-windup).
+    :class:`PI` (discrete, with limits and anti-windup), :class:`Antagonistic`
+    (one command split into an antagonistic pair).
+Scenarios
+    :mod:`cosim.scenarios` (closed loops around the seed plants' FMUs).
 Master
     :class:`CoSimulation` (fixed communication step, execution order and
     algebraic-loop detection from direct feedthrough) returning a
@@ -24,13 +27,13 @@ Master
 >>> result = sim.run(2.0)                                               # doctest: +SKIP
 >>> result.to_csv("closed_loop.csv"); fig = result.plot()               # doctest: +SKIP
 """
-from .blocks import PI, Constant, Function, Step, Table
+from .blocks import PI, Antagonistic, Constant, Function, Step, Table
 from .component import Component, Port, PythonBlock
 from .fmu_component import FMUComponent
 from .master import CoSimulation, CosimResult
 
 __all__ = [
     "Component", "Port", "PythonBlock", "FMUComponent",
-    "Constant", "Step", "Function", "Table", "PI",
+    "Constant", "Step", "Function", "Table", "PI", "Antagonistic",
     "CoSimulation", "CosimResult",
 ]

@@ -16,7 +16,7 @@ from bondgraph.errors import CosimError
 
 from .component import Port, PythonBlock
 
-__all__ = ["Constant", "Step", "Function", "Table", "PI"]
+__all__ = ["Constant", "Step", "Function", "Table", "PI", "Antagonistic"]
 
 
 def _tol(t: float) -> float:
@@ -217,3 +217,31 @@ class PI(PythonBlock):
         if (v > self.u_max and self.ki * e > 0.0) or (v < self.u_min and self.ki * e < 0.0):
             return   # anti-windup: saturated and e would push further in
         self.integral += dt * e
+
+
+class Antagonistic(PythonBlock):
+    """Split one command into an antagonistic pair: ``a = u0 + v``, ``b = u0 - v``.
+
+    For actuators that work in pairs (the two valves of a PAM joint, the two
+    tendons of a cable drive).  ``v`` feeds through to both outputs.
+
+    Parameters
+    ----------
+    name : str
+    u0 : float
+        Common command, output unit (e.g. 5 V: both valves half open).
+    unit : str, optional
+        Unit of input and outputs.
+    outputs : (str, str), optional
+        Output port names (default ``"u1"``, ``"u2"``).
+    """
+
+    def __init__(self, name: str, u0: float, *, unit: str = "", outputs=("u1", "u2")):
+        self.u0 = _finite(name, "u0", u0)
+        super().__init__(name, inputs=[Port("v", unit, "differential command")],
+                         outputs=[Port(outputs[0], unit, "u0 + v", start=self.u0),
+                                  Port(outputs[1], unit, "u0 - v", start=self.u0)])
+
+    def output(self, t: float) -> None:
+        self.y[0] = self.u0 + self.u[0]
+        self.y[1] = self.u0 - self.u[0]

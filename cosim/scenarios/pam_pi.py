@@ -1,4 +1,4 @@
-"""Export the PAM joint as an FMU and close a PI angle loop around it in the co-simulation master.
+"""Scenario ``pam-pi``: the PAM joint exported as an FMU under a PI angle loop in the master.
 
 The plant is the antagonistic pneumatic-muscle joint of seed 000 (``pam``,
 Co-Simulation FMU: 1 ms communication step, 4 internal RK4 sub-steps with
@@ -7,7 +7,11 @@ joint angle (deg) whose output ``v`` (V) is split antagonistically:
 ``u1 = u0 + v``, ``u2 = u0 - v`` (muscle 1 pulls towards positive angles), within
 the valves' 0-10 V range.  The joint starts at rest at ``u1 = u2 = u0``.
 
-Run:  python examples/cosim_pam_pi.py [OUTPUT_DIR]
+The plant is slow (pressures settle over about a second) and the friction
+sticks, so a plain PI settles within a few degrees, with overshoot on the
+large steps; the UKF-based controllers of seed 000 are a later scenario.
+
+Run:  python -m cosim.scenarios.pam_pi [OUTPUT_DIR]
 """
 from __future__ import annotations
 
@@ -19,30 +23,33 @@ import numpy as np
 
 import bondgraph.library as library
 from bondgraph.blockdiagram import pam
-from cosim import PI, CoSimulation, FMUComponent, Port, PythonBlock, Table
 from fmus import export
+
+from ..blocks import PI, Antagonistic, Table
+from ..fmu_component import FMUComponent
+from ..master import CoSimulation
 
 U0 = 5.0          # V, common valve command (both muscles half open)
 V_MAX = 5.0       # V, so u1, u2 stay in 0...10 V
-KP, KI = 0.3, 0.3   # V/deg, V/(deg s)
-
-
-class Antagonist(PythonBlock):
-    """Split one command v into the two valve voltages u1 = u0 + v, u2 = u0 - v (feedthrough)."""
-
-    def __init__(self, name: str, u0: float):
-        super().__init__(name, inputs=[Port("v", "V")],
-                         outputs=[Port("u1", "V", start=u0), Port("u2", "V", start=u0)])
-        self.u0 = u0
-
-    def output(self, t: float) -> None:
-        self.y[0] = self.u0 + self.u[0]
-        self.y[1] = self.u0 - self.u[0]
+KP, KI = 0.8, 1.0   # V/deg, V/(deg s): tuned by hand on this plant
 
 
 def run(output_dir=None, *, t_end: float = 13.0, step: float = 1e-3):
-    """Co-simulate the PI-controlled PAM joint; returns the result (and writes CSV + PNG
-    into `output_dir` if given)."""
+    """Co-simulate the PI-controlled PAM joint.
+
+    Parameters
+    ----------
+    output_dir : path-like, optional
+        Write ``cosim_pam_pi.csv`` and ``cosim_pam_pi.png`` there.
+    t_end, step : float, s
+        Duration and communication step.
+
+    Returns
+    -------
+    CosimResult
+        Signals ``reference.y`` (deg), ``plant.psi`` (deg), ``plant.u1``, ``plant.u2`` (V),
+        ``plant.tau`` (N m), ``pi.u`` ... as named by the connections.
+    """
     with tempfile.TemporaryDirectory() as tmp:
         fmu = export(library.build("pam"), Path(tmp) / "pam.fmu")
         reference = Table("reference", [0.0, 1.0, 4.0, 7.0, 10.0], [0.0, 10.0, -10.0, 15.0, 0.0],
@@ -53,7 +60,7 @@ def run(output_dir=None, *, t_end: float = 13.0, step: float = 1e-3):
         plant = FMUComponent(fmu, "plant", start_values={
             "u1": U0, "u2": U0, "P_1": P1, "P_2": P2, "q_psi": psi})
         sim = CoSimulation(
-            [reference, pi, Antagonist("split", U0), plant],
+            [reference, pi, Antagonistic("split", U0, unit="V"), plant],
             [("reference.y", "pi.r"), ("plant.psi", "pi.y_m"), ("pi.v", "split.v"),
              ("split.u1", "plant.u1"), ("split.u2", "plant.u2")],
             step=step)

@@ -25,6 +25,7 @@ __all__ = [
     "FMUError",
     "CosimError",
     "AlgebraicLoopError",
+    "EstimatorError",
 ]
 
 
@@ -221,18 +222,34 @@ class AlgebraicLoopError(CosimError):
 
 
 class EstimatorError(BondcosimError, ValueError):
-    """An estimator or controller is set up wrongly: a matrix of the wrong
-    shape, a non-finite entry, a covariance or weight that is not symmetric
-    positive (semi-)definite, a Riccati equation without a stabilising solution.
+    """An estimator is set up wrongly or fails at a step.
+
+    Set-up problems: a matrix of the wrong shape, not symmetric, not positive
+    (semi)definite or not finite; a measurement of the wrong shape or not
+    finite.  Failures at a step: a covariance that is no longer positive
+    definite (its Cholesky factorisation fails), a model that returns
+    non-finite states.
 
     Attributes
     ----------
     name : str
-        The offending matrix or parameter (``"Q"``, ``"R"``, ``"P0"``), or "".
+        The offending matrix or argument: ``"x0"``, ``"P0"``, ``"Q"``, ``"R"``,
+        ``"z"``, ``"u"``, ``"P"`` (posterior), ``"P_prior"``, ``"S"``
+        (innovation covariance), ``"fx"``, ``"hx"``...
+    step : int or None
+        Filter step (number of predictions made) at which it happened.
+    time : float or None
+        Filter time, s, when known.
+    problems : list of str
+        Every problem found (validation collects them all before raising).
     """
 
-    def __init__(self, message: str, name: str = ""):
+    def __init__(self, message: str, name: str = "", *, step: int | None = None,
+                 time: float | None = None, problems: list[str] | None = None):
         self.name = str(name)
+        self.step = step
+        self.time = time
+        self.problems = list(problems) if problems else [message]
         super().__init__(message)
 
 
@@ -269,4 +286,4 @@ class UncontrollableModeError(EstimatorError):
         super().__init__(message, name=name)
 
 
-__all__ += ["EstimatorError", "UnobservableModeError", "UncontrollableModeError"]
+__all__ += ["UnobservableModeError", "UncontrollableModeError"]

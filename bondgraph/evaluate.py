@@ -342,6 +342,56 @@ class CompiledModel:
         if nz:
             self._z_warm[n] = z
 
+    def rk4_step(self, x, u=None, *, t0=0.0, h, substeps=1, p=None, d=None):
+        """`substeps` classic RK4 sub-steps of `h` s from `t0`, inputs held: one sample.
+
+        The fixed-step scheme of :func:`~bondgraph.simulation.simulate` for one
+        output interval (``bc_rk4`` of :mod:`bondgraph.codegen_c`), for a whole
+        batch in one call (sigma points, Monte-Carlo runs): at the start of
+        every sub-step the held values are replaced by
+        :math:`d^+ = g(t, x, u, z, d, p, h)` and held over it; algebraic
+        unknowns are solved at every stage.
+
+        Parameters
+        ----------
+        x : array_like, shape (n_batch, n_states) or (n_states,)
+            States at `t0`, SI units.
+        u : array_like, shape (n_inputs,) or (n_batch, n_inputs), optional
+            Inputs, held over the sample; default ``input_defaults``.
+        t0 : float, s
+            Time at the start.
+        h : float, s
+            Sub-step length (> 0).
+        substeps : int
+            Number of sub-steps (>= 1); the sample is ``substeps * h`` s.
+        p : None, dict or array_like, shape (n_params,) or (n_batch, n_params)
+            Parameters (see the class docstring).
+        d : array_like, shape (n_held,) or (n_batch, n_held), optional
+            Held values at `t0`; default ``held_initial``.
+
+        Returns
+        -------
+        x : ndarray, shape like `x`
+            States at ``t0 + substeps * h``.
+        d : ndarray, shape (n_batch, n_held) or (n_held,)
+            Held values in effect over the last sub-step.
+
+        Raises
+        ------
+        ValueError
+            Wrong shape, ``h <= 0`` or ``substeps < 1``.
+        SimulationError
+            Newton's method failed on an algebraic loop.
+        """
+        if not (float(h) > 0.0) or int(substeps) != substeps or substeps < 1:
+            raise ValueError(f"rk4_step: need h > 0 and an integer substeps >= 1; found h={h!r}, "
+                             f"substeps={substeps!r}")
+        single, x, u, _, p, d = self._normalise(x, u, t0, p, d)
+        x = x.copy()
+        d = np.array(np.broadcast_to(d, (x.shape[0], d.shape[1])))
+        self._rk4(float(t0), float(h), int(substeps), x, u, p, d)
+        return (x[0], d[0]) if single else (x, d)
+
     def _kernel(self, name, x, u, t, p, d, z, step=0.0):
         single, x, u, t, p, d = self._normalise(x, u, t, p, d)
         out = self._call(name, t, x, u, p, d, z, step)

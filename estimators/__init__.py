@@ -1,6 +1,15 @@
 """estimators: UKF, Kalman filter / steady-state observer, KPID, LQR/LQI design, PI.
 
-Layer 3 of the design (imports ``bondgraph`` and ``fmus``).  Arrives with the estimators issue.
+Layer 3 of the design (imports ``bondgraph`` and ``fmus``).
+
+Unscented Kalman filter
+-----------------------
+UnscentedKalmanFilter   UKF on batched Python models or a bond-graph model (C step kernel)
+UKFResult               estimates and covariances of ``batch_filter``
+JulierSigmaPoints       the paper's sigma points (kappa; seed 000 uses 0)
+MerweScaledSigmaPoints  scaled sigma points (alpha, beta, kappa)
+SigmaPoints             base class of both
+StateMap                linear map between filter and model coordinates
 
 Linear Kalman filter, steady-state observers, LQR/LQI, PID/KPID, PI
 --------------------------------------------------------------------
@@ -17,7 +26,14 @@ augment_integral          the integral augmentation (and augment_integral_discre
 PID, KPID                 discrete PID and Kalman-PID (seed 002 eq. 14); kpid_model, kpid_model_zoh
 DiscretePI                the sensor-less PAM PI (seed 000, Sec. IV.C)
 """
-__all__: list[str] = []
+from .sigma_points import JulierSigmaPoints, MerweScaledSigmaPoints, SigmaPoints
+from .ukf import UKFResult, UnscentedKalmanFilter
+from .ukf_model import StateMap
+
+__all__: list[str] = [
+    "UnscentedKalmanFilter", "UKFResult", "JulierSigmaPoints", "MerweScaledSigmaPoints",
+    "SigmaPoints", "StateMap",
+]
 
 # -- linear estimators and controllers
 from .kalman import KalmanFilter, KalmanResult  # noqa: E402

@@ -39,57 +39,19 @@ References
 """
 from __future__ import annotations
 
-import sys
-import time as _time
-from dataclasses import dataclass
-
 import numpy as np
 
 from bondgraph.errors import EstimatorError
 
-from .sigma_points import SigmaPoints
-from .ukf_checks import check_covariance, check_vector, raise_problems
+from .ukf_checks import check_covariance, check_vector, raise_problems, validate_setup
 from .ukf_engine import NumpyEngine
 from .ukf_model import ModelFunctions, StateMap, substeps_for
+from .ukf_result import UKFResult, _Progress
 
 __all__ = ["UnscentedKalmanFilter", "UKFResult", "KERNELS"]
 
 #: Accepted values of ``kernel``.
 KERNELS = ("auto", "c", "numpy")
-
-
-@dataclass(frozen=True, eq=False)
-class UKFResult:
-    """Estimates of :meth:`UnscentedKalmanFilter.batch_filter`.
-
-    Attributes
-    ----------
-    times : ndarray, shape (N,), s
-    x : ndarray, shape (N, n)
-        Posterior means; row 0 is the filter's state before the run.
-    P : ndarray, shape (N, n, n)
-        Posterior covariances.
-    state_names : tuple of str
-    units : tuple of str
-    """
-
-    times: np.ndarray
-    x: np.ndarray
-    P: np.ndarray
-    state_names: tuple
-    units: tuple = ()
-
-    def __getitem__(self, name: str) -> np.ndarray:
-        """Estimates of state `name`, shape (N,)."""
-        try:
-            return self.x[:, self.state_names.index(name)]
-        except ValueError:
-            raise KeyError(f"no state {name!r}; states are {', '.join(self.state_names)}") from None
-
-    @property
-    def std(self) -> np.ndarray:
-        """Standard deviations, shape (N, n): square roots of the diagonals of ``P``."""
-        return np.sqrt(np.einsum("kii->ki", self.P))
 
 
 class UnscentedKalmanFilter:
@@ -147,7 +109,7 @@ class UnscentedKalmanFilter:
             raise EstimatorError("fx and hx must be callables (X, u) -> array", "fx" if not callable(fx) else "hx")
         n = np.size(x0)
         m = np.shape(R)[0] if np.ndim(R) == 2 else None   # None: R is reported as not a matrix
-        x0, P0, Q, R = self._validate(points, x0, P0, Q, R, n, m, state_names or (), measurement_names or ())
+        x0, P0, Q, R = validate_setup(points, x0, P0, Q, R, n, m, state_names or (), measurement_names or ())
 
         def propagate(X, u, t, d):
             return fx(X, u), d
@@ -213,13 +175,11 @@ class UnscentedKalmanFilter:
         from .ukf_c import CEngine, c_engine_available
 
         if kernel not in KERNELS:
-            raise EstimatorError(f"kernel must be one of {', '.join(map(repr, KERNELS))}; found {kernel!r}",
-                                 "kernel")
+            raise EstimatorError(f"kernel must be one of {', '.join(map(repr, KERNELS))}; found {kernel!r}", "kernel")
         if not isinstance(model, CompiledModel):
             model = compile_model(model, backend=backend)
         if state_map is not None and not isinstance(state_map, StateMap):
-            raise EstimatorError(f"state_map must be a StateMap; found {type(state_map).__name__}",
-                                 "state_map")
+            raise EstimatorError(f"state_map must be a StateMap; found {type(state_map).__name__}", "state_map")
         if not (np.isfinite(dt) and dt > 0):
             raise EstimatorError(f"dt must be a finite number of seconds > 0; found {dt!r}", "dt")
         eqs = model.equations
@@ -227,7 +187,7 @@ class UnscentedKalmanFilter:
                             state_map=state_map, params=params)
         names = state_map.names if state_map else model.state_names
         units = state_map.units if state_map else tuple(eqs.units.get(s, "") for s in names)
-        x0, P0, Q, R = cls._validate(points, x0, P0, Q, R, len(names), len(fn.outputs), names, fn.outputs)
+        x0, P0, Q, R = validate_setup(points, x0, P0, Q, R, len(names), len(fn.outputs), names, fn.outputs)
         problems = []
         d0 = model.default_held if d0 is None else d0
         d0 = check_vector("d0", d0, len(model.held_names), problems, names=model.held_names)
@@ -242,24 +202,6 @@ class UnscentedKalmanFilter:
         self = cls.__new__(cls)
         self._setup(engine, points, redraw, names, units, fn.outputs, model)
         return self
-
-    @staticmethod
-    def _validate(points, x0, P0, Q, R, n, m, state_names, measurement_names):
-        if not isinstance(points, SigmaPoints):
-            raise EstimatorError("points must be a SigmaPoints object (JulierSigmaPoints, "
-                                 f"MerweScaledSigmaPoints); found {type(points).__name__}", "points")
-        problems = []
-        if points.n != n:
-            problems.append(f"points: made for n = {points.n} states; the filter has {n}")
-        x0 = check_vector("x0", x0, n, problems, names=state_names)
-        P0 = check_covariance("P0", P0, n, problems, definite=True, names=state_names)
-        Q = check_covariance("Q", Q, n, problems, definite=False, names=state_names)
-        if m is None:
-            problems.append(f"R: expected a square matrix (m, m); found shape {np.shape(R)}")
-        else:
-            R = check_covariance("R", R, m, problems, definite=True, names=measurement_names)
-        raise_problems(problems, "UKF set-up")
-        return x0, P0, Q, R
 
     def _setup(self, engine, points, redraw, state_names, units, measurement_names, model):
         self._e = engine
@@ -313,22 +255,18 @@ class UnscentedKalmanFilter:
         self._e.set_state(P=v)
 
     # -- steps ------------------------------------------------------------------------------
-    def _check_u(self, u):
-        if self._nu is None or u is None:
-            return u
+    def _checked(self, name, value, n, names, what):
         problems = []
-        u = check_vector("u", u, self._nu, problems, names=self.model.input_names)
+        value = check_vector(name, value, n, problems, names=names)
         if problems:
-            raise EstimatorError(f"UKF step {self.k}: {problems[0]}", "u", step=self.k, time=self.t)
-        return u
+            raise EstimatorError(f"UKF {what} at step {self.k}: {problems[0]}", name, step=self.k, time=self.t)
+        return value
+
+    def _check_u(self, u):
+        return u if self._nu is None or u is None else self._checked("u", u, self._nu, self.model.input_names, "step")
 
     def _check_z(self, z):
-        problems = []
-        z = check_vector("z", z, self.dim_z, problems, names=self.measurement_names)
-        if problems:
-            raise EstimatorError(f"UKF update at step {self.k}: {problems[0]}", "z", step=self.k,
-                                 time=self.t)
-        return z
+        return self._checked("z", z, self.dim_z, self.measurement_names, "update")
 
     def predict(self, u=None) -> None:
         """Prediction, eqs. (13)-(18): :attr:`x`, :attr:`P` become the prior.
@@ -395,7 +333,7 @@ class UnscentedKalmanFilter:
             Inputs held from each sample to the next (``u[N-1]`` is not used);
             None: the model's defaults (or None for Python models).
         times : array_like, shape (N,), optional
-            Sample times for the result; default ``t + k dt``.
+            Sample times for the result; default ``t + k dt`` (``t + k`` if ``dt`` is 0).
         progress : bool
             Show the progress on stderr.
 
@@ -437,7 +375,8 @@ class UnscentedKalmanFilter:
                 X[k], P[k] = self._e.x, self._e.P
                 bar.update(k + 1)
         bar.close()
-        times = (t_start + self._e.dt * np.arange(N)) if times is None else np.asarray(times, dtype=float)
+        if times is None:   # without a sample time (Python models, dt = 0): sample numbers
+            times = t_start + (self._e.dt or 1.0) * np.arange(N)
         return UKFResult(times, X, P, self.state_names, self.units)
 
     def _inputs(self, u, N):
@@ -455,23 +394,3 @@ class UnscentedKalmanFilter:
             raise EstimatorError(f"batch_filter: u[{r}, {c}] ({self.model.input_names[c]}) is not finite",
                                  "u", step=int(r))
         return np.ascontiguousarray(U)
-
-
-class _Progress:
-    """One self-overwriting line on stderr, at most every 0.2 s."""
-
-    def __init__(self, enabled, total):
-        self.enabled, self.total, self._last = enabled, max(1, total), 0.0
-
-    def update(self, done):
-        if self.enabled and _time.monotonic() - self._last >= 0.2:
-            self._last = _time.monotonic()
-            sys.stderr.write(f"\rukf: {100.0 * done / self.total:5.1f} %  ({done}/{self.total} samples)")
-            sys.stderr.flush()
-
-    def close(self):
-        if self.enabled:
-            self._last = 0.0
-            self.update(self.total)
-            sys.stderr.write("\n")
-            sys.stderr.flush()

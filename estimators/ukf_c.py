@@ -150,10 +150,13 @@ class CEngine:
         self.k += 1
 
     def update(self, z, u):
-        if u is not None:
-            self._u[:] = u
         self._y[:] = z
+        if u is not None:   # for this update only; the last predict's input stays
+            self._u_prev[:] = self._u
+            self._u[:] = u
         status = self._update_fn(self._ws_p, self._info_p)
+        if u is not None:
+            self._u[:] = self._u_prev
         if status:
             self._raise(status, "update")
 

@@ -10,7 +10,9 @@ import numpy as np
 
 from bondgraph.errors import EstimatorError
 
-__all__ = ["check_vector", "check_covariance", "raise_problems", "SYMMETRY_RTOL"]
+from .sigma_points import SigmaPoints
+
+__all__ = ["check_vector", "check_covariance", "raise_problems", "validate_setup", "SYMMETRY_RTOL"]
 
 #: Relative tolerance of the symmetry check: :math:`|M - M^T| \\le 10^{-9} \\max|M|`.
 SYMMETRY_RTOL = 1e-9
@@ -100,3 +102,23 @@ def raise_problems(problems: list, what: str) -> None:
         n = len(problems)
         raise EstimatorError(f"{what}: {n} problem{'s' if n != 1 else ''}:\n"
                              + "\n".join(f"  - {p}" for p in problems), first, problems=problems)
+
+
+def validate_setup(points, x0, P0, Q, R, n, m, state_names, measurement_names):
+    """Checked ``x0, P0, Q, R`` of a UKF with n states and m measurements (m None: R is not
+    a matrix); raises one :class:`EstimatorError` listing every problem."""
+    if not isinstance(points, SigmaPoints):
+        raise EstimatorError("points must be a SigmaPoints object (JulierSigmaPoints, "
+                             f"MerweScaledSigmaPoints); found {type(points).__name__}", "points")
+    problems = []
+    if points.n != n:
+        problems.append(f"points: made for n = {points.n} states; the filter has {n}")
+    x0 = check_vector("x0", x0, n, problems, names=state_names)
+    P0 = check_covariance("P0", P0, n, problems, definite=True, names=state_names)
+    Q = check_covariance("Q", Q, n, problems, definite=False, names=state_names)
+    if m is None:
+        problems.append(f"R: expected a square matrix (m, m); found shape {np.shape(R)}")
+    else:
+        R = check_covariance("R", R, m, problems, definite=True, names=measurement_names)
+    raise_problems(problems, "UKF set-up")
+    return x0, P0, Q, R

@@ -1,0 +1,64 @@
+"""Results of :meth:`estimators.ukf.UnscentedKalmanFilter.batch_filter`, and its progress line."""
+from __future__ import annotations
+
+import sys
+import time as _time
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["UKFResult"]
+
+
+@dataclass(frozen=True, eq=False)
+class UKFResult:
+    """Estimates of :meth:`UnscentedKalmanFilter.batch_filter`.
+
+    Attributes
+    ----------
+    times : ndarray, shape (N,), s
+    x : ndarray, shape (N, n)
+        Posterior means; row 0 is the filter's state before the run.
+    P : ndarray, shape (N, n, n)
+        Posterior covariances.
+    state_names : tuple of str
+    units : tuple of str
+    """
+
+    times: np.ndarray
+    x: np.ndarray
+    P: np.ndarray
+    state_names: tuple
+    units: tuple = ()
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        """Estimates of state `name`, shape (N,)."""
+        try:
+            return self.x[:, self.state_names.index(name)]
+        except ValueError:
+            raise KeyError(f"no state {name!r}; states are {', '.join(self.state_names)}") from None
+
+    @property
+    def std(self) -> np.ndarray:
+        """Standard deviations, shape (N, n): square roots of the diagonals of ``P``."""
+        return np.sqrt(np.einsum("kii->ki", self.P))
+
+
+class _Progress:
+    """One self-overwriting line on stderr, at most every 0.2 s."""
+
+    def __init__(self, enabled, total):
+        self.enabled, self.total, self._last = enabled, max(1, total), 0.0
+
+    def update(self, done):
+        if self.enabled and _time.monotonic() - self._last >= 0.2:
+            self._last = _time.monotonic()
+            sys.stderr.write(f"\rukf: {100.0 * done / self.total:5.1f} %  ({done}/{self.total} samples)")
+            sys.stderr.flush()
+
+    def close(self):
+        if self.enabled:
+            self._last = 0.0
+            self.update(self.total)
+            sys.stderr.write("\n")
+            sys.stderr.flush()

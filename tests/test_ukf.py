@@ -10,6 +10,8 @@ models); the pam model simulated open loop.
 import numpy as np
 import pytest
 import scipy.linalg
+from hypothesis import given
+from hypothesis import strategies as st
 from filterpy.kalman import JulierSigmaPoints as FpJulier
 from filterpy.kalman import MerweScaledSigmaPoints as FpMerwe
 from filterpy.kalman import UnscentedKalmanFilter as FpUKF
@@ -415,6 +417,38 @@ def test_state_map_and_options_are_checked(pam):
     with pytest.raises(Exception, match="unknown output 'P3'"):
         UnscentedKalmanFilter.from_model(model, dt=DT, outputs=("P3",), x0=np.zeros(4), P0=np.eye(4),
                                          Q=np.eye(4), R=np.eye(1), points=JulierSigmaPoints(4))
+
+
+def test_models_with_algebraic_loops_use_the_numpy_engine(capsys):
+    graph = build("resistor-loop-nl")
+    eqs = graph.equations()
+    assert eqs.algebraic   # a loop solved by Newton's method at each evaluation
+    n, outputs = len(eqs.states), ("v_C",)
+    args = dict(dt=0.01, outputs=outputs, x0=np.zeros(n), P0=np.eye(n), Q=1e-4 * np.eye(n),
+                R=[[1e-2]], points=JulierSigmaPoints(n))
+    ukf = UnscentedKalmanFilter.from_model(graph, **args)
+    assert ukf.kernel == "numpy"
+    res = ukf.batch_filter(np.full((30, 1), 0.5), progress=True)
+    assert np.isfinite(res.x).all() and res.std.shape == (30, n)
+    assert "ukf: 100.0 %" in capsys.readouterr().err
+    with pytest.raises(EstimatorError, match="algebraic unknowns") as err:
+        UnscentedKalmanFilter.from_model(graph, kernel="c", **args)
+    assert err.value.name == "kernel"
+
+
+@given(st.floats(0.05, 5.0), st.floats(-0.9, 0.9), st.floats(1e-4, 1.0), st.floats(1e-3, 1.0),
+       st.sampled_from([0.0, 1.0, 3.0]))
+def test_covariance_stays_symmetric_positive_definite(p0, rho, q, r, kappa):
+    """Invariant: after every update P is exactly symmetric and positive definite."""
+    P0 = p0 * np.array([[1.0, rho], [rho, 1.0]])
+    ukf = UnscentedKalmanFilter(fx=toy_fx, hx=toy_hx, x0=[0.3, 0.0], P0=P0, Q=q * np.eye(2),
+                                R=r * np.eye(2), points=JulierSigmaPoints(2, kappa=kappa))
+    zs = np.random.default_rng(7).normal(size=(15, 2))
+    for z in zs:
+        ukf.step(0.1, z)
+        P = ukf.P
+        assert (P == P.T).all()
+        assert np.linalg.eigvalsh(P).min() > 0
 
 
 def test_benchmark_runs_once(load_script, capsys):

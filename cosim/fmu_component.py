@@ -14,7 +14,7 @@ import functools
 import os
 import weakref
 from collections import deque
-from ctypes import POINTER, byref, c_bool, c_double, c_uint, c_void_p, cast, pointer
+from ctypes import POINTER, byref, c_bool, c_double, c_int, c_uint, c_void_p, cast, pointer
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +23,7 @@ from bondgraph.errors import CosimError, FMUError, UnknownNameError
 from fmus.loading import extract_fmu, find_variable, read_fmu, remove_extracted, variable_unit
 
 from .component import Port
+from .fmu_fastpath import advance_function
 
 __all__ = ["FMUComponent"]
 
@@ -272,12 +273,22 @@ class FMUComponent:
             self._set_u = functools.partial(dll.fmi2SetReal, comp, vr_in, n_in, self._u_ptr)
             self._get_y = functools.partial(dll.fmi2GetReal, comp, vr_out, n_out, self._y_ptr)
             self._do_step = functools.partial(dll.fmi2DoStep, comp)
+        # Without feedthrough the outputs at t + dt are known after doStep: one C call
+        # sets the inputs, steps and fetches them (cosim.fmu_fastpath), output() is then free.
+        self._which = c_int()
+        self._fast = None if self._ft_any else advance_function(
+            dll, comp.value, 3 if self._v3 else 2, self._vr_in, n_in, self._u_ptr,
+            self._vr_out, n_out, self._y_ptr, self._which)
+        self._y_fresh = False
         self._set_name = "fmi3SetFloat64" if self._v3 else "fmi2SetReal"
         self._get_name = "fmi3GetFloat64" if self._v3 else "fmi2GetReal"
         self._step_name = "fmi3DoStep" if self._v3 else "fmi2DoStep"
 
     def output(self, t: float) -> None:
         """Outputs at ``t`` (s) into ``y``: set the inputs first if any feeds through."""
+        if self._y_fresh:   # the fast path fetched them at the end of the last step
+            self._y_fresh = False
+            return
         if self._ft_any:
             status = self._set_u()
             if status > 1:
@@ -287,7 +298,14 @@ class FMUComponent:
             raise self._status_error(self._get_name, t, status)
 
     def advance(self, t: float, dt: float) -> None:
-        """Set the inputs and ``doStep(t, dt)`` (s)."""
+        """Set the inputs and ``doStep(t, dt)`` (s); without feedthrough, also fetch the
+        outputs at ``t + dt`` in the same C call."""
+        if self._fast is not None:
+            status = self._fast(t, dt)
+            if status:
+                raise self._fast_error(t, status)
+            self._y_fresh = True
+            return
         if self.inputs:
             status = self._set_u()
             if status > 1:
@@ -327,6 +345,7 @@ class FMUComponent:
         self._need_state_support("set_state")
         with self._calls("setFMUstate"):
             self._fmu.setFMUState(state)
+        self._y_fresh = False
 
     def free_state(self, state) -> None:
         """Release a state saved by :meth:`get_state` (``freeFMUstate``)."""
@@ -347,6 +366,13 @@ class FMUComponent:
     # -- errors and logging ------------------------------------------------------------------
     def _log_tail(self) -> str:
         return ("; the FMU logged: " + " | ".join(list(self.messages)[-3:])) if self.messages else ""
+
+    def _fast_error(self, t: float, status: int) -> FMUError:
+        which = self._which.value
+        if which == 3:
+            return self._status_error(self._step_name, t, _TERMINATE)
+        name = (self._set_name, self._step_name, self._get_name)[which]
+        return self._status_error(name, t, status)
 
     def _status_error(self, function: str, t: float, status: int) -> FMUError:
         self._failed = True

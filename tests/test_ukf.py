@@ -453,6 +453,6 @@ def test_covariance_stays_symmetric_positive_definite(p0, rho, q, r, kappa):
 
 def test_benchmark_runs_once(load_script, capsys):
     bench = load_script("benchmarks/ukf.py")
-    bench.main(steps=20, repeats=1)
+    bench.main(steps=20, repeats=1, python_steps=2)
     out = capsys.readouterr().out
     assert "filterpy" in out and "us/step" in out

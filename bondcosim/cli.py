@@ -10,6 +10,7 @@ Examples
   bondcosim compare exoskeleton --json --plot figures
   bondcosim export-fmu pam -o pam.fmu --fmi 3
   bondcosim fmu-info pam.fmu
+  bondcosim cosim pam-pi --json --plot figures
   bondcosim demo
 """
 from __future__ import annotations
@@ -80,6 +81,13 @@ def _parser() -> argparse.ArgumentParser:
     p = sub.add_parser("fmu-info", help="list an FMU's variables with causality, units and start values")
     p.add_argument("fmu", help=".fmu file (any FMI 2.0/3.0 FMU)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+
+    p = sub.add_parser("cosim", help="run a closed-loop scenario: plant FMU, estimators and "
+                       "controllers in the co-simulation master")
+    p.add_argument("scenario", help="scenario name (bondcosim cosim --list)", nargs="?")
+    p.add_argument("--list", action="store_true", help="list the scenarios")
+    p.add_argument("--json", action="store_true", help="print the numbers as JSON")
+    p.add_argument("--plot", default=None, metavar="DIR", help="save the scenario's plots in DIR")
 
     p = sub.add_parser("demo", help="the main job on built-in defaults: equations, drawings, a simulation")
     p.add_argument("--output-dir", default="demo-output", help="where figures and CSVs go (default demo-output)")
@@ -194,6 +202,33 @@ def _cmd_fmu_info(args) -> int:
     return 0
 
 
+def _cmd_cosim(args) -> int:
+    from cosim import scenarios
+    if args.list or not args.scenario:
+        width = max(len(n) for n in scenarios.names())
+        for name in scenarios.names():
+            print(f"{name:<{width}}  {scenarios.describe(name)}")
+        return 0
+    result = scenarios.run(args.scenario, args.plot)
+    if args.json:
+        print(json.dumps(result, indent=2))
+        return 0
+    print(f"{args.scenario}: {scenarios.describe(args.scenario)}")
+    for key, value in _flatten(result):
+        print(f"  {key}: {value:.4g}" if isinstance(value, float) else f"  {key}: {value}")
+    if args.plot:
+        print(f"  plots in {args.plot}")
+    return 0
+
+
+def _flatten(data, prefix=""):
+    for key, value in data.items():
+        if isinstance(value, dict):
+            yield from _flatten(value, f"{prefix}{key}.")
+        else:
+            yield f"{prefix}{key}", value
+
+
 def _cmd_demo(args) -> int:
     from .demo import run_demo
     run_demo(args.output_dir)
@@ -202,7 +237,7 @@ def _cmd_demo(args) -> int:
 
 _COMMANDS = {"list": _cmd_list, "equations": _cmd_equations, "draw": _cmd_draw,
              "simulate": _cmd_simulate, "compare": _cmd_compare, "export-fmu": _cmd_export_fmu,
-             "fmu-info": _cmd_fmu_info, "demo": _cmd_demo}
+             "fmu-info": _cmd_fmu_info, "cosim": _cmd_cosim, "demo": _cmd_demo}
 
 
 def main(argv=None) -> int:

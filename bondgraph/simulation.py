@@ -77,7 +77,7 @@ _MAX_DEFAULT_POINTS = 10000  # cap for non-smooth models
 
 def simulate(system, t_span, *, inputs=None, x0=None, params=None, method="auto", dt=None,
              output_interval=None, backend="auto", rtol=1e-8, atol=1e-10,
-             progress=False) -> SimulationResult:
+             progress=False, max_nfev: int = 500_000) -> SimulationResult:
     """Simulate a model over a time span.
 
     Parameters
@@ -109,6 +109,12 @@ def simulate(system, t_span, *, inputs=None, x0=None, params=None, method="auto"
         Tolerances of the ``solve_ivp`` methods (states in SI units).
     progress : bool
         Print a progress line to stderr.
+    max_nfev : int
+        Budget of right-hand-side evaluations of the ``solve_ivp`` methods
+        (about 10 s of work): a solver grinding towards a singularity (a
+        volume going to zero, a stiff transient it cannot step over) stops
+        with a :class:`SimulationError` naming the time and the fastest-changing
+        states instead of running for ever.
 
     Returns
     -------
@@ -155,7 +161,8 @@ def simulate(system, t_span, *, inputs=None, x0=None, params=None, method="auto"
             X, D, info = _integrate_fixed(model, plan, x_init, d0, p, times, h_max, bar)
         else:
             times = _grid(t0, t1, output_interval or (t1 - t0) / _DEFAULT_POINTS)
-            X, info = _integrate_smooth(model, plan, x_init, p, d0, times, method, dt, rtol, atol, bar)
+            X, info = _integrate_smooth(model, plan, x_init, p, d0, times, method, dt, rtol, atol,
+                                        bar, max_nfev)
             D = np.repeat(d0, times.size, axis=0)
     finally:
         bar.close()
@@ -316,7 +323,19 @@ def _choose_method(model, plan, x, p, d, t0, span):
     return "LSODA", ratio
 
 
-def _integrate_smooth(model, plan, x0, p, d, times, method, dt, rtol, atol, bar):
+def _give_up(model, method, max_nfev, t, x, dx):
+    """Raise the SimulationError of an exhausted evaluation budget, naming the states
+    that change fastest relative to their size."""
+    rate = np.abs(dx) / np.maximum(np.abs(x), 1e-12)
+    worst = [model.state_names[i] for i in np.argsort(-rate)[:3] if rate[i] > 0]
+    raise SimulationError(
+        f"model {model.equations.name!r}: {method} gave up after {max_nfev} right-hand-side "
+        f"evaluations at t = {t:.9g} s; fastest-changing states (relative): {', '.join(worst)}. "
+        "The model may be near a singularity there; check the initial state, or raise max_nfev "
+        "(or try method='Radau')", time=float(t))
+
+
+def _integrate_smooth(model, plan, x0, p, d, times, method, dt, rtol, atol, bar, max_nfev):
     from scipy.integrate import solve_ivp
 
     t0, t1 = times[0], times[-1]
@@ -341,6 +360,8 @@ def _integrate_smooth(model, plan, x0, p, d, times, method, dt, rtol, atol, bar)
         dx = model._call("f", np.array([t]), x2, plan.vector(t, hold[0]), p, d)[0]
         _check_finite(model, dx, t, "time derivative")
         counts["nfev"] += 1
+        if counts["nfev"] > max_nfev:
+            _give_up(model, info["method"], max_nfev, t, x, dx)
         return dx
 
     def jac(t, x):

@@ -328,3 +328,14 @@ def test_csv_round_trip_property(tmp_path_factory, data, n):
     np.testing.assert_array_equal(back.t, res.t)
     for nm in names:
         np.testing.assert_array_equal(back[nm], res[nm])
+
+
+def test_a_solver_grinding_towards_a_singularity_stops_with_a_named_error():
+    """pam-frictionless from vented muscles swings towards the angle where a muscle
+    volume vanishes; LSODA's steps collapse there.  The budget turns that into an error."""
+    import bondgraph.library as library
+    from bondgraph.errors import SimulationError
+    with pytest.raises(SimulationError, match=r"gave up after 3000 right-hand-side evaluations "
+                                              r"at t = .* fastest-changing states") as info:
+        simulate(library.build("pam-frictionless"), (0.0, 2.0), max_nfev=3000)
+    assert 0.0 < info.value.time < 2.0

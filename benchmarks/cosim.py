@@ -54,13 +54,16 @@ class Controller(PythonBlock):
     def __init__(self, scenario):
         self.ctrl = peers.make_controller(scenario)
         self.setpoint = peers.setpoint_function(scenario)
+        self._last_t = None
         super().__init__("pi", inputs=[Port("psi", "deg")],
                          outputs=[Port("u1", "V"), Port("u2", "V")])
 
     def output(self, t):
-        # the master calls output once per step (no feedthrough loop), so the
-        # controller's state update may live here, as in the other loops
-        self.y[0], self.y[1] = self.ctrl.step(self.u[0], self.setpoint(t))
+        # PIController.step also advances the integral, as in the other loops; the
+        # master may ask twice for the outputs at t0 (start, then the first step)
+        if t != self._last_t:
+            self._last_t = t
+            self.y[0], self.y[1] = self.ctrl.step(self.u[0], self.setpoint(t))
 
 
 def _start_values(scenario) -> dict:

@@ -313,8 +313,8 @@ class CoSimulation:
                 c.start(t0)
                 c.output(t0)
             chunk = max(1, n // 100) if show else max(n, 1)
-            for k0 in range(0, n, chunk):
-                for k in range(k0, min(k0 + chunk, n)):
+            for k0 in range(0, n + 1, chunk):
+                for k in range(k0, min(k0 + chunk, n + 1)):
                     t = t0 + k * step
                     for out, idx, u in calls:
                         if idx is not None:
@@ -322,17 +322,11 @@ class CoSimulation:
                         out(t)
                     take(gather, out=sig_in, mode="clip")
                     log[k] = sig
-                    for adv in advances:
-                        adv(t, step)
+                    if k < n:   # the last point is only observed
+                        for adv in advances:
+                            adv(t, step)
                 if show:
                     _bar(min(k0 + chunk, n), n, t0 + min(k0 + chunk, n) * step)
-            t = t0 + n * step
-            for out, idx, u in calls:
-                if idx is not None:
-                    take(idx, out=u, mode="clip")
-                out(t)
-            take(gather, out=sig_in, mode="clip")
-            log[n] = sig
         except BondcosimError:
             raise
         except Exception as exc:

@@ -55,19 +55,24 @@ def _units_and_categories(root, variables) -> None:
     ET.SubElement(root, "DefaultExperiment", {"startTime": "0.0"})
 
 
+def _common_attrs(v) -> dict:
+    """Attributes every FMI version writes the same way, in the standard's order."""
+    attrs = {"name": v.name, "valueReference": str(v.vr)}
+    if v.description:
+        attrs["description"] = v.description
+    attrs.update({"causality": v.causality, "variability": v.variability})
+    if v.initial:
+        attrs["initial"] = v.initial
+    return attrs
+
+
 def _fmi2_variables(root, variables) -> dict[int, int]:
     """Write the ScalarVariables; return value reference -> 1-based index."""
     mv = ET.SubElement(root, "ModelVariables")
     index = {}
     for k, v in enumerate(variables, start=1):
         index[v.vr] = k
-        attrs = {"name": v.name, "valueReference": str(v.vr)}
-        if v.description:
-            attrs["description"] = v.description
-        attrs.update({"causality": v.causality, "variability": v.variability})
-        if v.initial:
-            attrs["initial"] = v.initial
-        sv = ET.SubElement(mv, "ScalarVariable", attrs)
+        sv = ET.SubElement(mv, "ScalarVariable", _common_attrs(v))
         real = {}
         if v.state_vr is not None:
             real["derivative"] = str(index[v.state_vr])
@@ -104,12 +109,7 @@ def _fmi3_variables(root, variables) -> None:
     mv = ET.SubElement(root, "ModelVariables")
     time = [v for v in variables if v.kind == "time"]
     for v in time + [v for v in variables if v.kind != "time"]:
-        attrs = {"name": v.name, "valueReference": str(v.vr)}
-        if v.description:
-            attrs["description"] = v.description
-        attrs.update({"causality": v.causality, "variability": v.variability})
-        if v.initial:
-            attrs["initial"] = v.initial
+        attrs = _common_attrs(v)
         if v.state_vr is not None:
             attrs["derivative"] = str(v.state_vr)
         if v.unit:

@@ -26,10 +26,7 @@ __all__ = ["names", "describe", "run", "SCENARIOS"]
 #: Scenario name -> module (in this package).
 SCENARIOS = {
     "pam-pi": "pam_pi",
-    "pam-ukf": "pam_ukf",
-    "pam-sensorless-pi": "pam_sensorless_pi",
     "kpid": "kpid",
-    "exo-lqi": "exo_lqi",
 }
 
 

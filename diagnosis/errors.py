@@ -1,0 +1,52 @@
+"""Exceptions of the diagnosis package.
+
+All derive from :class:`bondgraph.errors.BondcosimError` and from the builtin
+they refine (``ValueError``), so ``except ValueError`` keeps working.  Each
+carries the offending names as attributes, not only in its message.
+Other diagnosis modules append their own classes here.
+"""
+from __future__ import annotations
+
+from bondgraph.errors import BondcosimError
+
+__all__ = ["DiagnosisError", "UnitError", "RecordingError"]
+
+
+class DiagnosisError(BondcosimError, ValueError):
+    """A diagnosis cannot be set up or carried out (reason in the message)."""
+
+
+class UnitError(DiagnosisError):
+    """A unit that is unknown, or two units that cannot be converted into each other.
+
+    Attributes
+    ----------
+    unit_from, unit_to : str
+        The two units concerned (``unit_to`` is "" when only one unit was parsed).
+    """
+
+    def __init__(self, message: str, unit_from: str = "", unit_to: str = ""):
+        self.unit_from = unit_from
+        self.unit_to = unit_to
+        super().__init__(message)
+
+
+class RecordingError(DiagnosisError):
+    """A recording that cannot be used as it is.
+
+    Attributes
+    ----------
+    source : str
+        The file (or ``"arrays"``) the recording came from.
+    column : str or None
+        The offending column, when one is concerned.
+    rows : list of int
+        The offending data rows (0-based, header excluded), when known.
+    """
+
+    def __init__(self, message: str, source: str = "", column: str | None = None,
+                 rows=()):
+        self.source = str(source)
+        self.column = column
+        self.rows = [int(r) for r in rows]
+        super().__init__(message)

@@ -91,6 +91,7 @@ def _parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("demo", help="the main job on built-in defaults: equations, drawings, a simulation")
     p.add_argument("--output-dir", default="demo-output", help="where figures and CSVs go (default demo-output)")
+    p.add_argument("--quick", action="store_true", help="shortened closed-loop scenarios (for tests)")
     return parser
 
 
@@ -231,7 +232,7 @@ def _flatten(data, prefix=""):
 
 def _cmd_demo(args) -> int:
     from .demo import run_demo
-    run_demo(args.output_dir)
+    run_demo(args.output_dir, quick=args.quick)
     return 0
 
 

@@ -5,7 +5,7 @@ to PNG, simulate the mass-spring-damper step response and the DC motor
 start-up and plot them, then compare the exoskeleton's and the PAM joint's
 bond graphs with the papers' block-diagram / state-space models, export the
 PAM joint as an FMU and close a PI angle loop around it in the co-simulation
-master.
+master, and run the papers' closed-loop scenarios (``cosim.scenarios``).
 """
 from __future__ import annotations
 
@@ -22,8 +22,11 @@ def _step(message: str) -> None:
     print(f"== {message}", flush=True)
 
 
-def run_demo(output_dir="demo-output") -> dict:
-    """Run the demo, writing figures and CSVs into `output_dir`; returns the paths written."""
+def run_demo(output_dir="demo-output", *, quick: bool = False) -> dict:
+    """Run the demo, writing figures and CSVs into `output_dir`; returns the paths written.
+
+    ``quick`` shortens the closed-loop scenarios (for tests).
+    """
     import matplotlib
     matplotlib.use("Agg")
     from bondgraph import library
@@ -96,6 +99,10 @@ def run_demo(output_dir="demo-output") -> dict:
     print(f"   {loop.info['n_steps']} steps of 1 ms in {loop.info['wall_time']:.2f} s "
           f"({1e6 * loop.info['wall_time'] / loop.info['n_steps']:.1f} us/step); "
           f"settled |angle error| <= {err:.1f} deg")
+
+    _step("the papers' closed loops: plant FMUs with estimators and controllers in the master")
+    from .demo_scenarios import run_scenarios
+    written.update(run_scenarios(out, quick=quick, step=_step))
 
     _step(f"done in {time.perf_counter() - start:.1f} s; files in {out.resolve()}")
     for key, path in written.items():

@@ -7,7 +7,7 @@ from bondcosim.cli import main
 
 
 def test_demo_writes_every_file_it_lists(tmp_path, capsys):
-    assert main(["demo", "--output-dir", str(tmp_path)]) == 0
+    assert main(["demo", "--output-dir", str(tmp_path), "--quick"]) == 0
     out = capsys.readouterr().out
     summary = out.split("== done in", 1)[1].splitlines()[1:]   # the files, one per line
     assert len(summary) >= 15

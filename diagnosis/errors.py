@@ -7,9 +7,9 @@ Other diagnosis modules append their own classes here.
 """
 from __future__ import annotations
 
-from bondgraph.errors import BondcosimError
+from bondgraph.errors import BondcosimError, UnknownNameError
 
-__all__ = ["DiagnosisError", "UnitError", "RecordingError"]
+__all__ = ["DiagnosisError", "UnitError", "RecordingError", "UnknownColumnError"]
 
 
 class DiagnosisError(BondcosimError, ValueError):
@@ -50,3 +50,25 @@ class RecordingError(DiagnosisError):
         self.column = column
         self.rows = [int(r) for r in rows]
         super().__init__(message)
+
+
+class UnknownColumnError(UnknownNameError, RecordingError):
+    """A column the recording does not have (an :class:`UnknownNameError` with
+    ``kind == "column"``, and a :class:`RecordingError`).
+
+    Attributes
+    ----------
+    name : str
+        The missing column.
+    known : list of str
+        The recording's columns.
+    source : str
+        The recording's file.
+    """
+
+    def __init__(self, name: str, known, source: str = "", wanted_for: str = ""):
+        self.kind, self.name, self.known = "column", name, list(known)
+        self.source, self.column, self.rows = str(source), name, []
+        why = f" (wanted for {wanted_for})" if wanted_for else ""
+        Exception.__init__(self, f"{source}: no column {name!r}{why}; columns are "
+                                 f"{', '.join(self.known) or '(none)'}")

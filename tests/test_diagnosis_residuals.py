@@ -1,0 +1,113 @@
+"""diagnosis.residuals: simulation on recorded inputs, NRMSE and the noise estimate."""
+import numpy as np
+import pytest
+
+from bondgraph import library, simulate
+from bondgraph.errors import ParameterError, UnknownNameError
+from diagnosis.errors import DiagnosisError
+from diagnosis.recording import Experiment
+from diagnosis.residuals import OutputSimulator, noise_sigma, nrmse, residuals, simulate_outputs
+
+
+def _msd_step(t, m=1.0, b=0.4, k=4.0):
+    """Analytic unit-step response x(t) of m x'' + b x' + k x = 1 (underdamped)."""
+    wn = np.sqrt(k / m)
+    zeta = b / (2 * np.sqrt(k * m))
+    wd = wn * np.sqrt(1 - zeta ** 2)
+    return (1 - np.exp(-zeta * wn * t) * (np.cos(wd * t) + zeta * wn / wd * np.sin(wd * t))) / k
+
+
+def test_step_response_matches_analytic_on_uneven_grid():
+    rng = np.random.default_rng(1)
+    t = np.sort(np.r_[0.0, rng.uniform(0.0, 5.0, 400), 5.0])
+    exp = Experiment(t, {"F": np.ones_like(t)}, {"x": t.copy()}, {"F": "N", "x": "m"})
+    x = simulate_outputs(library.build("mass-spring-damper"), exp)["x"]
+    np.testing.assert_allclose(x, _msd_step(t), atol=1e-6)   # RK4, h |lambda| <= 0.5
+
+
+def test_parameters_and_initial_state_are_used():
+    t = np.linspace(0.0, 3.0, 301)
+    exp = Experiment(t, {"F": np.ones_like(t)}, {"x": t.copy()}, {})
+    sim = OutputSimulator(library.build("mass-spring-damper"), exp)
+    x = sim(params={"k": 9.0, "b": 1.2})["x"]
+    np.testing.assert_allclose(x, _msd_step(t, k=9.0, b=1.2), atol=1e-7)
+    # free response from x0 = 0.1 m with F = 1 N: superposition of step and free decay
+    x_free = sim(x0={"q_k": 0.1})["x"]
+    wn, zeta = 2.0, 0.1
+    wd = wn * np.sqrt(1 - zeta ** 2)
+    decay = 0.1 * np.exp(-zeta * wn * t) * (np.cos(wd * t) + zeta * wn / wd * np.sin(wd * t))
+    np.testing.assert_allclose(x_free, _msd_step(t) + decay, atol=1e-7)
+    with pytest.raises(ParameterError, match="unknown parameter 'kk'"):
+        sim(params={"kk": 1.0})
+    with pytest.raises(UnknownNameError, match="unknown state 'x'"):
+        sim(x0={"x": 1.0})
+
+
+@pytest.fixture(scope="module")
+def pam_run():
+    t = np.arange(0.0, 1.5 + 1e-9, 1e-3)
+    u1, u2 = 5 + 2 * np.sin(2 * np.pi * t), 5 - 2 * np.sin(2 * np.pi * t)
+    exp = Experiment(t, {"u1": u1, "u2": u2}, {"psi": t.copy(), "P1": t.copy()}, {})
+    return exp, library.build("pam")
+
+
+def test_pam_equals_bondgraph_simulate(pam_run):
+    """Same fixed-step scheme as bondgraph.simulate (1 ms samples, 4 RK4 sub-steps, ZOH)."""
+    exp, graph = pam_run
+    ours = OutputSimulator(graph, exp)()
+    ref = simulate(graph, exp.span, inputs={k: (exp.t, v) for k, v in exp.inputs.items()},
+                   output_interval=1e-3)
+    for name in ("psi", "P1"):
+        np.testing.assert_allclose(ours[name], ref[name], rtol=1e-12, atol=1e-9)
+    assert np.ptp(ours["psi"]) > 1.0   # the joint moves (deg)
+
+
+def test_batch_and_numpy_backend_agree(pam_run):
+    exp, graph = pam_run
+    sim = OutputSimulator(graph, exp, outputs=["psi"])
+    sets = [None, {"J": 1.3 * graph.equations().param_values["J"]}, {"k_s": 0.5}]
+    batch = sim.run_batch(sets)
+    for params, run in zip(sets, batch):
+        np.testing.assert_allclose(run.outputs["psi"], sim(params)["psi"], rtol=1e-13, atol=1e-12)
+    assert np.max(np.abs(batch[1].outputs["psi"] - batch[0].outputs["psi"])) > 1e-3
+    short = exp.window(0.0, 0.15)   # the numpy backend is slow: 150 samples
+    slow = OutputSimulator(graph, short, outputs=["psi"], backend="numpy")()["psi"]
+    np.testing.assert_allclose(slow, batch[0].outputs["psi"][:short.t.size], rtol=1e-9, atol=1e-9)
+
+
+def test_nrmse_definition():
+    y = np.array([1.0, 2.0, 3.0, 4.0])
+    assert nrmse(y, y) == 0.0
+    assert nrmse(y, np.full(4, y.mean())) == pytest.approx(1.0)   # the mean predicts nothing
+    # by hand: residual (0.5, -0.5, 0.5, -0.5): rms 0.5; std(y) = sqrt(1.25)
+    assert nrmse(y, y + np.array([-0.5, 0.5, -0.5, 0.5])) == pytest.approx(0.5 / np.sqrt(1.25))
+    with pytest.raises(DiagnosisError, match="constant"):
+        nrmse(np.ones(3), np.zeros(3))
+    with pytest.raises(DiagnosisError, match="shape"):
+        nrmse(y, y[:3])
+
+
+def test_noise_sigma_recovers_white_noise_on_a_signal():
+    rng = np.random.default_rng(7)
+    t = np.arange(0.0, 20.0, 1e-3)
+    signal = 3.0 * np.sin(2 * np.pi * 0.5 * t) + (t > 10.0)        # with a step
+    for sigma in (0.002, 0.05):
+        est = noise_sigma(signal + rng.normal(0.0, sigma, t.size))
+        assert est == pytest.approx(sigma, rel=0.05)
+    # quantised (step q = 0.01) slow signal without other noise: q / sqrt(12)
+    q = 0.01
+    est = noise_sigma(np.round(0.3 * t / q) * q)
+    assert est == pytest.approx(q / np.sqrt(12), rel=1e-6)
+
+
+def test_residuals_fields():
+    t = np.linspace(0.0, 4.0, 401)
+    graph = library.build("mass-spring-damper")
+    truth = _msd_step(t)
+    exp = Experiment(t, {"F": np.ones_like(t)}, {"x": truth + 0.01}, {"F": "N", "x": "m"})
+    res = residuals(graph, exp)
+    np.testing.assert_allclose(res.residual["x"], 0.01, atol=1e-7)
+    assert res.nrmse["x"] == pytest.approx(0.01 / np.std(truth), rel=1e-4)
+    assert res.run.states.shape == (t.size, 2) and res.run.state_names == ("p_m", "q_k")
+    with pytest.raises(UnknownNameError, match="unknown output 'y'"):
+        residuals(graph, exp, outputs=["y"])

@@ -1,0 +1,167 @@
+"""Scenario ``exo-lqi``: seed 004 Section 5.2 -- Kalman observer + LQI with
+double integral action around the exoskeleton FMU.
+
+Plant: the exoskeleton bond graph (Fig. 6 of [1]_, 7 states with the absolute
+trunk angle, ``b_f = 0`` as in the paper's simulations) exported as an FMU.
+Controller (Fig. 12), run in the master at ``dt = 0.1 ms``:
+
+- observer from motor velocity and sensor torque (eq. (5)) on the 6-state
+  **relative-angle** model (``theta_h_dot`` a known input, eq. (8)); the
+  absolute 7-state model has an unobservable rigid-body mode with these two
+  sensors (eigenvalue 0), see :mod:`._exo_design`.  The loop runs the
+  steady-state discrete Kalman filter of the ZOH model; the margins and the
+  Bode plot use the continuous Kalman-Bucy gain of eq. (9), same covariances;
+- LQI with double integral action on the body torque, weights of eq. (15)
+  (eq. (14) single-integral design reported alongside), gains against eqs. (16)-(17);
+- test of Sec. 5.2: ``theta_h_dot = 0.1 rad/s`` from ``t = 0``, ``tau_ref``
+  step of 10 N m at 0.1 s, 0.5 s; uniform noise within the bounds of Sec. 4
+  on both inputs and both sensors (seeded).
+
+Outputs: gains; gain, phase and delay margins of the loop broken at the motor
+torque (Figs. 13-14); the -3 dB band of trunk velocity -> estimated body
+torque (Fig. 15); the step test (Figs. 16-20): largest motor torque against
++-0.56 N m and the body-torque estimation error.
+
+Run:  python -m cosim.scenarios.exo_lqi [OUTPUT_DIR]
+
+References
+----------
+.. [1] Exoskeleton bond graph / Kalman observer paper,
+   ``shared/seeds/004_e7537f0e64a650f8.txt``, Sections 3-5.
+"""
+from __future__ import annotations
+
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from bondgraph.library.exoskeleton import exoskeleton
+from fmus import export
+
+from ._exo_analysis import band_limits, margins
+from ._exo_design import NOISE_BOUNDS, PAPER_GAINS, PAPER_SIMULATION_PARAMS, design, disturbance_to_estimate, \
+    loop_at_plant_input
+from ._exo_loop import NOISE_COLUMNS, cosimulate, monolithic
+
+NAME = "exo-lqi"
+DESCRIPTION = "exoskeleton (seed 004 Sec. 5.2) as FMU: Kalman observer + LQI with double integral action"
+
+DT = 1e-4                #: controller / communication period, s
+SEED = 2004              #: seed of the noise draw (numpy default_rng)
+W_H = 0.1                #: trunk velocity, rad/s (Sec. 5.2)
+TAU_REF, T_REF = 10.0, 0.1   #: reference step, N m at s (Sec. 5.2)
+T_END, T_END_QUICK = 0.5, 0.2    #: horizon, s
+MOTOR_TORQUE_LIMIT = 0.56        #: N m (Sec. 5.2)
+#: Sec. 5.2 of [1]_ (margins Figs. 13-14, bandwidth Fig. 15, errors Figs. 17 and 19).
+PAPER = {"gains": dict(PAPER_GAINS), "margins": {"gain_db": 8.46, "phase_deg": 59.0, "delay_s": 0.007},
+         "bandwidth_hz": 52.0, "most_destructive_band_hz": [4.0, 6.2], "estimation_mse": 0.1e-3,
+         "motor_velocity_mse": 3e-6, "max_motor_torque_limit": MOTOR_TORQUE_LIMIT}
+READING = ("relative angles (theta_h removed, theta_h_dot a known observer input): the absolute 7-state model "
+           "is not detectable from motor velocity and sensor torque; LQI on (A1, Bm, Cb) of eqs. (10)-(12) with "
+           "eq. (15) weights; noise bounds of Sec. 4 read as uniform on [-a, a] (variance a^2/3) for the "
+           "Kalman covariances and the simulated noise; loop run at 0.1 ms with the discrete steady-state Kalman "
+           "filter of the ZOH model (margins and Bode from the continuous Kalman-Bucy gain, eq. 9); bandwidth = "
+           "upper -3 dB frequency below the peak (DC gain is 0 under double integral action); unpublished "
+           "parameters from shared/exo-parameters.md (k_g, k_s, J_sint, J_sext assumed)")
+
+
+def noise(n: int, *, seed: int = SEED) -> np.ndarray:
+    """Uniform noise within the bounds of Sec. 4 of [1]_, shape (n, 4), columns
+    :data:`._exo_loop.NOISE_COLUMNS` (N m, rad/s, rad/s, N m)."""
+    rng = np.random.default_rng(seed)
+    bounds = np.array([NOISE_BOUNDS[c] for c in NOISE_COLUMNS])
+    return rng.uniform(-1.0, 1.0, (n, len(NOISE_COLUMNS))) * bounds
+
+
+def export_plant(path) -> Path:
+    """The exoskeleton bond graph with the paper's simulation setting (``b_f = 0``) as an FMI 2.0 FMU."""
+    return export(exoskeleton(params=dict(PAPER_SIMULATION_PARAMS)), path)
+
+
+def simulate(*, quick: bool = False, dt: float = DT, seed: int = SEED):
+    """Design, export and co-simulate the step test.
+
+    Returns
+    -------
+    design : ExoDesign
+    result : CosimResult
+    noise : ndarray, shape (n + 1, 4)
+    """
+    d = design(dt=dt)
+    t_end = T_END_QUICK if quick else T_END
+    n = int(round(t_end / dt))
+    w = noise(n + 1, seed=seed)
+    with tempfile.TemporaryDirectory() as tmp:
+        fmu = export_plant(Path(tmp) / "exoskeleton.fmu")
+        res = cosimulate(d, fmu, t_end=n * dt, noise=w, w_h=W_H, tau_ref=TAU_REF, t_ref=T_REF)
+    return d, res, w
+
+
+def _gains(g) -> dict:
+    out = {"Fix": [float(v) for v in g.Kx[0]], "Fiz_prime": float(g.Kz[0, 0])}
+    if g.Kzz is not None:
+        out["Fiz"] = float(g.Kzz[0, 0])
+    return out
+
+
+def _state_feedback_margins(d) -> dict:
+    """Margins of the LQ loop alone (state feedback on the true augmented state, no observer)."""
+    g = d.lqi2
+    m = margins(g.A_aug, g.B_aug, g.K, np.zeros((1, 1)))
+    return {"gain_db": float(m.gain_db), "phase_deg": m.phase_deg, "delay_s": m.delay_s}
+
+
+def run(plot_dir=None, *, quick: bool = False) -> dict:
+    """The scenario's numbers (JSON-ready); Figs. 13-20 in `plot_dir` if given.
+
+    ``gains`` (eq. (15) design; ``single_integral`` the eq. (14) one),
+    ``margins`` (loop at the motor-torque input with the observer; the LQ
+    loop without observer in ``margins_state_feedback``), ``bandwidth_hz``
+    (upper -3 dB frequency of trunk velocity -> estimated body torque; peak and
+    lower limit in ``bode``), ``max_motor_torque`` (N m), ``estimation_mse``
+    (mean of ``(y_b - y_b_hat)^2``, N^2 m^2, over the run), ``paper`` the
+    published values, ``reading`` how the paper was read.
+    """
+    d, res, w = simulate(quick=quick)
+    loop = loop_at_plant_input(d)
+    mg = margins(*loop)
+    dist = disturbance_to_estimate(d)
+    band = band_limits(dist[0], dist[1], dist[2][[0]], dist[3][[0]])
+    yb, ybh = np.asarray(res["plant.tau_b"]), np.asarray(res["ctrl.y_b_hat"])
+    wm_true, wmh = np.asarray(res["plant.w_m"]), np.asarray(res["ctrl.w_m_hat"])
+    u = np.asarray(res["ctrl.tau_m"])
+    mono = monolithic(d, res.t, w, w_h=W_H, tau_ref=TAU_REF, t_ref=T_REF)
+    settle = res.t >= res.t[-1] - 0.05
+    result = {
+        "gains": _gains(d.lqi2),
+        "single_integral": _gains(d.lqi1),
+        "margins": {"gain_db": float(mg.gain_db), "phase_deg": mg.phase_deg, "delay_s": mg.delay_s,
+                    "w_gc_rad_s": mg.w_gc, "w_pc_rad_s": mg.w_pc},
+        "margins_state_feedback": _state_feedback_margins(d),
+        "bandwidth_hz": band.upper_hz,
+        "bode": {"peak_hz": float(band.peak_hz), "peak_gain_db": float(20 * np.log10(band.peak_gain)),
+                 "lower_hz": band.lower_hz, "upper_hz": band.upper_hz, "dc_gain": band.dc_gain},
+        "max_motor_torque": float(np.max(np.abs(u))),
+        "motor_torque_within_limit": bool(np.max(np.abs(u)) <= MOTOR_TORQUE_LIMIT),
+        "estimation_mse": float(np.mean((yb - ybh) ** 2)),
+        "estimation_rms_Nm": float(np.sqrt(np.mean((yb - ybh) ** 2))),
+        "motor_velocity_mse": float(np.mean((wm_true - wmh) ** 2)),
+        "body_torque_final_Nm": float(np.mean(yb[settle])),
+        "body_torque_peak_Nm": float(np.max(yb)), "body_torque_min_Nm": float(np.min(yb)),
+        "cosim_vs_monolithic_max_abs": {"tau_m": float(np.max(np.abs(u - mono["tau_m"]))),
+                                        "y_b": float(np.max(np.abs(yb - mono["y_b"])))},
+        "observer_poles_continuous": [float(np.min(d.observer_c.poles.real)),
+                                      float(np.max(d.observer_c.poles.real))],
+        "dt_s": d.dt, "t_end_s": float(res.t[-1]), "seed": SEED, "paper": PAPER, "reading": READING,
+    }
+    if plot_dir is not None:
+        from ._exo_plots import plot_all
+        plot_all(res, loop, mg, dist, band, plot_dir)
+    return result
+
+
+if __name__ == "__main__":
+    import json
+    print(json.dumps(run(sys.argv[1] if len(sys.argv) > 1 else "cosim-output"), indent=2))

@@ -27,6 +27,7 @@ __all__ = ["names", "describe", "run", "SCENARIOS"]
 SCENARIOS = {
     "pam-pi": "pam_pi",
     "kpid": "kpid",
+    "exo-lqi": "exo_lqi",
 }
 
 

@@ -27,6 +27,7 @@ __all__ = ["names", "describe", "run", "SCENARIOS"]
 SCENARIOS = {
     "pam-pi": "pam_pi",
     "kpid": "kpid",
+    "pam-sensorless-pi": "pam_sensorless_pi",
     "exo-lqi": "exo_lqi",
 }
 

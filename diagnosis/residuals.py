@@ -29,7 +29,7 @@ import sympy as sp
 
 from .errors import DiagnosisError
 
-__all__ = ["OutputSimulator", "SimRun", "simulate_outputs", "nrmse", "noise_sigma",
+__all__ = ["OutputSimulator", "SimRun", "input_matrix", "simulate_outputs", "nrmse", "noise_sigma",
            "Residuals", "residuals"]
 
 _RK4_ACCURACY = 0.5       # h * |lambda_max| per sub-step for smooth models
@@ -60,6 +60,44 @@ class SimRun:
     state_names: tuple
     input_names: tuple
     substeps: int
+
+
+def input_matrix(eqs, t, inputs: dict) -> np.ndarray:
+    """Input values at times `t`, shape (n, n_inputs), in the model's input order.
+
+    Parameters
+    ----------
+    eqs : StateEquations
+    t : ndarray, shape (n,)
+        Times, s.
+    inputs : dict str -> ndarray, shape (n,)
+        Recorded inputs by name; others take ``input_functions`` (of ``t``) or
+        ``input_defaults``.
+
+    Raises
+    ------
+    UnknownNameError
+        An input name the model does not have.
+    """
+    from bondgraph.errors import UnknownNameError
+
+    for name in inputs:
+        if name not in eqs.input_names:
+            raise UnknownNameError("input", name, eqs.input_names, eqs.name)
+    U = np.empty((t.size, len(eqs.input_names)))
+    for j, name in enumerate(eqs.input_names):
+        if name in inputs:
+            U[:, j] = inputs[name]
+            continue
+        spec = eqs.input_functions.get(name, eqs.input_defaults.get(name, 0.0))
+        if isinstance(spec, numbers.Real):
+            U[:, j] = float(spec)
+        elif callable(spec) and not isinstance(spec, sp.Basic):
+            U[:, j] = [float(spec(tk)) for tk in t]
+        else:
+            fn = sp.lambdify(eqs.t, sp.sympify(spec), modules="numpy")
+            U[:, j] = np.broadcast_to(np.asarray(fn(t), dtype=float), t.shape)
+    return np.ascontiguousarray(U)
 
 
 class OutputSimulator:
@@ -106,30 +144,8 @@ class OutputSimulator:
         self.output_names = tuple(wanted)
         self._out_idx = [self.model.output_index[n] for n in wanted]
         self.t = np.ascontiguousarray(experiment.t, dtype=float)
-        self.U = self._input_matrix(experiment)
+        self.U = input_matrix(self.equations, self.t, experiment.inputs)
         self._dt = np.diff(self.t)
-
-    def _input_matrix(self, experiment):
-        from bondgraph.errors import UnknownNameError
-
-        eqs, t = self.equations, self.t
-        for name in experiment.inputs:
-            if name not in self.model.input_index:
-                raise UnknownNameError("input", name, eqs.input_names, eqs.name)
-        U = np.empty((t.size, len(eqs.input_names)))
-        for j, name in enumerate(eqs.input_names):
-            if name in experiment.inputs:
-                U[:, j] = experiment.inputs[name]
-                continue
-            spec = eqs.input_functions.get(name, eqs.input_defaults.get(name, 0.0))
-            if isinstance(spec, numbers.Real):
-                U[:, j] = float(spec)
-            elif callable(spec) and not isinstance(spec, sp.Basic):
-                U[:, j] = [float(spec(tk)) for tk in t]
-            else:
-                fn = sp.lambdify(eqs.t, sp.sympify(spec), modules="numpy")
-                U[:, j] = np.broadcast_to(np.asarray(fn(t), dtype=float), t.shape)
-        return np.ascontiguousarray(U)
 
     def initial_state(self, x0=None) -> np.ndarray:
         """The initial state vector from None (model default), a dict by name, or an array."""

@@ -97,6 +97,32 @@ def test_margins_two_ways(d):
     assert lq.gain == pytest.approx(gm2, rel=1e-6) and lq.phase_deg == pytest.approx(pm2, rel=1e-6)
 
 
+def test_gain_margin_is_where_the_closed_loop_loses_stability(d):
+    """Third check, by eigenvalues: closing u = -g L with g just below / above the gain margin
+    leaves the poles inside / puts one outside (Re 0 for the continuous loop, |z| = 1 sampled)."""
+    A, B, C, _ = de.loop_at_plant_input(d)
+    gm = an.margins(A, B, C, np.zeros((1, 1))).gain
+    assert np.max(np.linalg.eigvals(A - 0.999 * gm * B @ C).real) < 0 < \
+        np.max(np.linalg.eigvals(A - 1.001 * gm * B @ C).real)
+    A, B, C, _ = de.sampled_loop_at_plant_input(d)
+    gm = an.margins(A, B, C, np.zeros((1, 1)), dt=d.dt).gain
+    assert np.max(np.abs(np.linalg.eigvals(A - 0.999 * gm * B @ C))) < 1 < \
+        np.max(np.abs(np.linalg.eigvals(A - 1.001 * gm * B @ C)))
+
+
+def test_sampled_loop_margins_against_python_control_frd(d):
+    """The discrete loop that runs (0.1 ms): python-control's margins from its own frequency
+    response (FRD; its polynomial method is ill-conditioned for this 14th-order loop)."""
+    A, B, C, D = de.sampled_loop_at_plant_input(d)
+    ours = an.margins(A, B, C, D, dt=d.dt)
+    w = np.logspace(0, 4.4, 2000)
+    gm, pm, _, wpc, wgc, _ = ct.stability_margins(ct.frd(ct.ss(A, B, C, D, d.dt), w))
+    assert ours.gain == pytest.approx(gm, rel=1e-6) and ours.phase_deg == pytest.approx(pm, rel=1e-6)
+    assert ours.w_gc == pytest.approx(wgc, rel=1e-6) and ours.w_pc == pytest.approx(wpc, rel=1e-6)
+    cont = an.margins(*de.loop_at_plant_input(d))
+    assert ours.phase_deg == pytest.approx(cont.phase_deg, abs=0.1)   # 0.1 ms sampling: ~ continuous
+
+
 def test_bandwidth_against_python_control_response(d):
     """|G| at the reported -3 dB limits is the peak / sqrt(2), evaluated by python-control;
     the DC gain is 0 (double integral action rejects a constant trunk velocity)."""

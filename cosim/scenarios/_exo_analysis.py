@@ -34,20 +34,22 @@ __all__ = ["freqresp", "Margins", "margins", "Bandwidth", "band_limits"]
 GRID = np.logspace(-3, 7, 20001)
 
 
-def freqresp(A, B, C, D, w) -> np.ndarray:
-    """:math:`C (j\\omega I - A)^{-1} B + D` of a SISO system at `w` (rad/s), shape (len(w),), complex.
+def freqresp(A, B, C, D, w, *, dt: float | None = None) -> np.ndarray:
+    """:math:`C (s I - A)^{-1} B + D` of a SISO system at `w` (rad/s), shape (len(w),), complex.
 
-    Solved through the eigen-decomposition of ``A`` (diagonalisable here),
-    one small solve per frequency otherwise.
+    ``s = j w`` for a continuous system; ``z = exp(j w dt)`` for a discrete
+    one of period `dt` (s).  Solved through the eigen-decomposition of ``A``
+    (diagonalisable here), one batched solve otherwise.
     """
     A, B, C, D = (np.asarray(m, dtype=float) for m in (A, B, C, D))
     w = np.atleast_1d(np.asarray(w, dtype=float))
+    s = 1j * w if dt is None else np.exp(1j * w * dt)
     lam, V = np.linalg.eig(A)
     if np.linalg.cond(V) < 1e8:
         cb = (C @ V).ravel() * np.linalg.solve(V, B).ravel()     # residues c_i b_i
-        return (cb[None, :] / (1j * w[:, None] - lam[None, :])).sum(axis=1) + D[0, 0]
-    n = A.shape[0]
-    return np.array([(C @ np.linalg.solve(1j * wi * np.eye(n) - A, B))[0, 0] for wi in w]) + D[0, 0]
+        return (cb[None, :] / (s[:, None] - lam[None, :])).sum(axis=1) + D[0, 0]
+    M = s[:, None, None] * np.eye(A.shape[0]) - A            # one batched solve (Jordan blocks)
+    return (C @ np.linalg.solve(M, np.broadcast_to(B, (s.size,) + B.shape)))[:, 0, 0] + D[0, 0]
 
 
 def _roots(fun, w):
@@ -83,10 +85,23 @@ class Margins:
     w_gc: float
 
 
-def margins(A, B, C, D, *, w=GRID) -> Margins:
-    """Gain, phase and delay margins of the SISO loop gain ``(A, B, C, D)`` (module docstring)."""
+def margins(A, B, C, D, *, dt: float | None = None, w=GRID) -> Margins:
+    """Gain, phase and delay margins of the SISO loop gain ``(A, B, C, D)`` (module docstring).
+
+    Parameters
+    ----------
+    A, B, C, D : array_like
+        Loop gain, continuous or (with `dt`) discrete.
+    dt : float, s, optional
+        Sampling period of a discrete loop (frequencies up to the Nyquist frequency ``pi / dt``).
+    w : ndarray, rad/s
+        Search grid.
+    """
+    if dt is not None:
+        w = w[w < np.pi / dt]
+
     def L(lw):
-        return freqresp(A, B, C, D, 10.0 ** np.asarray(lw))
+        return freqresp(A, B, C, D, 10.0 ** np.asarray(lw), dt=dt)
 
     w_gc = _roots(lambda lw: np.log(np.abs(L(lw))), w)
     w_pc = [wp for wp in _roots(lambda lw: L(lw).imag, w) if L(np.log10(wp))[0].real < 0]
@@ -105,7 +120,7 @@ def margins(A, B, C, D, *, w=GRID) -> Margins:
         delay = float(np.min(np.radians(pms[pos]) / w_gc[pos])) if pos.any() else 0.0
     else:
         phase, wgc, delay = float("inf"), float("nan"), float("inf")
-    return Margins(gain, 20.0 * np.log10(gain), phase, delay, wpc, wgc)
+    return Margins(gain, float(20.0 * np.log10(gain)), phase, delay, wpc, wgc)
 
 
 @dataclass(frozen=True)

@@ -57,7 +57,7 @@ from estimators.observer import ObserverGain, continuous_kalman_gain, discrete_k
 
 __all__ = ["REL_STATES", "PAPER_SIMULATION_PARAMS", "NOISE_BOUNDS", "Q_PRIME_C", "R_PRIME_C", "Q_C", "R_C",
            "PAPER_GAINS", "ExoDesign", "design", "relative_model", "controller_system", "loop_at_plant_input",
-           "disturbance_to_estimate"]
+           "disturbance_to_estimate", "sampled_loop_at_plant_input"]
 
 REL_STATES = ("theta_m_rel", "dtheta_m", "theta_sint_rel", "dtheta_sint", "theta_sext_rel", "dtheta_sext")
 #: Sec. 4 of [1]_: b_f, d_eh and d_s are neglected in the simulations.
@@ -257,3 +257,46 @@ def disturbance_to_estimate(d: ExoDesign):
     C[1, :n] = d.Cb[0]
     D = np.full((2, 1), -d.d_eh)               # eq. (6): y_b = Cb x - d_eh theta_h_dot
     return A, B, C, D
+
+
+def sampled_loop_at_plant_input(d: ExoDesign):
+    """The loop that runs in the co-simulation, broken at the motor torque: discrete, period ``d.dt``.
+
+    Plant ``tau_m -> [w_m, tau_s]`` discretised with ZOH (``F``, ``Gd[:, 0]``,
+    ``Cm``); controller the steady-state discrete Kalman filter (update form)
+    and the LQI with forward-Euler integrators (:mod:`._exo_loop`):
+
+    .. math::
+
+        x^+ = (I - K C_m) x^- + K y,\\quad u = -F'_{ix} x^+ - F'_{iz} z - F_{iz} w,\\quad
+        x^-_{+1} = F x^+ + G_{d,1} u,\\quad z_{+1} = z - dt\\, C_b x^+,\\quad w_{+1} = w + dt\\, z
+
+    Returns
+    -------
+    A, B, C, D : ndarray
+        Discrete loop gain ``L(z) = -K(z) P(z)``, states ``[x (6), x^- (6), z, w]``.
+    """
+    g, K, dt = d.lqi2, d.observer_d.K, d.dt
+    n = 6
+    IKC = np.eye(n) - K @ d.Cm
+    kx = g.Kx[0]
+    # controller (input y, output u): states [x_prior, z, w]
+    Cc = np.concatenate([-kx @ IKC, [-g.Kz[0, 0], -g.Kzz[0, 0]]])[None, :]
+    Dc = (-kx @ K)[None, :]
+    Ac = np.zeros((n + 2, n + 2))
+    Ac[:n, :n] = d.F @ IKC
+    Ac[:n] += np.outer(d.Gd[:, 0], Cc[0])
+    Ac[n, :n] = -dt * (d.Cb[0] @ IKC)
+    Ac[n, n] = 1.0
+    Ac[n + 1, n], Ac[n + 1, n + 1] = dt, 1.0
+    Bc = np.zeros((n + 2, 2))
+    Bc[:n] = d.F @ K + np.outer(d.Gd[:, 0], Dc[0])
+    Bc[n] = -dt * (d.Cb[0] @ K)
+    # series: plant (F, Gd[:, 0], Cm, 0) then controller; L = -u_out / u_in
+    A = np.zeros((2 * n + 2, 2 * n + 2))
+    A[:n, :n] = d.F
+    A[n:, :n] = Bc @ d.Cm
+    A[n:, n:] = Ac
+    B = np.concatenate([d.Gd[:, 0], np.zeros(n + 2)])[:, None]
+    C = -np.hstack([Dc @ d.Cm, Cc])
+    return A, B, C, np.zeros((1, 1))

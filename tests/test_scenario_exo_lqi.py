@@ -63,6 +63,17 @@ def test_gains_against_eqs_16_17_and_python_control(d):
     np.testing.assert_allclose(g.K, K, rtol=1e-7)
 
 
+def test_printed_F_iz_prime_is_the_single_integral_design_with_q_z_1e13(quick_run):
+    """Eq. (17)'s F'_iz = -3.16 = -sqrt(1e13 / 1e12): the single-integral design (eqs. (10)-(11))
+    with integral weight 1e13; its F'_ix then rounds to the printed 0.03, 0, 0 at entries 2, 4, 6
+    and is 0.98 for the printed 1.00 (eq. (16))."""
+    g = quick_run[0]["single_integral_qz_1e13"]
+    assert round(g["Fiz_prime"], 2) == de.PAPER_GAINS["Fiz_prime"]
+    fix = [round(v, 2) for v in g["Fix"]]
+    assert [fix[i] for i in (1, 3, 5)] == [de.PAPER_GAINS["Fix"][i] for i in (1, 3, 5)]
+    assert abs(g["Fix"][0] - de.PAPER_GAINS["Fix"][0]) < 0.05
+
+
 def _python_control_loop(d):
     """The loop at the plant input built with python-control only: lqe for the observer gain,
     ss arithmetic for the controller and the series connection."""

@@ -39,12 +39,13 @@ from pathlib import Path
 import numpy as np
 
 from bondgraph.library.exoskeleton import exoskeleton
+from estimators.lqi import lqi
 from estimators.observer import continuous_kalman_gain
 from fmus import export
 
 from ._exo_analysis import band_limits, margins
-from ._exo_design import NOISE_BOUNDS, PAPER_GAINS, PAPER_SIMULATION_PARAMS, design, disturbance_to_estimate, \
-    loop_at_plant_input, sampled_loop_at_plant_input
+from ._exo_design import NOISE_BOUNDS, PAPER_GAINS, PAPER_SIMULATION_PARAMS, Q_PRIME_C, R_PRIME_C, design, \
+    disturbance_to_estimate, loop_at_plant_input, sampled_loop_at_plant_input
 from ._exo_loop import NOISE_COLUMNS, cosimulate, monolithic
 
 NAME = "exo-lqi"
@@ -111,6 +112,13 @@ def _gains(g) -> dict:
     return out
 
 
+def _single_qz_1e13(d):
+    """Single integral action (eqs. (10)-(11)) with the integral weight 1e13 instead of eq. (14)'s
+    5e13: the reading under which eq. (17)'s F'_iz = -3.16 = -sqrt(1e13 / 1e12) follows (for single
+    integral action F'_iz = -sqrt(q_z / R) whatever the plant)."""
+    return lqi(d.A1, d.Bm, d.Cb, np.diag(Q_PRIME_C[:6] + (1e13,)), [[R_PRIME_C]], order=1)
+
+
 def _as_dict(m) -> dict:
     return {"gain_db": m.gain_db, "phase_deg": m.phase_deg, "delay_s": m.delay_s,
             "w_gc_rad_s": m.w_gc, "w_pc_rad_s": m.w_pc}
@@ -138,7 +146,8 @@ def _other_margins(d) -> dict:
 def run(plot_dir=None, *, quick: bool = False) -> dict:
     """The scenario's numbers (JSON-ready); Figs. 13-20 in `plot_dir` if given.
 
-    ``gains`` (eq. (15) design; ``single_integral`` the eq. (14) one),
+    ``gains`` (eq. (15) design; ``single_integral`` the eq. (14) one;
+    ``single_integral_qz_1e13`` the reading that gives eq. (17)'s F'_iz),
     ``margins`` (continuous loop at the motor-torque input with the
     Kalman-Bucy observer; ``margins_other_readings`` see
     :func:`_other_margins`), ``bandwidth_hz``
@@ -160,6 +169,7 @@ def run(plot_dir=None, *, quick: bool = False) -> dict:
     result = {
         "gains": _gains(d.lqi2),
         "single_integral": _gains(d.lqi1),
+        "single_integral_qz_1e13": _gains(_single_qz_1e13(d)),
         "margins": _as_dict(mg),
         "margins_other_readings": _other_margins(d),
         "bandwidth_hz": band.upper_hz,

@@ -131,7 +131,8 @@ def _other_margins(d) -> dict:
     ``motor_noise_observer``: Kalman-Bucy gain with process noise on the motor
     torque only (no trunk-velocity noise), which recovers the LQ loop
     (loop-transfer recovery at the plant input); ``sampled``: the discrete loop
-    that runs in the co-simulation (ZOH plant, discrete filter, period ``dt``).
+    that runs in the co-simulation (ZOH plant, discrete filter, period ``dt``);
+    ``printed_gains``: eqs. (16)-(17)'s printed gains with our plant and observer.
     """
     g = d.lqi2
     lq = margins(g.A_aug, g.B_aug, g.K, np.zeros((1, 1)))
@@ -140,7 +141,12 @@ def _other_margins(d) -> dict:
                                  G=np.hstack([d.Bm, d.Bh]))
     ltr = margins(*loop_at_plant_input(dataclasses.replace(d, observer_c=obs)))
     sampled = margins(*sampled_loop_at_plant_input(d), dt=d.dt)
-    return {"state_feedback": _as_dict(lq), "motor_noise_observer": _as_dict(ltr), "sampled": _as_dict(sampled)}
+    # the printed gains of eqs. (16)-(17) with our (partly assumed) plant and Kalman gain
+    Kx, Kz, Kzz = (np.atleast_2d(np.asarray(PAPER_GAINS[k], dtype=float)) for k in ("Fix", "Fiz_prime", "Fiz"))
+    printed = dataclasses.replace(g, Kx=Kx, Kz=Kz, Kzz=Kzz, K=np.hstack([Kx, Kz, Kzz]))
+    paper = margins(*loop_at_plant_input(dataclasses.replace(d, lqi2=printed)))
+    return {"state_feedback": _as_dict(lq), "motor_noise_observer": _as_dict(ltr), "sampled": _as_dict(sampled),
+            "printed_gains": _as_dict(paper)}
 
 
 def run(plot_dir=None, *, quick: bool = False) -> dict:

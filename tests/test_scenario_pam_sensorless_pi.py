@@ -32,6 +32,8 @@ def test_metric_reproduces_the_papers_arithmetic(worst, span, pct):
     assert got["worst_steady_state_error"] == pytest.approx(worst, rel=1e-6)
     assert got["reference_span"] == span
     assert got["steady_state_samples"] == 3 * 300     # the last 3 s of each 10 s segment at 10 ms
+    np.testing.assert_allclose(got["worst_error_per_step"],
+                               [[span / 2, 0.0], [-span / 2, -worst], [span / 4, 0.5 * worst]], atol=1e-12)
 
 
 def test_steady_state_mask_counts_from_each_change():

@@ -141,8 +141,8 @@ def _ukf_block(locked: bool) -> UKFBlock:
                                estimates=("psi", "tau"))
 
 
-def build_loop(loop: str, times, values, fmu_dir, *, reading: str = "deg", seed: int = 0,
-               noise_pa: float = NOISE_PA) -> CoSimulation:
+def build_loop(loop: str, times, values, fmu_dir, *, reading: str = "deg", pi_reading: str = "gain",
+               seed: int = 0, noise_pa: float = NOISE_PA) -> CoSimulation:
     """The closed loop of Fig. 13 of [1]_ ((a) ``"angle"``, (b) ``"torque"``), ready to run.
 
     Parameters
@@ -158,6 +158,9 @@ def build_loop(loop: str, times, values, fmu_dir, *, reading: str = "deg", seed:
     reading : {"deg", "rad"}
         Unit of the angle error ``e`` fed to the PI (``"deg"``: the model's
         output psi, eq. (11b); ``"rad"``: the state); ignored for the torque.
+    pi_reading : {"gain", "printed"}
+        :math:`C = \\pm T_I T_{stp}` or :math:`\\pm T_I / T_{stp}` as printed
+        (:class:`~estimators.DiscretePI`).
     seed : int
         Seed of the pressure noise.
     noise_pa : float, Pa
@@ -178,7 +181,8 @@ def build_loop(loop: str, times, values, fmu_dir, *, reading: str = "deg", seed:
         (reading, np.asarray(values, float) * (1.0 if reading == "deg" else np.pi / 180)))
     estimate = {"N m": "ukf.tau_hat", "deg": "ukf.psi_hat", "rad": "ukf.x_psi"}[unit]
     reference = Table("reference", times, values, unit=unit, interpolation="hold")
-    pi = DiscretePIBlock("pi", DiscretePI.from_paper(loop, Tstp=SAMPLE, beta=BETA), unit)
+    controller = DiscretePI.from_paper(loop, Tstp=SAMPLE, beta=BETA, reading=pi_reading)
+    pi = DiscretePIBlock("pi", controller, unit)
     sensors = PressureSensors("sensors", noise_pa, np.random.default_rng(seed))
     connections = [("reference.y", "pi.r"), (estimate, "pi.y_m"),
                    ("pi.u1", "rig.u1"), ("pi.u2", "rig.u2"), ("pi.u1", "ukf.u1"), ("pi.u2", "ukf.u2"),

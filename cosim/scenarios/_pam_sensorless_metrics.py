@@ -77,7 +77,9 @@ def steady_state_performance(t, reference, actual, *, settle: float) -> dict:
     -------
     dict
         ``steady_state_performance_pct`` (%), ``worst_steady_state_error`` and
-        ``reference_span`` (unit of the reference), ``steady_state_samples``.
+        ``reference_span`` (unit of the reference), ``steady_state_samples``,
+        ``worst_error_per_step``: (reference value, worst steady-state signed
+        error :math:`\\zeta`) per constant-reference segment that has steady samples.
 
     Raises
     ------
@@ -102,10 +104,17 @@ def steady_state_performance(t, reference, actual, *, settle: float) -> dict:
         raise CosimError("steady_state_performance: the reference is constant (its range is 0)")
     if not mask.any():
         raise CosimError(f"steady_state_performance: no sample lies {settle} s after a reference change")
-    worst = float(np.abs(r - y)[mask].max())
+    zeta = r - y
+    worst = float(np.abs(zeta)[mask].max())
+    starts = np.concatenate([[0], np.flatnonzero(np.diff(r) != 0) + 1, [r.size]])
+    per_step = []
+    for a, b in zip(starts[:-1], starts[1:]):
+        z = zeta[a:b][mask[a:b]]
+        if z.size:
+            per_step.append([float(r[a]), float(z[np.argmax(np.abs(z))])])
     return {"steady_state_performance_pct": 100.0 * (1.0 - worst / span),
             "worst_steady_state_error": worst, "reference_span": span,
-            "steady_state_samples": int(mask.sum())}
+            "steady_state_samples": int(mask.sum()), "worst_error_per_step": per_step}
 
 
 def plot_loop(t, reference, estimate, actual, u1, u2, *, quantity: str, unit: str, settle: float):

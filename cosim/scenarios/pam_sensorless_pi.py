@@ -71,7 +71,8 @@ PROFILES = {
 _UNITS = {"angle": "deg", "torque": "N m"}
 
 
-def simulate(loop: str, *, quick: bool = False, reading: str = "deg", seed: int = 0):
+def simulate(loop: str, *, quick: bool = False, reading: str = "deg", pi_reading: str = "gain",
+             seed: int = 0):
     """Co-simulate one loop of Fig. 13 of [1]_ on its reference profile.
 
     Parameters
@@ -81,6 +82,8 @@ def simulate(loop: str, *, quick: bool = False, reading: str = "deg", seed: int 
         The short profile of :data:`PROFILES` (tests).
     reading : {"deg", "rad"}
         Unit of the angle error fed to the PI (ignored for the torque).
+    pi_reading : {"gain", "printed"}
+        :math:`C = \\pm T_I T_{stp}` (default) or :math:`\\pm T_I / T_{stp}` as printed.
     seed : int
         Pressure-noise seed.
 
@@ -95,7 +98,8 @@ def simulate(loop: str, *, quick: bool = False, reading: str = "deg", seed: int 
     seg, values, _ = PROFILES[(loop, quick)]
     times = seg * np.arange(len(values))
     with tempfile.TemporaryDirectory() as tmp:
-        sim = build_loop(loop, times, values, tmp, reading=reading, seed=seed)
+        sim = build_loop(loop, times, values, tmp, reading=reading, pi_reading=pi_reading,
+                         seed=seed)
         return sim.run(seg * len(values))
 
 

@@ -26,6 +26,7 @@ __all__ = ["names", "describe", "run", "SCENARIOS"]
 #: Scenario name -> module (in this package).
 SCENARIOS = {
     "pam-pi": "pam_pi",
+    "pam-ukf": "pam_ukf",
     "kpid": "kpid",
     "pam-sensorless-pi": "pam_sensorless_pi",
     "exo-lqi": "exo_lqi",

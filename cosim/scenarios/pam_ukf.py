@@ -1,0 +1,289 @@
+"""Scenario ``pam-ukf``: UKF angle and torque estimation from the two pressures (seed 000, Secs. III-IV.A).
+
+What the paper compares (Section IV-A, Figs. 9-10 of [1]_): the joint angle
+:math:`\\psi` and torque :math:`\\tau` computed by the model alone (open loop,
+from the valve commands) against those of a UKF that also uses the measured
+pressures :math:`P_1, P_2` -- both against the rig's sensors -- with the
+indices I (RMSE), M (max) and Q (M over the signal's range).
+
+Here the "rig" is :mod:`._pam_rig`: the ``pam`` bond graph with perturbed
+orifice areas, polytropic indexes and friction coefficients, exported as an
+FMU and co-simulated in our master under a Fig. 8-like input profile
+(:func:`bondgraph.blockdiagram.pam.fig8_profile`, 13 segments of 10 s; quick:
+0.3 s).  Per run:
+
+1. **recording**: the rig FMU, at rest at :data:`U_PRE` before t = 0, driven by
+   the profile (1 ms steps); truth ``psi`` (deg), ``tau`` (N m), and the pressure
+   readings ``P1``, ``P2`` plus white Gaussian noise of :data:`SIGMA_P` (seeded);
+2. **model alone**: the nominal ``pam`` (Table II) simulated open loop on the
+   same inputs (the conventions' RK4, 4 sub-steps of 0.25 ms per sample);
+3. **UKF**: :class:`estimators.UnscentedKalmanFilter` on the nominal model with
+   the paper's :math:`P(0) = Q = \\mathrm{diag}(10^{-5}, 10^{-4}, 10^6, 10^6)`,
+   :math:`R = \\mathrm{diag}(10^8, 10^8)`, Julier sigma points with
+   :math:`\\kappa = 0`, measuring ``P1``, ``P2`` only;
+   :math:`\\hat\\tau` is eq. (9) of the estimated state (Fig. 6).
+
+Both estimators start from the same **wrong** state: the nominal model's rest
+under the profile's first command (what one would assume), while the rig
+rests under :data:`U_PRE`.
+
+Reading of the paper (see ``docs/reproduction_pam_ukf.md``)
+- angle on the free joint, torque with the joint locked at 0 deg (Section
+  IV-A2: "the joint angle was fixed at 0 deg"); the locked UKF has the
+  pressure states only, with the pressure block of the paper's P(0), Q;
+- noise: :math:`\\sigma = \\sqrt{R_{ii}} = 10` kPa, so the filter's R is the
+  true noise (and the E8F2 sensor's +-1 % of 1 MPa full scale);
+- the indices are taken from :data:`T_CONVERGE` on: both estimates share the
+  initial error by construction, so M over the whole record would be
+  :math:`|z(0)|` for both; the whole-record values are under ``full_record``.
+
+Run:  python -m cosim.scenarios.pam_ukf [OUTPUT_DIR]
+
+References
+----------
+.. [1] T. Shin, T. Ibayashi, K. Kogiso, "Detailed dynamic model of antagonistic
+   PAM system and its experimental validation: sensor-less angle and torque
+   control with UKF", ``shared/seeds/000_e88691151ec17d16.txt``.
+"""
+from __future__ import annotations
+
+import json
+import sys
+import tempfile
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from bondgraph.blockdiagram import pam as pam_bd
+from bondgraph.library.pam import FRICTION_STEP, parameter_values
+from bondgraph.simulation import simulate
+from estimators import JulierSigmaPoints, UnscentedKalmanFilter
+from estimators.ukf_model import StateMap
+
+from ..blocks import Table
+from ..fmu_component import FMUComponent
+from ..master import CoSimulation
+from ._pam_rig import RIG_PERTURBATION, add_pressure_noise, export_rig, nominal_equations, rig_start_values
+from ._pam_ukf_metrics import indices
+
+__all__ = ["NAME", "DESCRIPTION", "run", "inputs", "record_rig", "make_ukf", "ukf_estimates",
+           "model_alone", "estimator_start", "experiment", "PAPER_OFFLINE"]
+
+NAME = "pam-ukf"
+DESCRIPTION = "UKF estimating PAM joint angle and torque from P1, P2 on a perturbed rig FMU (seed 000)"
+
+SAMPLE_TIME = 1e-3                    # s, the rig's sampling period (Sec. II-A of [1])
+SEGMENT, QUICK_SEGMENT = 10.0, 0.3    # s, length of each of the 13 Fig. 8-like segments
+U_PRE = (5.0, 5.0)                    # V, valve commands the rig rests under before t = 0
+SIGMA_P = 1e4                         # Pa, pressure-sensor noise (std) = sqrt(R_ii)
+SEED = 5                              # numpy.random.default_rng seed of the noise
+T_CONVERGE = 1.0                      # s, indices from here on (after the shared initial error)
+KAPPA = 0.0                           # Julier sigma-point parameter, Section IV of [1]
+# Section IV of [1]: P(0) = Q = diag(1e-5 rad^2, 1e-4 (rad/s)^2, 1e6 Pa^2, 1e6 Pa^2), R = diag(1e8, 1e8) Pa^2
+P0_DIAG = (1e-5, 1e-4, 1e6, 1e6)
+Q_DIAG = (1e-5, 1e-4, 1e6, 1e6)
+R_DIAG = (1e8, 1e8)
+
+#: Section IV-A of [1]: offline estimation (Figs. 9, 10), angle in deg, torque in N m.
+PAPER_OFFLINE = {
+    "model_only": {"angle": {"I": 1.053, "M": 3.50, "Q": 0.0887}, "torque": {"I": 0.162, "M": 0.494, "Q": 0.1023}},
+    "ukf": {"angle": {"I": 0.838, "M": 2.42, "Q": 0.0613}, "torque": {"I": 0.108, "M": 0.238, "Q": 0.0494}},
+}
+
+
+def inputs(*, quick: bool = False):
+    """The Fig. 8-like valve commands: ``(t [s], u [V], shape (n, 2))``, 1 ms samples.
+
+    13 segments of :data:`SEGMENT` (130 s, the paper's N = 130e3) or, ``quick``,
+    of :data:`QUICK_SEGMENT` (3.9 s).
+    """
+    return pam_bd.fig8_profile(segment=QUICK_SEGMENT if quick else SEGMENT)
+
+
+def record_rig(fmu, t, u, *, locked: bool = False, u_pre=U_PRE) -> dict:
+    """Co-simulate the rig FMU in the master under the commands `u`.
+
+    Parameters
+    ----------
+    fmu : path-like
+        From :func:`._pam_rig.export_rig` (with the same `locked`).
+    t : ndarray, shape (n,), s
+        ``0, 1 ms, ...``; the run ends at ``t[-1]``.
+    u : ndarray, shape (n, 2), V
+        Row k held over ``[t_k, t_k + 1 ms)`` (Table blocks, zero-order hold).
+    locked : bool
+    u_pre : (float, float), V
+        Commands the rig rests under before t = 0 (:func:`._pam_rig.rig_start_values`).
+
+    Returns
+    -------
+    dict str -> ndarray, shape (n,)
+        ``t`` (s), ``psi`` (deg), ``P1``, ``P2`` (Pa abs), ``tau`` (N m): the rig's truth.
+    """
+    t, u = np.asarray(t, dtype=float), np.asarray(u, dtype=float)
+    if u.shape != (t.size, 2):
+        raise ValueError(f"record_rig: u must have shape ({t.size}, 2) for {t.size} times; found {u.shape}")
+    plant = FMUComponent(fmu, "rig", start_values=rig_start_values(u_pre, locked=locked))
+    tables = [Table(f"u{i}", t, u[:, i - 1], unit="V", interpolation="hold") for i in (1, 2)]
+    sim = CoSimulation(tables + [plant], [("u1.y", "rig.u1"), ("u2.y", "rig.u2")], step=SAMPLE_TIME)
+    result = sim.run(float(t[-1]))
+    return {"t": result.t, **{s: np.array(result[f"rig.{s}"]) for s in ("psi", "P1", "P2", "tau")}}
+
+
+@lru_cache(maxsize=1)
+def _state_map() -> StateMap:
+    """The paper's :math:`x = (\\psi, \\dot\\psi, P_1, P_2)` over the model's states (p_J = J psi')."""
+    J = parameter_values()["J"]
+    return StateMap.scaled(nominal_equations().state_names,
+                           {"psi": ("q_psi", 1.0), "dpsi": ("p_J", J), "P1": ("P_1", 1.0), "P2": ("P_2", 1.0)},
+                           units=("rad", "rad/s", "Pa", "Pa"))
+
+
+def estimator_start(u0, *, locked: bool = False) -> np.ndarray:
+    """Initial estimate: the nominal model at rest under commands `u0` (V).
+
+    Returns
+    -------
+    ndarray
+        ``(psi [rad], dpsi [rad/s], P1 [Pa], P2 [Pa])``, or ``(P1, P2)`` if `locked`.
+    """
+    x = pam_bd.equilibrium(np.asarray(u0, dtype=float), variant="locked" if locked else "full")
+    return x[2:] if locked else x
+
+
+def make_ukf(x0, *, locked: bool = False) -> UnscentedKalmanFilter:
+    """The paper's UKF on the nominal ``pam`` (or ``pam-locked``), measuring ``P1``, ``P2``.
+
+    Parameters
+    ----------
+    x0 : array_like, shape (4,) or (2,) if locked
+        :math:`\\hat x(0)`: ``(psi [rad], dpsi [rad/s], P1 [Pa], P2 [Pa])`` or ``(P1, P2)``.
+    locked : bool
+        The locked joint: states ``P_1``, ``P_2`` only; P(0) and Q are the
+        pressure block of the paper's.
+
+    Returns
+    -------
+    UnscentedKalmanFilter
+        1 ms samples of 4 RK4 sub-steps, Julier points with :math:`\\kappa = 0`.
+    """
+    keep = slice(2, 4) if locked else slice(0, 4)
+    n = 2 if locked else 4
+    return UnscentedKalmanFilter.from_model(
+        nominal_equations(locked=locked), dt=SAMPLE_TIME, substeps=round(SAMPLE_TIME / FRICTION_STEP), outputs=("P1", "P2"),
+        x0=x0, P0=np.diag(P0_DIAG[keep]), Q=np.diag(Q_DIAG[keep]), R=np.diag(R_DIAG),
+        points=JulierSigmaPoints(n, kappa=KAPPA), state_map=None if locked else _state_map())
+
+
+def ukf_estimates(z, u, x0, *, locked: bool = False) -> dict:
+    """Run the UKF of :func:`make_ukf` over a recording.
+
+    Parameters
+    ----------
+    z : ndarray, shape (n, 2), Pa
+        Pressure readings ``(P1, P2)``; row 0 is not used (the paper's recursion).
+    u : ndarray, shape (n, 2), V
+        Commands, row k held over sample k.
+    x0 : array_like
+        :math:`\\hat x(0)` (:func:`estimator_start`).
+    locked : bool
+
+    Returns
+    -------
+    dict str -> ndarray, shape (n,)
+        ``psi`` (deg), ``P1``, ``P2`` (Pa), ``tau`` (N m, eq. (9) of the estimate, Fig. 6).
+    """
+    ukf = make_ukf(x0, locked=locked)
+    est = ukf.batch_filter(z, u)
+    x_model = est.x if locked else _state_map().to_model(est.x)
+    y = ukf.model.h(x_model, np.asarray(u, dtype=float))
+    names = list(ukf.model.output_names)
+    return {s: y[:, names.index(s)] for s in ("psi", "P1", "P2", "tau")}
+
+
+def model_alone(t, u, x0, *, locked: bool = False) -> dict:
+    """The nominal model open loop on the commands: the paper's "estimation by model".
+
+    Parameters
+    ----------
+    t : ndarray, shape (n,), s
+    u : ndarray, shape (n, 2), V
+    x0 : array_like
+        Initial state as for :func:`make_ukf`.
+    locked : bool
+
+    Returns
+    -------
+    dict str -> ndarray, shape (n,)
+        ``psi`` (deg), ``P1``, ``P2`` (Pa), ``tau`` (N m).
+    """
+    eqs = nominal_equations(locked=locked)
+    x_model = np.asarray(x0, dtype=float) if locked else _state_map().to_model(x0)
+    res = simulate(eqs, (0.0, float(t[-1])), inputs={"u1": (t, u[:, 0]), "u2": (t, u[:, 1])},
+                   x0=dict(zip(eqs.state_names, x_model)), method="RK4", dt=FRICTION_STEP,
+                   output_interval=SAMPLE_TIME)
+    return {s: np.array(res[s]) for s in ("psi", "P1", "P2", "tau")}
+
+
+def experiment(fmu, t, u, rng, *, locked: bool = False) -> dict:
+    """Recording, noisy pressures, model alone and UKF for one rig variant.
+
+    Returns
+    -------
+    dict
+        ``t``, ``u``, ``truth``, ``model``, ``ukf`` (dicts of signals, see
+        :func:`record_rig`) and ``z`` (shape (n, 2), Pa: the noisy readings).
+    """
+    truth = record_rig(fmu, t, u, locked=locked)
+    z = add_pressure_noise(np.column_stack([truth["P1"], truth["P2"]]), rng, SIGMA_P)
+    x0 = estimator_start(u[0], locked=locked)
+    return {"t": t, "u": u, "truth": truth, "z": z, "model": model_alone(t, u, x0, locked=locked),
+            "ukf": ukf_estimates(z, u, x0, locked=locked)}
+
+
+def _scores(runs: dict, start: int) -> dict:
+    keys = {"angle": ("free", "psi"), "torque": ("locked", "tau")}
+    return {method: {q: indices(runs[v]["truth"][s][start:], runs[v][method][s][start:])
+                     for q, (v, s) in keys.items()} for method in ("model", "ukf")}
+
+
+def run(plot_dir=None, *, quick: bool = False) -> dict:
+    """The scenario's numbers (JSON-ready); plots in `plot_dir` if given.
+
+    Returns
+    -------
+    dict
+        ``{"model_only": {"angle": {"I", "M", "Q"}, "torque": {...}}, "ukf": {...}}``
+        (angle I, M in deg, torque I, M in N m, Q ratio) over ``t >=``
+        :data:`T_CONVERGE`; alongside: ``full_record`` (same indices over k = 0..N),
+        ``paper`` (:data:`PAPER_OFFLINE`), ``ranges``, ``units``, ``window_s``,
+        ``perturbation``, ``noise_sigma_pa``, ``seed``, ``quick``.
+    """
+    t, u = inputs(quick=quick)
+    rng = np.random.default_rng(SEED)
+    runs = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for variant in ("free", "locked"):
+            fmu = export_rig(Path(tmp) / f"rig_{variant}.fmu", locked=variant == "locked")
+            runs[variant] = experiment(fmu, t, u, rng, locked=variant == "locked")
+    start = int(round(T_CONVERGE / SAMPLE_TIME))
+    late, full = _scores(runs, start), _scores(runs, 0)
+    out = {"model_only": late["model"], "ukf": late["ukf"],
+           "full_record": {"model_only": full["model"], "ukf": full["ukf"]},
+           "paper": PAPER_OFFLINE,
+           "ranges": {"angle_deg": [float(runs["free"]["truth"]["psi"][start:].min()),
+                                    float(runs["free"]["truth"]["psi"][start:].max())],
+                      "torque_nm": [float(runs["locked"]["truth"]["tau"][start:].min()),
+                                    float(runs["locked"]["truth"]["tau"][start:].max())]},
+           "units": {"angle": "deg", "torque": "N m", "Q": "1"},
+           "window_s": [T_CONVERGE, float(t[-1])], "perturbation": dict(RIG_PERTURBATION),
+           "noise_sigma_pa": SIGMA_P, "seed": SEED, "quick": quick}
+    if plot_dir is not None:
+        from ._pam_ukf_plots import save_plots
+        save_plots(runs, Path(plot_dir), t_converge=T_CONVERGE)
+    return out
+
+
+if __name__ == "__main__":
+    print(json.dumps(run(sys.argv[1] if len(sys.argv) > 1 else "cosim-output"), indent=1))

@@ -158,40 +158,47 @@ def _closed_loop_matrices(d: ExoDesign):
 
     A, B, C, D = state_space(d.params)                    # the paper's absolute 7-state plant
     Ad, Bd, *_ = cont2discrete((A, B, C, D), d.dt, method="zoh")
-    K, Cm, Cb, dt, deh = d.observer_d.K, d.Cm, d.Cb, d.dt, d.d_eh
-    g = d.lqi2
+    K, g, dt = d.observer_d.K, d.lqi2, d.dt
     n = 7 + 6 + 2
-    Cm7 = C[[1, 0]]                                        # [w_m, tau_s] of the plant
-    # x_post = Px X + Pu U
-    Px = np.zeros((6, n)); Pu = np.zeros((6, 6))
-    Px[:, :7] = K @ Cm7
-    Px[:, 7:13] = np.eye(6) - K @ Cm
-    Pu[:, 4:6] = K
-    # u = -Kx x_post - Kz z - Kzz w = Ux X + Uu U
-    Ux = -g.Kx @ Px; Ux[:, 13] -= g.Kz[0, 0]; Ux[:, 14] -= g.Kzz[0, 0]
-    Uu = -g.Kx @ Pu
-    # y_b_hat = Cb x_post - d_eh v_h
-    Yx, Yu = Cb @ Px, Cb @ Pu
-    Yu[0, 1] -= deh
+    XP, XO, IZ, IW = slice(0, 7), slice(7, 13), 13, 14     # state blocks
+    REF, VH, W_TAU, W_H, V_V, V_T = range(6)               # inputs
+    # every signal s = Sx X + Su U; the Kalman update x_post = x_prior + K (y - Cm x_prior)
+    Px, Pu = np.zeros((6, n)), np.zeros((6, 6))
+    Px[:, XP] = K @ C[[1, 0]]                              # y = [w_m, tau_s] of the plant + noise
+    Px[:, XO] = np.eye(6) - K @ d.Cm
+    Pu[:, [V_V, V_T]] = K
+    # u = -F'_ix x_post - F'_iz z - F_iz w                  eq. (13)
+    Ux, Uu = -g.Kx @ Px, -g.Kx @ Pu
+    Ux[0, IZ] -= g.Kz[0, 0]
+    Ux[0, IW] -= g.Kzz[0, 0]
+    # y_b_hat = Cb x_post - d_eh v_h                        eq. (6)
+    Yx, Yu = d.Cb @ Px, d.Cb @ Pu
+    Yu[0, VH] -= d.d_eh
     Phi, Gam = np.zeros((n, n)), np.zeros((n, 6))
     # plant: x' = Ad x + Bd[:, 0] (u + w_tau) + Bd[:, 1] (v_h + w_h)
-    Phi[:7, :7] = Ad
-    Phi[:7] += np.outer(Bd[:, 0], Ux[0]); Gam[:7] += np.outer(Bd[:, 0], Uu[0])
-    Gam[:7, 2] += Bd[:, 0]; Gam[:7, 1] += Bd[:, 1]; Gam[:7, 3] += Bd[:, 1]
+    Phi[XP, XP] = Ad
+    Phi[XP] += np.outer(Bd[:, 0], Ux[0])
+    Gam[XP] += np.outer(Bd[:, 0], Uu[0])
+    Gam[XP, W_TAU] += Bd[:, 0]
+    Gam[XP, VH] += Bd[:, 1]
+    Gam[XP, W_H] += Bd[:, 1]
     # observer: x_prior' = F x_post + Gd[:, 0] u + Gd[:, 1] v_h
-    Phi[7:13] = d.F @ Px + np.outer(d.Gd[:, 0], Ux[0])
-    Gam[7:13] = d.F @ Pu + np.outer(d.Gd[:, 0], Uu[0])
-    Gam[7:13, 1] += d.Gd[:, 1]
-    # integrators: w' = w + dt z; z' = z + dt (tau_ref - y_b_hat)
-    Phi[13] = -dt * Yx[0]; Phi[13, 13] += 1.0
-    Gam[13] = -dt * Yu[0]; Gam[13, 0] += dt
-    Phi[14, 13], Phi[14, 14] = dt, 1.0
+    Phi[XO] = d.F @ Px + np.outer(d.Gd[:, 0], Ux[0])
+    Gam[XO] = d.F @ Pu + np.outer(d.Gd[:, 0], Uu[0])
+    Gam[XO, VH] += d.Gd[:, 1]
+    # integrators: z' = z + dt (tau_ref - y_b_hat), w' = w + dt z      eqs. (10), (12)
+    Phi[IZ] = -dt * Yx[0]
+    Phi[IZ, IZ] += 1.0
+    Gam[IZ] = -dt * Yu[0]
+    Gam[IZ, REF] += dt
+    Phi[IW, IZ], Phi[IW, IW] = dt, 1.0
     Cout, Dout = np.zeros((6, n)), np.zeros((6, 6))
     Cout[0], Dout[0] = Ux[0], Uu[0]
     Cout[1], Dout[1] = Yx[0], Yu[0]
     Cout[2], Dout[2] = Px[1], Pu[1]
-    Cout[3, :7] = C[2]; Dout[3, 1] = Dout[3, 3] = D[2, 1]
-    Cout[4, :7], Cout[5, :7] = C[1], C[0]
+    Cout[3, XP] = C[2]                                     # true y_b, with its -d_eh theta_h_dot term
+    Dout[3, VH] = Dout[3, W_H] = D[2, 1]
+    Cout[4, XP], Cout[5, XP] = C[1], C[0]
     return Phi, Gam, Cout, Dout
 
 

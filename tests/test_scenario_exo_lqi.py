@@ -184,6 +184,15 @@ def test_run_json_shape_and_plots(quick_run):
         assert (folder / f"exo_lqi_{name}.png").stat().st_size > 10_000
 
 
+def test_noise_block_names_its_problem():
+    from bondgraph.errors import CosimError
+    from cosim.scenarios._exo_loop import AddNoise
+    with pytest.raises(CosimError, match="'act'.*shape \\(n_samples, 2\\)"):
+        AddNoise("act", ("tau_m", "w_h"), np.zeros((5, 3)), 1e-4)
+    with pytest.raises(CosimError, match="unknown signal.*theta"):
+        AddNoise("act", ("theta",), np.zeros((5, 1)), 1e-4)
+
+
 def test_design_rejects_bad_period():
     with pytest.raises(ParameterError, match="dt"):
         de.design(dt=-1e-3)

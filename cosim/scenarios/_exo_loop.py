@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from bondgraph.blockdiagram.exoskeleton import state_space
+from bondgraph.errors import CosimError
 
 from ..blocks import Constant, Step
 from ..component import Port, PythonBlock
@@ -103,6 +104,15 @@ class AddNoise(PythonBlock):
     """
 
     def __init__(self, name: str, signals, noise, dt: float):
+        signals = tuple(signals)
+        unknown = [s for s in signals if s not in _UNITS]
+        if unknown:
+            raise CosimError(f"block {name!r}: unknown signal(s) {', '.join(unknown)}; expected some of "
+                             f"{', '.join(NOISE_COLUMNS)}")
+        noise = np.asarray(noise, dtype=float)
+        if noise.ndim != 2 or noise.shape[1] != len(signals) or noise.shape[0] == 0:
+            raise CosimError(f"block {name!r}: noise must have shape (n_samples, {len(signals)}); "
+                             f"found {noise.shape}")
         super().__init__(name, inputs=[Port(s, _UNITS[s]) for s in signals],
                          outputs=[Port(f"{s}_out", _UNITS[s], f"{s} plus noise") for s in signals],
                          feedthrough=[(s, f"{s}_out") for s in signals])

@@ -1,0 +1,47 @@
+"""Recordings with concealed effects: the diagnosis test set and its generator.
+
+Each case drives a TRUTH model -- an unmodified built-in library model (the
+NOMINAL model a diagnosis is given) plus one concealed effect written by hand
+in :mod:`diagnosis.cases.truth`, independently of the diagnosis catalogue --
+with a seeded, realistic excitation, and records its inputs and outputs
+through simulated sensors (Gaussian noise, then quantisation to the sensor's
+resolution) into a small CSV file whose columns carry their units in their
+names (``x_mm``, ``P1_kPa``, ``w_m_rpm``).  Null cases have no effect.
+
+``python -m diagnosis.cases OUTDIR [CASE ...]`` regenerates the CSV files and
+the manifest ``cases.json``; the committed copies live in
+``tests/data/diagnosis/``.  Generation is deterministic: each case owns a seed
+(``numpy.random.default_rng(seed)`` draws the excitation, then the noise of
+each output in order), and the model is driven by exactly the command values
+written to the file, as zero-order-hold tables.
+
+Manifest fields (one entry per case)
+------------------------------------
+``name``, ``file``, ``model`` (nominal, ``bondgraph.library`` name),
+``description`` (one line), ``kind`` (issue 6 vocabulary, or ``"none"``),
+``place`` (``{"kind": "junction"|"input"|"output", "name": ...}`` or null),
+``parameters`` (true values with units), ``affected_output``, ``time``
+(time column), ``inputs`` / ``outputs`` (``NAME=COLUMN:UNIT`` bindings),
+``model_units``, ``seed``, ``sample_rate_Hz``, ``duration_s``,
+``excitation`` (profile and amplitudes), ``noise`` (per output: column, unit,
+``sigma``, ``quantum``, ``effective_sigma`` = sqrt(sigma^2 + quantum^2/12)),
+``min_effect_to_noise`` (documented floor) and ``effect_to_noise`` (measured:
+RMS of truth minus nominal, noise-free, of the affected output over its
+effective sigma).
+
+Public names
+------------
+``CASES``, ``Case``, ``Signal``, ``case`` (definitions); ``record``,
+``simulate_case``, ``write_all``, ``MANIFEST`` (generator); the effect classes
+live in :mod:`diagnosis.cases.truth`.
+
+Examples
+--------
+>>> from diagnosis.cases import CASES
+>>> len({c.kind for c in CASES if c.kind != "none"}) >= 8
+True
+"""
+from .definitions import CASES, Case, Signal, case
+from .generate import MANIFEST, record, simulate_case, write_all
+
+__all__ = ["CASES", "Case", "Signal", "case", "MANIFEST", "record", "simulate_case", "write_all"]

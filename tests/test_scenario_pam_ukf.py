@@ -127,6 +127,11 @@ def test_json_shape(quick):
         for q in ("angle", "torque"):
             assert set(res[method][q]) == {"I", "M", "Q"}
             assert all(math.isfinite(v) and v >= 0 for v in res[method][q].values())
+    for extra in ("full_record", "second_half"):
+        assert {m: set(res[extra][m]) for m in ("model_only", "ukf")} == {m: {"angle", "torque"}
+                                                                        for m in ("model_only", "ukf")}
+    assert res["second_half"]["window_s"] == [pytest.approx(1.95), pytest.approx(3.9)]
+    assert res["window_s"] == [1.0, pytest.approx(3.9)]
     assert res["units"] == {"angle": "deg", "torque": "N m", "Q": "1"}
     assert res["perturbation"] == dict(rig.RIG_PERTURBATION)
 

@@ -104,6 +104,16 @@ def test_master_recording_equals_direct_simulation_of_the_rig_graph(tmp_path, lo
     assert np.abs(nominal["P1"] - rec["P1"]).max() > 1e3   # the FMU carries the rig's parameters
 
 
+@pytest.mark.parametrize("t, u, match", [
+    (np.arange(5) * 1e-3, np.zeros((4, 2)), "shape"),
+    (np.arange(5) * 2e-3, np.zeros((5, 2)), "1 ms"),
+    (np.arange(5) * 1e-3, np.full((5, 2), np.nan), "row 0"),
+])
+def test_model_alone_rejects_a_bad_profile(t, u, match):
+    with pytest.raises(ValueError, match=f"model_alone.*{match}"):
+        pam_ukf.model_alone(t, u, pam_ukf.estimator_start((5.0, 5.0)))
+
+
 def test_ukf_uses_the_papers_settings():
     ukf = pam_ukf.make_ukf(pam_ukf.estimator_start((5.0, 5.0)))
     np.testing.assert_array_equal(ukf.P, np.diag([1e-5, 1e-4, 1e6, 1e6]))

@@ -59,6 +59,11 @@ def rmse_index(z) -> float:
 def max_index(z) -> float:
     """:math:`\\mathbb{M}(z) = \\|z\\|_\\infty` (unit of `z`).
 
+    Parameters
+    ----------
+    z : array_like, shape (N + 1,)
+        Estimation error at k = 0..N, N >= 1.
+
     Examples
     --------
     >>> max_index([0.5, -2.0, 1.0])

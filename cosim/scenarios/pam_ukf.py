@@ -93,10 +93,18 @@ PAPER_OFFLINE = {
 
 
 def inputs(*, quick: bool = False):
-    """The Fig. 8-like valve commands: ``(t [s], u [V], shape (n, 2))``, 1 ms samples.
+    """The Fig. 8-like valve commands, 1 ms samples.
 
-    13 segments of :data:`SEGMENT` (130 s, the paper's N = 130e3) or, ``quick``,
-    of :data:`QUICK_SEGMENT` (3.9 s).
+    Parameters
+    ----------
+    quick : bool
+        13 segments of :data:`QUICK_SEGMENT` (3.9 s) instead of :data:`SEGMENT`
+        (130 s, the paper's N = 130e3).
+
+    Returns
+    -------
+    t : ndarray, shape (n,), s
+    u : ndarray, shape (n, 2), V
     """
     return pam_bd.fig8_profile(segment=QUICK_SEGMENT if quick else SEGMENT)
 
@@ -120,15 +128,31 @@ def record_rig(fmu, t, u, *, locked: bool = False, u_pre=U_PRE) -> dict:
     -------
     dict str -> ndarray, shape (n,)
         ``t`` (s), ``psi`` (deg), ``P1``, ``P2`` (Pa abs), ``tau`` (N m): the rig's truth.
+
+    Raises
+    ------
+    ValueError
+        `t` not 0, 1 ms, 2 ms, ...; `u` not of shape (len(t), 2) or not finite.
     """
-    t, u = np.asarray(t, dtype=float), np.asarray(u, dtype=float)
-    if u.shape != (t.size, 2):
-        raise ValueError(f"record_rig: u must have shape ({t.size}, 2) for {t.size} times; found {u.shape}")
+    t, u = _profile(t, u, "record_rig")
     plant = FMUComponent(fmu, "rig", start_values=rig_start_values(u_pre, locked=locked))
     tables = [Table(f"u{i}", t, u[:, i - 1], unit="V", interpolation="hold") for i in (1, 2)]
     sim = CoSimulation(tables + [plant], [("u1.y", "rig.u1"), ("u2.y", "rig.u2")], step=SAMPLE_TIME)
     result = sim.run(float(t[-1]))
     return {"t": result.t, **{s: np.array(result[f"rig.{s}"]) for s in ("psi", "P1", "P2", "tau")}}
+
+
+def _profile(t, u, who: str):
+    """`t`, `u` as float arrays; u of shape (len(t), 2), t = 0, 1 ms, 2 ms, ..."""
+    t, u = np.asarray(t, dtype=float), np.asarray(u, dtype=float)
+    if t.ndim != 1 or t.size < 2 or u.shape != (t.size, 2):
+        raise ValueError(f"{who}: need t of shape (n >= 2,) and u of shape (n, 2) (V); found t {t.shape}, "
+                         f"u {u.shape}")
+    if not np.allclose(t, np.arange(t.size) * SAMPLE_TIME, rtol=0.0, atol=1e-9):
+        raise ValueError(f"{who}: t must be 0, 1 ms, 2 ms, ... (the rig's sampling)")
+    if not np.all(np.isfinite(u)):
+        raise ValueError(f"{who}: u has non-finite values (first at row {int(np.argmax(~np.isfinite(u).all(1)))})")
+    return t, u
 
 
 @lru_cache(maxsize=1)
@@ -141,7 +165,12 @@ def _state_map() -> StateMap:
 
 
 def estimator_start(u0, *, locked: bool = False) -> np.ndarray:
-    """Initial estimate: the nominal model at rest under commands `u0` (V).
+    """Initial estimate: the nominal model at rest under commands `u0`.
+
+    Parameters
+    ----------
+    u0 : array_like, shape (2,), V
+    locked : bool
 
     Returns
     -------
@@ -217,7 +246,13 @@ def model_alone(t, u, x0, *, locked: bool = False) -> dict:
     -------
     dict str -> ndarray, shape (n,)
         ``psi`` (deg), ``P1``, ``P2`` (Pa), ``tau`` (N m).
+
+    Raises
+    ------
+    ValueError
+        As :func:`record_rig`.
     """
+    t, u = _profile(t, u, "model_alone")
     eqs = nominal_equations(locked=locked)
     x_model = np.asarray(x0, dtype=float) if locked else _state_map().to_model(x0)
     res = simulate(eqs, (0.0, float(t[-1])), inputs={"u1": (t, u[:, 0]), "u2": (t, u[:, 1])},
@@ -228,6 +263,16 @@ def model_alone(t, u, x0, *, locked: bool = False) -> dict:
 
 def experiment(fmu, t, u, rng, *, locked: bool = False) -> dict:
     """Recording, noisy pressures, model alone and UKF for one rig variant.
+
+    Parameters
+    ----------
+    fmu : path-like
+        The rig FMU (:func:`._pam_rig.export_rig` with the same `locked`).
+    t : ndarray, shape (n,), s
+    u : ndarray, shape (n, 2), V
+    rng : numpy.random.Generator
+        Draws the pressure noise (:data:`SIGMA_P`).
+    locked : bool
 
     Returns
     -------

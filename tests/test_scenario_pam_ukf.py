@@ -148,7 +148,7 @@ def test_json_shape(quick):
 
 def test_ukf_beats_the_model_alone_on_the_perturbed_rig(quick):
     # Measured (quick, seed 5): angle I 0.43 vs 3.69 deg, M 0.81 vs 5.00 deg; torque I 0.017 vs
-    # 0.40 N m, M 0.060 vs 0.58 N m -- UKF/model <= 0.16.  The model alone keeps the wrong initial
+    # 0.40 N m, M 0.060 vs 0.58 N m -- UKF/model <= 0.16 (seeds 0-3: <= 0.18).  The model alone keeps the wrong initial
     # pressures for seconds (slow valves) and its wrong rig parameters; the UKF corrects the
     # pressures within ~50 ms.  0.3 leaves room for other noise draws yet fails if the filter
     # stops using the measurements (then both would be equal).

@@ -20,7 +20,7 @@ from bondgraph import simulate
 
 from .definitions import CASES, Case
 
-__all__ = ["sample_times", "commands", "simulate_case", "Recording", "record", "write_case",
+__all__ = ["sample_times", "commands", "simulate_case", "GeneratedRecording", "record", "write_case",
            "manifest_entry", "write_all", "MANIFEST"]
 
 #: File name of the manifest next to the CSV files.
@@ -64,8 +64,9 @@ def _compressed(times: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.n
 
 @lru_cache(maxsize=32)
 def _equations(model: str, effect):
-    """State equations of the nominal `model` with `effect` (a frozen, hashable Effect) added;
-    derived once per process (the derivation, not the simulation, is the slow part)."""
+    """State equations of the nominal `model` with the structure of `effect` (a frozen, hashable
+    :meth:`Effect.structure`, or None) added, derived once per process (the derivation, not
+    the simulation, is the slow part); the effect's values are passed at simulation time."""
     graph = library.build(model)
     return (graph if effect is None else effect.graph(graph)).equations()
 
@@ -91,8 +92,10 @@ def simulate_case(case: Case, t: np.ndarray, model_commands: dict, *, truth: boo
     if truth and effect is not None:
         tables = effect.inputs(t, model_commands)
     tables = {k: _compressed(*tv) for k, tv in tables.items()}
-    eqs = _equations(case.model, effect if truth else None)
+    with_effect = truth and effect is not None
+    eqs = _equations(case.model, effect.structure() if with_effect else None)
     result = simulate(eqs, (float(t[0]), float(t[-1])), inputs=tables,
+                      params=effect.simulation_params() if with_effect else None,
                       output_interval=float(t[1] - t[0]))
     if len(result.t) != len(t) or not np.allclose(result.t, t, atol=1e-9):
         raise RuntimeError(f"case {case.name}: the simulation's time grid does not match the samples")
@@ -102,7 +105,7 @@ def simulate_case(case: Case, t: np.ndarray, model_commands: dict, *, truth: boo
     return outputs
 
 
-class Recording:
+class GeneratedRecording:
     """A generated recording: column texts (the CSV) and the noise-free signals behind it.
 
     Attributes
@@ -126,7 +129,7 @@ class Recording:
         return "\n".join(rows) + "\n"
 
 
-def record(case: Case) -> Recording:
+def record(case: Case) -> GeneratedRecording:
     """Generate `case`'s recording (deterministic, see the module docstring)."""
     rng = np.random.default_rng(case.seed)
     t = sample_times(case)
@@ -138,10 +141,10 @@ def record(case: Case) -> Recording:
     for s in case.outputs:
         noisy = s.scale * clean[s.name] + rng.normal(0.0, s.sigma, size=len(t))
         texts[s.column] = _fmt(np.round(noisy / s.quantum) * s.quantum, s.decimals)
-    return Recording(case, t, texts, model_commands, clean)
+    return GeneratedRecording(case, t, texts, model_commands, clean)
 
 
-def write_case(case: Case, outdir) -> tuple[Path, Recording]:
+def write_case(case: Case, outdir) -> tuple[Path, GeneratedRecording]:
     """Write ``<outdir>/<case.name>.csv``; return its path and the recording."""
     rec = record(case)
     path = Path(outdir) / f"{case.name}.csv"
@@ -149,14 +152,14 @@ def write_case(case: Case, outdir) -> tuple[Path, Recording]:
     return path, rec
 
 
-def effect_ratio(case: Case, rec: Recording) -> float:
+def effect_ratio(case: Case, rec: GeneratedRecording) -> float:
     """RMS(truth - nominal) of the affected output over its effective noise sigma (both noise-free)."""
     s = case.output(case.affected)
     nominal = simulate_case(case, rec.t, rec.commands, truth=False)[case.affected]
     return float(np.sqrt(np.mean((s.scale * (rec.clean[case.affected] - nominal)) ** 2)) / s.effective_sigma)
 
 
-def manifest_entry(case: Case, rec: Recording) -> dict:
+def manifest_entry(case: Case, rec: GeneratedRecording) -> dict:
     """The manifest's record of `case` (see ``diagnosis.cases`` for the fields)."""
     graph = library.build(case.model)
     units = {d.name: d.unit for d in graph.inputs()} | {o.name: o.unit for o in graph.outputs.values()}

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["held_levels", "staircase", "prbs", "chirp", "dac"]
+__all__ = ["held_levels", "staircase", "prbs", "dac"]
 
 
 def held_levels(t, rng, *, low: float, high: float, hold: tuple[float, float]) -> np.ndarray:
@@ -54,14 +54,6 @@ def prbs(t, rng, *, low: float, high: float, bit_time: float) -> np.ndarray:
     t = np.asarray(t, dtype=float)
     bits = rng.integers(0, 2, size=int(np.ceil(t[-1] / bit_time)) + 1)
     return np.where(bits[np.floor(t / bit_time).astype(int)] == 1, high, low)
-
-
-def chirp(t, *, amplitude: float, f0: float, f1: float, offset: float = 0.0) -> np.ndarray:
-    """Linear chirp ``offset + amplitude sin(2 pi (f0 t + (f1 - f0) t^2 / (2 T)))`` (f in Hz)."""
-    t = np.asarray(t, dtype=float)
-    span = t[-1] - t[0]
-    tau = t - t[0]
-    return offset + amplitude * np.sin(2 * np.pi * (f0 * tau + 0.5 * (f1 - f0) * tau ** 2 / span))
 
 
 def dac(values, quantum: float, *, low: float = -np.inf, high: float = np.inf) -> np.ndarray:

@@ -80,6 +80,19 @@ class Effect:
         """The truth graph (default: the nominal graph itself)."""
         return nominal
 
+    def structure(self):
+        """What decides the truth graph's equations, the parameter values aside (hashable);
+        ``None`` when the truth graph is the nominal one.  Two effects of the same structure
+        share one derivation and differ only by :meth:`simulation_params`."""
+        return None
+
+    def simulation_params(self) -> dict[str, float]:
+        """Parameter values (SI) to pass to ``simulate(params=...)`` for the truth graph."""
+        return {}
+
+    def _blank(self) -> "Effect":
+        return replace(self, params=tuple(replace(p, value=1.0) for p in self.params))
+
     def inputs(self, t: np.ndarray, commands: dict) -> dict:
         """Input tables ``name -> (times, values)`` the truth model sees (default: the commands)."""
         return {name: (np.asarray(t, float), np.asarray(u, float)) for name, u in commands.items()}
@@ -112,6 +125,12 @@ class ResistiveEffect(Effect):
     def _neutral_values(self) -> dict:
         return {name: 0.0 for name in self.zero}
 
+    def structure(self):
+        return self._blank()
+
+    def simulation_params(self):
+        return {p.name: p.value for p in self.params}
+
     def graph(self, nominal: BondGraph) -> BondGraph:
         name = f"{self.kind}_{self.place.name}"
         law = {"flow": self.law} if self.flow_law else {"effort": self.law}
@@ -130,6 +149,12 @@ class CubicSpring(Effect):
 
     def _neutral_values(self) -> dict:
         return {"k3": 0.0}
+
+    def structure(self):
+        return self._blank()
+
+    def simulation_params(self):
+        return {"k3": self.value("k3")}
 
     def graph(self, nominal: BondGraph) -> BondGraph:
         name = f"{self.kind}_{self.place.name}"
@@ -154,6 +179,13 @@ class PamValveLag(Effect):
 
     def _neutral_values(self) -> dict:
         return {"tau": 0.0}
+
+    def structure(self):
+        return None if self.value("tau") == 0.0 else self._blank()
+
+    def simulation_params(self):
+        tau = self.value("tau")
+        return {} if tau == 0.0 else {f"valve{self.place.name[-1]}_driver_R": tau / self.c_drive}
 
     def graph(self, nominal: BondGraph) -> BondGraph:
         from bondgraph.library.pam import valve_law

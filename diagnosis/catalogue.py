@@ -1,0 +1,214 @@
+"""The catalogue of candidate physics: what a model may be missing, by physical name.
+
+Each :class:`Candidate` is one kind of effect (:data:`KINDS`) attached to one
+:class:`~diagnosis.place.Place`, with fitted parameters (:class:`ParamSpec`:
+guess and bounds scaled from the data) and fixed constants.
+:meth:`Candidate.build` returns a NEW graph with the effect added as a proper
+bond-graph element (R with a nonlinear law, C with a changed law, equation
+element, 1-junction branch), an input transformation (the element reading the
+input gets the lag / delay / saturation, with its extra states) or an output
+transformation.  Candidate parameters are graph parameters, so a compiled
+candidate is re-run with new values, and the graph saves to JSON and exports
+to an FMU like any other.
+
+Which kinds at which place (:func:`candidates`):
+
+* 1-junction: ``coulomb_friction``, ``viscous_friction``, ``stribeck_friction``,
+  ``pressure_dependent_friction`` (one per pressure variable of the model),
+  ``hysteresis``, and for each C on it ``backlash``, ``nonlinear_stiffness``
+  (:mod:`diagnosis.catalogue_friction`, :mod:`diagnosis.catalogue_storage`);
+* 0-junction: ``leak``, ``heat_transfer`` (pneumatic / thermal only),
+  ``nonlinear_stiffness`` for each C on it;
+* input: ``valve_lag``, ``transport_delay``, ``saturation``;
+* output: ``sensor_offset``, ``sensor_gain`` (:mod:`diagnosis.catalogue_signals`).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bondgraph.errors import UnknownNameError
+from bondgraph.io_json import graph_from_dict
+
+from .catalogue_common import ParamSpec, add_parameter
+from .catalogue_friction import FRICTION_KINDS, build_friction, explain_friction, make_friction
+from .catalogue_scales import experiment_times, junction_scales
+from .catalogue_signals import (INPUT_KINDS, OUTPUT_KINDS, build_signal, explain_signal, make_input,
+                                make_output)
+from .catalogue_storage import STORAGE_KINDS, build_storage, explain_storage, make_storage
+from .errors import DiagnosisError
+from .place import Place
+
+__all__ = ["KINDS", "ParamSpec", "Candidate", "candidates"]
+
+#: The vocabulary of issue 6, in its order.
+KINDS = ("coulomb_friction", "viscous_friction", "stribeck_friction", "pressure_dependent_friction", "leak",
+         "heat_transfer", "valve_lag", "transport_delay", "hysteresis", "backlash", "nonlinear_stiffness",
+         "saturation", "sensor_offset", "sensor_gain")
+
+_FAMILIES = {**{k: (build_friction, explain_friction) for k in FRICTION_KINDS},
+             **{k: (build_storage, explain_storage) for k in STORAGE_KINDS},
+             **{k: (build_signal, explain_signal) for k in INPUT_KINDS + OUTPUT_KINDS}}
+assert set(_FAMILIES) == set(KINDS)
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One kind of missing physics at one place.
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`KINDS`.
+    place : Place
+        Where it is attached.
+    params : list of ParamSpec
+        Fitted parameters (graph parameter names, guesses, bounds, units).
+    regime : str, optional
+        The regime variable the law depends on (the pressure of
+        ``pressure_dependent_friction``), as an expression of the model.
+    constants : tuple of (name, value, unit, description)
+        Fixed graph parameters the law uses (smoothing flow, reference and
+        ambient pressures).
+    target : str, optional
+        The element acted on (the C of ``nonlinear_stiffness`` / ``backlash``).
+    initial : dict str -> float
+        Initial values of the states the candidate adds.
+    """
+
+    kind: str
+    place: Place
+    params: list
+    regime: str | None = None
+    constants: tuple = ()
+    target: str | None = None
+    initial: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if self.kind not in KINDS:
+            raise DiagnosisError(f"unknown kind {self.kind!r}; expected one of {', '.join(KINDS)}")
+        if not isinstance(self.place, Place):
+            raise DiagnosisError(f"candidate {self.kind}: place must be a Place, got {self.place!r}")
+
+    @property
+    def n_params(self) -> int:
+        """Number of fitted parameters."""
+        return len(self.params)
+
+    def guesses(self) -> dict[str, float]:
+        """Starting values by parameter name."""
+        return {p.name: p.guess for p in self.params}
+
+    def values_with_guesses(self, values=None) -> dict[str, float]:
+        """`values` completed with the guesses; unknown names raise UnknownNameError."""
+        values = dict(values or {})
+        known = self.guesses()
+        unknown = sorted(set(values) - set(known))
+        if unknown:
+            raise UnknownNameError("parameter", unknown[0], known, model=f"candidate {self}")
+        known.update({k: float(v) for k, v in values.items()})
+        return known
+
+    def build(self, model_graph, values=None):
+        """A new graph: `model_graph` with this effect added.
+
+        Parameters
+        ----------
+        model_graph : BondGraph
+            The nominal graph (not modified).
+        values : dict str -> float, optional
+            Parameter values by :attr:`ParamSpec.name` (SI); missing ones take their guess.
+
+        Returns
+        -------
+        BondGraph
+            Named ``<model>_<kind>``; the fitted parameters and constants are graph parameters.
+        """
+        values = self.values_with_guesses(values)
+        data = model_graph.to_dict()
+        data["name"] = f"{model_graph.name}_{self.kind}"
+        data["description"] = f"{model_graph.description} + {self.kind} at {self.place}".strip(" +")
+        for spec in self.params:
+            add_parameter(data, spec.name, values[spec.name], spec.unit, spec.description)
+        for name, value, unit, description in self.constants:
+            add_parameter(data, name, value, unit, description)
+        build, _ = _FAMILIES[self.kind]
+        build(data, model_graph, self, values)
+        return graph_from_dict(data, source=f"candidate {self.kind} at {self.place}")
+
+    def explain(self, values=None) -> str:
+        """The effect in plain language, with the values and their units."""
+        values = self.values_with_guesses(values)
+        units = {p.name: p.unit for p in self.params}
+
+        def show(name):
+            unit = units.get(name, "")
+            return f"{values[name]:.3g} {unit if unit != '1' else ''}".strip()
+
+        _, explain = _FAMILIES[self.kind]
+        return explain(self, values, show)
+
+    def __str__(self) -> str:
+        return f"{self.kind} at {self.place}"
+
+
+def candidates(graph, place: Place, *, regime_variables=None, experiment=None) -> list[Candidate]:
+    """The kinds that make physical sense at `place`, with guesses scaled from the data.
+
+    Parameters
+    ----------
+    graph : BondGraph
+        The nominal model.
+    place : Place
+        A junction (kind ``"1"`` or ``"0"``), an input or an output of `graph`.
+    regime_variables : dict, optional
+        From :func:`diagnosis.locate.regime_variables` (name -> (values, description)); a
+        pressure-dependent friction is offered for each pressure variable of the model,
+        first those whose name appears here.
+    experiment : Experiment, optional
+        Recorded inputs/outputs (model units); scales for guesses and bounds come from
+        a nominal simulation on it.  Without it every scale is 1 (SI).
+
+    Returns
+    -------
+    list of Candidate
+        In the order of :data:`KINDS`.
+    """
+    if not isinstance(place, Place):
+        raise DiagnosisError(f"place must be a diagnosis.place.Place, got {place!r}")
+    taken = set(graph.names())
+    if place.kind == "junction":
+        element = graph.elements.get(place.name)
+        if element is None or element.kind not in ("0", "1"):
+            junctions = [n for n, e in graph.elements.items() if e.kind in ("0", "1")]
+            raise UnknownNameError("junction", place.name, junctions, model=graph.name)
+        scales = junction_scales(graph, place.name, experiment)
+        protos = make_storage(graph, place, scales, taken, experiment)
+        if element.kind == "1":
+            protos = make_friction(graph, place, scales, taken, experiment) + protos
+            protos = _regime_first(protos, regime_variables)
+    elif place.kind == "input":
+        names = [d.name for d in graph.inputs()]
+        if place.name not in names:
+            raise UnknownNameError("input", place.name, names, model=graph.name)
+        span, dt = experiment_times(experiment) if experiment is not None else (1.0, 0.01)
+        recorded = experiment.inputs.get(place.name) if experiment is not None else None
+        protos = make_input(graph, place, span, dt, recorded, taken)
+    else:
+        if place.name not in graph.outputs:
+            raise UnknownNameError("output", place.name, list(graph.outputs), model=graph.name)
+        measured = experiment.outputs.get(place.name) if experiment is not None else None
+        protos = make_output(graph, place, None if measured is None else np.asarray(measured, float), taken)
+    out = [Candidate(p["kind"], place, list(p["params"]), regime=p.get("regime"),
+                     constants=tuple(p.get("constants", ())), target=p.get("target"),
+                     initial=dict(p.get("initial", {}))) for p in protos]
+    return sorted(out, key=lambda c: KINDS.index(c.kind))
+
+
+def _regime_first(protos: list[dict], regime_variables) -> list[dict]:
+    """Pressure-dependent frictions whose pressure is among the located regime variables first."""
+    if not regime_variables:
+        return protos
+    named = set(regime_variables)
+    return sorted(protos, key=lambda p: p.get("regime") is not None and p["regime"] not in named)

@@ -1,0 +1,136 @@
+"""Scales taken from the data, for the catalogue's guesses and bounds.
+
+The nominal model is simulated once on the recorded inputs and the flows,
+efforts and displacements at a place are read off it (as extra outputs of a
+copy of the graph).  Without an experiment every scale is 1 in SI units, so a
+catalogue can still be listed.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from bondgraph.errors import BondcosimError
+from bondgraph.io_json import graph_from_dict
+
+__all__ = ["Scales", "simulate_expressions", "rms", "pressure_variables"]
+
+
+@dataclass(frozen=True)
+class Scales:
+    """Typical magnitudes at a place (SI units of the place).
+
+    Attributes
+    ----------
+    flow : float
+        RMS of the junction's common flow (1-junction) or of its largest bond flow (0-junction).
+    effort : float
+        RMS of the junction's largest bond effort (1-junction) or of its common effort (0-junction).
+    displacement : float
+        RMS of the integrated flow about its mean.
+    span : float, s
+        Duration of the experiment.
+    dt : float, s
+        Median sample interval.
+    from_data : bool
+        False when no experiment was given (every scale 1).
+    """
+
+    flow: float = 1.0
+    effort: float = 1.0
+    displacement: float = 1.0
+    span: float = 1.0
+    dt: float = 0.01
+    from_data: bool = False
+
+
+def rms(values) -> float:
+    """Root mean square of `values` (0 for an empty array)."""
+    values = np.asarray(values, dtype=float)
+    return float(np.sqrt(np.mean(values ** 2))) if values.size else 0.0
+
+
+def simulate_expressions(graph, experiment, expressions: dict) -> dict:
+    """Values of `expressions` along the nominal simulation of `experiment`.
+
+    Parameters
+    ----------
+    graph : BondGraph
+    experiment : Experiment
+        Recorded inputs (model units, zero-order hold) and time, s.
+    expressions : dict str -> str
+        Label -> expression of states, inputs, parameters and bond variables.
+
+    Returns
+    -------
+    dict str -> ndarray
+        Label -> values at the experiment's times; empty when
+        the nominal model cannot be simulated (the caller falls back to unit scales).
+    """
+    from .residuals import OutputSimulator
+    data = graph.to_dict()
+    labels = {f"scale_{k}": label for k, label in enumerate(expressions)}
+    data["outputs"] = [{"name": key, "expression": str(expressions[label]), "unit": ""}
+                       for key, label in labels.items()]
+    try:
+        g = graph_from_dict(data, source=f"scales of {graph.name}")
+        result = OutputSimulator(g, experiment, outputs=list(labels))()
+    except BondcosimError:
+        return {}
+    return {label: np.asarray(result[key], dtype=float) for key, label in labels.items()}
+
+
+def experiment_times(experiment) -> tuple[float, float]:
+    """(span, median sample interval) of an experiment, s."""
+    t = np.asarray(experiment.t, dtype=float)
+    return float(t[-1] - t[0]), float(np.median(np.diff(t)))
+
+
+def junction_scales(graph, junction: str, experiment) -> Scales:
+    """Flow, effort and displacement scales at a junction from the nominal simulation."""
+    if experiment is None:
+        return Scales()
+    span, dt = experiment_times(experiment)
+    bonds = [b for b, _ in graph.bonds_of(junction)]
+    common_flow = graph.elements[junction].kind == "1"
+    exprs = {f"f_{b.name}": f"f_{b.name}" for b in bonds}
+    exprs.update({f"e_{b.name}": f"e_{b.name}" for b in bonds})
+    values = simulate_expressions(graph, experiment, exprs)
+    if not values:
+        return Scales(span=span, dt=dt)
+    flows = [values[f"f_{b.name}"] for b in bonds]
+    efforts = [values[f"e_{b.name}"] for b in bonds]
+    if common_flow:
+        flow, effort = flows[0], max(efforts, key=rms)
+    else:
+        flow, effort = max(flows, key=rms), efforts[0] - np.mean(efforts[0])
+    t = np.asarray(experiment.t, dtype=float)
+    displacement = np.concatenate([[0.0], np.cumsum(0.5 * (flow[1:] + flow[:-1]) * np.diff(t))])
+    displacement = displacement - np.mean(displacement)
+    return Scales(flow=_positive(rms(flow)), effort=_positive(rms(effort)),
+                  displacement=_positive(rms(displacement)), span=span, dt=dt, from_data=True)
+
+
+def _positive(value: float) -> float:
+    return value if value > 0 and np.isfinite(value) else 1.0
+
+
+def pressure_variables(graph) -> dict[str, str]:
+    """Pressure-like variables of a graph: label -> expression.
+
+    States of equation elements in Pa (pneumatic chambers) and efforts of C
+    elements of the pneumatic and hydraulic domains; with two or more, also
+    their mean.
+    """
+    found = {}
+    for e in graph.elements.values():
+        if e.kind == "Eq":
+            for state in e.states:
+                if e.units.get(state, "") in ("Pa", "kPa", "bar"):
+                    found[state] = state
+        elif e.kind == "C" and getattr(e, "domain", "") in ("pneumatic", "hydraulic"):
+            found[f"e_{e.name}"] = f"e_{e.name}"
+    if len(found) >= 2:
+        found["mean_pressure"] = "(" + " + ".join(found.values()) + f")/{len(found)}"
+    return found

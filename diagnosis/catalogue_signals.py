@@ -1,0 +1,115 @@
+"""Actuator (input) and sensor (output) kinds.
+
+The recorded input ``u`` stays the model's input; the elements that used it
+see an effective input instead (:func:`~diagnosis.catalogue_common.route_input`):
+
+* ``valve_lag``: :math:`\\tau \\dot x = u - x`, effective input :math:`x` (an extra
+  state, starting at the first recorded value of ``u``).
+* ``transport_delay``: :math:`u(t - T)`, realised as the strictly proper Padé
+  [2/3] approximant of :math:`e^{-sT}`,
+
+  .. math:: \\frac{1 - \\tfrac25 sT + \\tfrac1{20}(sT)^2}
+                  {1 + \\tfrac35 sT + \\tfrac3{20}(sT)^2 + \\tfrac1{60}(sT)^3},
+
+  in controllable canonical form: three states owned by the element that
+  reads ``u``, with :math:`T` a parameter.  FMI has no delay primitive, and a
+  Padé chain is ordinary states, so the graph exports (Model Exchange and
+  Co-Simulation) like any other.  Error :math:`O((sT)^6)`; a step is
+  reproduced without a jump at t = 0 (strictly proper).
+* ``saturation``: :math:`\\min(\\max(u, u_{min}), u_{max})`.
+
+Sensor kinds transform the model output ``y`` before it is compared:
+``sensor_offset``: :math:`y + \\delta`; ``sensor_gain``: :math:`g\\, y`.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .catalogue_common import ParamSpec, fresh_name, route_input
+
+__all__ = ["INPUT_KINDS", "OUTPUT_KINDS", "make_input", "make_output", "build_signal", "explain_signal"]
+
+INPUT_KINDS = ("valve_lag", "transport_delay", "saturation")
+OUTPUT_KINDS = ("sensor_offset", "sensor_gain")
+
+
+def make_input(graph, place, span: float, dt: float, recorded, taken) -> list[dict]:
+    """Prototypes for an input place (`recorded`: the recorded input in model units, or None)."""
+    u = place.name
+    decl = next(d for d in graph.inputs() if d.name == u)
+    unit = decl.unit
+    values = np.asarray(recorded, dtype=float) if recorded is not None else np.array([decl.default - 1.0,
+                                                                                       decl.default + 1.0])
+    u0 = float(values[0]) if recorded is not None else float(decl.default)
+    lo, hi = float(np.min(values)), float(np.max(values))
+    width = max(hi - lo, 1e-12)
+    q_lo, q_hi = (float(v) for v in np.percentile(values, [5, 95]))
+    mid = float(np.median(values))
+    q_lo, q_hi = min(q_lo, mid - 1e-3 * width), max(q_hi, mid + 1e-3 * width)
+    return [
+        dict(kind="valve_lag", initial={f"x_lag_{u}": u0}, params=[
+            ParamSpec(fresh_name(taken, f"tau_lag_{u}"), max(5 * dt, span / 100), dt / 5, span / 2, "s",
+                      f"time constant of the actuator lag on {u}")]),
+        dict(kind="transport_delay", initial={f"z1_delay_{u}": u0}, params=[
+            ParamSpec(fresh_name(taken, f"T_delay_{u}"), max(3 * dt, span / 200), dt / 2, span / 4, "s",
+                      f"transport delay of {u}")]),
+        dict(kind="saturation", params=[
+            ParamSpec(fresh_name(taken, f"u_min_{u}"), q_lo, lo - width, mid, unit, f"lower saturation of {u}"),
+            ParamSpec(fresh_name(taken, f"u_max_{u}"), q_hi, mid, hi + width, unit, f"upper saturation of {u}")]),
+    ]
+
+
+def make_output(graph, place, measured, taken) -> list[dict]:
+    """Prototypes for an output place (`measured`: the recorded output in model units, or None)."""
+    y = place.name
+    unit = graph.outputs[y].unit
+    width = float(np.ptp(measured)) if measured is not None and np.ptp(measured) > 0 else 1.0
+    return [
+        dict(kind="sensor_offset", params=[ParamSpec(fresh_name(taken, f"offset_{y}"), 0.0, -2 * width, 2 * width,
+                                                     unit, f"offset of the {y} sensor")]),
+        dict(kind="sensor_gain", params=[ParamSpec(fresh_name(taken, f"gain_{y}"), 1.0, 0.2, 5.0, "1",
+                                                   f"gain of the {y} sensor")]),
+    ]
+
+
+def build_signal(data: dict, graph, cand, values: dict) -> None:
+    """Transform the input or output of `cand` in the graph dict `data`."""
+    name = cand.place.name
+    p = [spec.name for spec in cand.params]
+    if cand.kind in OUTPUT_KINDS:
+        entry = next(o for o in data["outputs"] if o["name"] == name)
+        expr = entry["expression"]
+        entry["expression"] = f"({expr}) + {p[0]}" if cand.kind == "sensor_offset" else f"{p[0]}*({expr})"
+        return
+    unit = next(d.unit for d in graph.inputs() if d.name == name)
+    if cand.kind == "saturation":
+        route_input(data, graph, name, f"Min(Max({name}, {p[0]}), {p[1]})")
+    elif cand.kind == "valve_lag":
+        x = f"x_lag_{name}"
+        route_input(data, graph, name, x, states={x: f"({name} - {x})/{p[0]}"}, initial=dict(cand.initial),
+                    units={x: unit})
+    else:  # transport_delay: Pade [2/3], controllable canonical form
+        z1, z2, z3, T = f"z1_delay_{name}", f"z2_delay_{name}", f"z3_delay_{name}", p[0]
+        states = {z1: z2, z2: z3,
+                  z3: f"60*({name} - {z1} - 3*{T}/5*{z2} - 3*{T}**2/20*{z3})/{T}**3"}
+        route_input(data, graph, name, f"{z1} - 2*{T}/5*{z2} + {T}**2/20*{z3}", states=states,
+                    initial={z1: cand.initial.get(z1, 0.0), z2: 0.0, z3: 0.0},
+                    units={z1: unit, z2: f"({unit})/s", z3: f"({unit})/s^2"})
+
+
+def explain_signal(cand, values: dict, show) -> str:
+    """Plain-language sentence for an input or output candidate."""
+    name = cand.place.name
+    p = [spec.name for spec in cand.params]
+    if cand.kind == "valve_lag":
+        return (f"the actuator driven by {name} follows its command with a lag of {show(p[0])}: "
+                f"a first-order valve/actuator lag on input {name}")
+    if cand.kind == "transport_delay":
+        return (f"the input {name} acts {show(p[0])} late: a transport delay on input {name} "
+                "(Pade [2/3] states in the model)")
+    if cand.kind == "saturation":
+        return (f"the input {name} has no effect beyond {show(p[0])} .. {show(p[1])}: "
+                f"saturation of input {name}")
+    if cand.kind == "sensor_offset":
+        return f"the {name} sensor reads {show(p[0])} off: a sensor offset on output {name}"
+    return f"the {name} sensor reads {show(p[0])} times the true value: a sensor gain error on output {name}"

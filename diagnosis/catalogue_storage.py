@@ -1,0 +1,157 @@
+"""Kinds acting on storage and flows: leak and heat transfer at a 0-junction, nonlinear stiffness
+and backlash of a C element at a junction.
+
+* ``leak``: an R from the 0-junction (common effort = pressure ``e``) to the
+  ambient, :math:`f = c_{leak} (e - P_{amb})`; for pneumatic pseudo-bonds a mass
+  flow proportional to the pressure difference.  :math:`P_{amb}` is fixed:
+  101325 Pa for a pneumatic junction whose mean pressure exceeds 50 kPa
+  (absolute pressures), else 0 (gauge pressures, other domains).
+* ``heat_transfer`` (pneumatic / thermal 0-junctions only): the gas in a chamber
+  is compressed nearly adiabatically in fast transients and nearly
+  isothermally in slow ones.  Newtonian heat exchange with the walls is
+  represented, to first order in the temperature excursion, by an extra
+  compliance :math:`C_{th}` (the difference between the isothermal and the
+  adiabatic compliance, :math:`(1 - 1/\\kappa) V / (R T)` for a chamber of volume
+  V) reached through a thermal resistance, i.e. a 1-junction with an R and a
+  C hung on the chamber's 0-junction; :math:`\\tau_{th} = R_{th} C_{th}` is the
+  thermal time constant :math:`m c_v / (h A)`.  We fit :math:`C_{th}` and
+  :math:`\\tau_{th}`; the C branch starts at the chamber's initial pressure.
+* ``nonlinear_stiffness``: the C's law gets a cubic term, :math:`e = \\Phi(q) + k_3 q^3`.
+* ``backlash``: the C's law acts on the displacement beyond a play of
+  :math:`\\pm b`: :math:`e = \\Phi(q - \\mathrm{clip}(q, -b, b))` (a compliant
+  transmission with a dead zone of total width 2b).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from bondgraph.params import DOMAINS
+
+from .catalogue_common import ParamSpec, domain_units, fresh_name, junction_domain, junction_elements, substitute
+from .catalogue_scales import simulate_expressions
+
+__all__ = ["STORAGE_KINDS", "make_storage", "build_storage", "explain_storage"]
+
+STORAGE_KINDS = ("leak", "heat_transfer", "backlash", "nonlinear_stiffness")
+P_AMBIENT = 101325.0  # Pa
+
+
+def make_storage(graph, place, scales, taken, experiment=None) -> list[dict]:
+    """Candidate prototypes for a junction: flow kinds at a 0-junction, stiffness kinds for each C on it."""
+    j = place.name
+    dom = junction_domain(graph, j)
+    e_unit, f_unit = domain_units(dom)
+    E, F = scales.effort, scales.flow
+    protos = []
+    if graph.elements[j].kind == "0":
+        first_bond = graph.bonds_of(j)[0][0].name
+        values = simulate_expressions(graph, experiment, {"e": f"e_{first_bond}"}) if experiment is not None else {}
+        e0, e_mean = (float(values["e"][0]), float(values["e"].mean())) if values else (0.0, 0.0)
+        p_amb = P_AMBIENT if dom == "pneumatic" and e_mean > 5e4 else 0.0
+        dev = max(abs(e_mean - p_amb), E)
+        protos.append(dict(kind="leak", constants=[(fresh_name(taken, f"P_amb_{j}"), p_amb, e_unit,
+                                                    f"ambient pressure the leak at {j} vents to")],
+                           params=[ParamSpec(fresh_name(taken, f"c_leak_{j}"), 0.1 * F / dev, 0.0, 100 * F / dev,
+                                             f"({f_unit})/({e_unit})" if e_unit else "",
+                                             f"leak conductance at {j}")]))
+        if dom in ("pneumatic", "thermal"):
+            c_unit = DOMAINS[dom].compliance
+            c_th = F * scales.span / max(E, 1e-12) * 0.05
+            protos.append(dict(kind="heat_transfer", constants=[(fresh_name(taken, f"P_th0_{j}"), e0, e_unit,
+                                                                 f"initial pressure of the thermal branch at {j}")],
+                               params=[ParamSpec(fresh_name(taken, f"C_th_{j}"), c_th, c_th * 1e-3, c_th * 1e3,
+                                                 c_unit, f"thermal compliance at {j}"),
+                                       ParamSpec(fresh_name(taken, f"tau_th_{j}"), scales.span / 10,
+                                                 scales.dt / 2, scales.span * 10, "s",
+                                                 f"thermal time constant at {j}")]))
+    for element, _ in junction_elements(graph, j):
+        if element.kind != "C":
+            continue
+        c = element.name
+        s_unit = DOMAINS[element.domain].stiffness if element.domain in DOMAINS else ""
+        q_unit = DOMAINS[element.domain].displacement if element.domain in DOMAINS else ""
+        X = _displacement_scale(graph, element, experiment, scales)
+        k_lin = E / X
+        protos.append(dict(kind="nonlinear_stiffness", target=c, params=[
+            ParamSpec(fresh_name(taken, f"k3_{c}"), 0.0, -100 * k_lin / X ** 2, 100 * k_lin / X ** 2,
+                      f"{e_unit}/{q_unit}^3" if q_unit else s_unit, f"cubic stiffness coefficient of {c}")]))
+        if graph.elements[j].kind == "1":
+            protos.append(dict(kind="backlash", target=c, params=[
+                ParamSpec(fresh_name(taken, f"b_play_{c}"), 0.1 * X, 0.0, 3 * X, q_unit,
+                          f"half-width of the play in front of {c}")]))
+    return protos
+
+
+def _displacement_scale(graph, element, experiment, scales) -> float:
+    if experiment is None:
+        return scales.displacement
+    values = simulate_expressions(graph, experiment, {"q": element.state})
+    x = values.get("q")
+    scale = float(np.sqrt(np.mean(x ** 2))) if x is not None else 0.0
+    return scale if scale > 0 and np.isfinite(scale) else scales.displacement
+
+
+def build_storage(data: dict, graph, cand, values: dict) -> None:
+    """Add the leak / heat-transfer branch, or change the C's law, in the graph dict `data`."""
+    j = cand.place.name
+    p = [spec.name for spec in cand.params]
+    c = [const[0] for const in cand.constants]
+    dom = junction_domain(graph, j)
+    if cand.kind == "leak":
+        name = f"leak_{j}"
+        data["elements"].append({"kind": "R", "name": name, "domain": dom, "flow": f"{p[0]}*(e - {c[0]})",
+                                 "description": f"leak from {j} to the ambient"})
+        data["bonds"].append({"name": f"b_{name}", "tail": [j, ""], "head": [name, ""]})
+        return
+    if cand.kind == "heat_transfer":
+        branch, r_th, c_th = f"heat_{j}", f"R_th_{j}", f"C_th_el_{j}"
+        data["elements"] += [
+            {"kind": "1", "name": branch, "description": f"heat exchange branch of the chamber at {j}"},
+            {"kind": "R", "name": r_th, "domain": dom, "flow": f"e*{p[0]}/{p[1]}",
+             "description": f"thermal resistance tau_th / C_th at {j}"},
+            {"kind": "C", "name": c_th, "domain": dom, "law": f"{c[0]} + q/{p[0]}", "state": f"q_th_{j}",
+             "initial": 0.0, "description": f"thermal compliance at {j}"}]
+        data["bonds"] += [{"name": f"b_{branch}", "tail": [j, ""], "head": [branch, ""]},
+                          {"name": f"b_{r_th}", "tail": [branch, ""], "head": [r_th, ""]},
+                          {"name": f"b_{c_th}", "tail": [branch, ""], "head": [c_th, ""]}]
+        return
+    entry = next(e for e in data["elements"] if e["name"] == cand.target)
+    law = _c_law(entry)
+    if cand.kind == "nonlinear_stiffness":
+        entry["law"] = f"{law} + {p[0]}*q**3"
+    else:  # backlash: the law sees the displacement beyond the play
+        dead = f"q - Max(-{p[0]}, Min({p[0]}, q))"
+        entry["law"] = substitute(substitute(law, entry.get("state", f"q_{cand.target}"), "q"), "q", dead)
+    entry["description"] = (entry.get("description", "") + f" (with {cand.kind.replace('_', ' ')})").strip()
+
+
+def _c_law(entry: dict) -> str:
+    """The C entry's law as a string in ``q``; a linear C becomes a law with its parameter kept."""
+    name = entry["name"]
+    if "law" in entry:
+        return f"({entry['law']})"
+    for key, form in (("stiffness", f"{name}*q"), ("value", f"q/{name}")):
+        if key in entry:
+            entry.setdefault("params", {})[name] = {"name": name, "value": entry.pop(key),
+                                                    "unit": entry.pop("unit", ""),
+                                                    "description": f"{key} of {name}"}
+            return form
+    raise ValueError(f"C {name!r} has neither a law nor a value")  # pragma: no cover - loader guarantees one
+
+
+def explain_storage(cand, values: dict, show) -> str:
+    """Plain-language sentence for a storage-family candidate."""
+    j = cand.place.name
+    p = [spec.name for spec in cand.params]
+    if cand.kind == "leak":
+        return f"the chamber at {j} loses {show(p[0])} of flow per unit of pressure above ambient: a leak at {j}"
+    if cand.kind == "heat_transfer":
+        return (f"the pressure at {j} relaxes with a time constant of {show(p[1])} after each change as the "
+                f"gas exchanges heat with its walls (thermal compliance {show(p[0])}): heat transfer at {j}")
+    if cand.kind == "nonlinear_stiffness":
+        k3 = values.get(p[0], 0.0)
+        word = "stiffens" if k3 > 0 else ("softens" if k3 < 0 else "changes its stiffness")
+        return (f"the spring {cand.target} at {j} {word} with deflection (cubic term {show(p[0])}): "
+                f"nonlinear stiffness of {cand.target}")
+    return (f"the spring {cand.target} at {j} only engages beyond a play of +/- {show(p[0])}: "
+            f"backlash in front of {cand.target}")

@@ -1,0 +1,264 @@
+"""The catalogue of candidate physics: every kind builds a graph whose equations differ from the
+nominal ones by exactly the expected term (written here by hand in sympy), explanations carry
+units, bad places/values are refused by name, and built candidates export to valid FMUs."""
+import numpy as np
+import pytest
+import sympy as sp
+
+import bondgraph.library as library
+from bondgraph import C, I, One, R, Sf, TF, Zero, BondGraph
+from bondgraph.errors import UnknownNameError
+from diagnosis.catalogue import KINDS, Candidate, ParamSpec, candidates
+from diagnosis.errors import DiagnosisError
+from diagnosis.place import Place
+
+S = sp.Symbol  # the equations use real symbols; compare by name via _named
+
+
+def _named(expr):
+    """`expr` with every symbol replaced by a plain symbol of the same name."""
+    return expr.xreplace({s: sp.Symbol(s.name) for s in expr.free_symbols})
+
+
+def _rates(graph):
+    eqs = graph.equations()
+    return {s.name: _named(f) for s, f in zip(eqs.states, eqs.f)}
+
+
+def _outputs(graph):
+    eqs = graph.equations()
+    return {name: _named(h) for name, h in zip(eqs.outputs, eqs.h)}
+
+
+def _one(graph, place, kind, **kw):
+    found = [c for c in candidates(graph, place, **kw) if c.kind == kind]
+    assert found, f"{kind} not offered at {place}"
+    return found[0]
+
+
+def _differs_by(built, nominal, state, expected):
+    assert sp.simplify(_rates(built)[state] - _rates(nominal)[state] - expected) == 0
+
+
+def hydraulic_cylinder():
+    """Flow source -> oil chamber (0-junction) -> piston TF (area A) -> rod (1-junction): mass, damper, spring."""
+    g = BondGraph("cylinder")
+    g.add(Sf("Q", 1e-5, domain="hydraulic"))
+    g.add(Zero("chamber"))
+    g.add(C("oil", 1e-11, domain="hydraulic"))
+    g.add(TF("piston", 1e-3, description="f1 = A f2: volume flow = area x velocity"))
+    g.add(One("rod"))
+    for e in (I("m", 5.0, domain="translation"), R("b", 200.0, domain="translation"),
+              C("k", stiffness=1e4, domain="translation")):
+        g.add(e)
+        g.connect("rod", e.name)
+    g.connect("Q", "chamber")
+    g.connect("chamber", "oil")
+    g.connect("chamber", "piston")
+    g.connect("piston", "rod")
+    g.add_output("P", "e_oil", unit="Pa")
+    g.add_output("x", "q_k", unit="m")
+    return g
+
+
+def pneumatic_tank():
+    """Mass flow into an air tank (0-junction) with an outlet orifice; absolute pressure."""
+    g = BondGraph("air_tank")
+    g.add(Sf("m_in", 1e-4, domain="pneumatic"))
+    g.add(Zero("tank"))
+    g.add(C("air", law="101325 + q*287*293/0.01", domain="pneumatic", state="m_air"))
+    g.add(R("outlet", flow="2e-8*(e - 101325)", domain="pneumatic"))
+    for e in ("air", "outlet"):
+        g.connect("tank", e)
+    g.connect("m_in", "tank")
+    g.add_output("P", "e_air", unit="Pa")
+    return g
+
+
+def test_kinds_are_the_issue_vocabulary_in_order():
+    # issue 6, section 2c, verbatim order
+    assert KINDS == ("coulomb_friction", "viscous_friction", "stribeck_friction", "pressure_dependent_friction",
+                     "leak", "heat_transfer", "valve_lag", "transport_delay", "hysteresis", "backlash",
+                     "nonlinear_stiffness", "saturation", "sensor_offset", "sensor_gain")
+
+
+def test_places_offer_the_kinds_that_make_sense():
+    msd = library.build("mass-spring-damper")
+    at = lambda g, p: [c.kind for c in candidates(g, p)]  # noqa: E731
+    assert at(msd, Place("junction", "v_mass")) == ["coulomb_friction", "viscous_friction", "stribeck_friction",
+                                                    "hysteresis", "backlash", "nonlinear_stiffness"]
+    assert at(msd, Place("input", "F")) == ["valve_lag", "transport_delay", "saturation"]
+    assert at(msd, Place("output", "x")) == ["sensor_offset", "sensor_gain"]
+    cyl = hydraulic_cylinder()
+    assert "pressure_dependent_friction" in at(cyl, Place("junction", "rod"))
+    assert at(cyl, Place("junction", "chamber")) == ["leak", "nonlinear_stiffness"]  # hydraulic: no heat transfer
+    assert at(pneumatic_tank(), Place("junction", "tank")) == ["leak", "heat_transfer", "nonlinear_stiffness"]
+
+
+@pytest.mark.parametrize("kind, expected", [
+    ("coulomb_friction", "-Fc_v_mass*tanh(p_m/(m*v_eps_v_mass))"),
+    ("viscous_friction", "-b_visc_v_mass*p_m/m"),
+    ("stribeck_friction", "-(Fc_v_mass + dFs_v_mass*exp(-(p_m/(m*v_s_v_mass))**2))*tanh(p_m/(m*v_eps_v_mass))"),
+    ("hysteresis", "-F_dahl_v_mass"),
+    ("nonlinear_stiffness", "-k3_k*q_k**3"),
+    ("backlash", "k*q_k - k*(q_k - Max(-b_play_k, Min(b_play_k, q_k)))"),
+])
+def test_junction_kinds_add_exactly_their_effort(kind, expected):
+    msd = library.build("mass-spring-damper")
+    built = _one(msd, Place("junction", "v_mass"), kind).build(msd)
+    _differs_by(built, msd, "p_m", sp.sympify(expected))
+    _differs_by(built, msd, "q_k", 0)
+    if kind == "hysteresis":  # Dahl: dz/dt = sigma (v - |v| z / F_h), v = p_m/m
+        z, v = S("F_dahl_v_mass"), S("p_m") / S("m")
+        rate = S("sigma_dahl_v_mass") * (v - sp.Abs(v) * z / S("Fh_v_mass"))
+        assert sp.simplify(_rates(built)["F_dahl_v_mass"] - rate) == 0
+
+
+def test_pressure_dependent_friction_uses_a_pressure_of_the_model():
+    cyl = hydraulic_cylinder()
+    cands = [c for c in candidates(cyl, Place("junction", "rod")) if c.kind == "pressure_dependent_friction"]
+    assert [c.regime for c in cands] == ["e_oil"]
+    built = cands[0].build(cyl, {"c0_rod": 2.0, "c1_rod": 1e-5})
+    P, v = S("q_oil") / S("oil"), S("p_m") / S("m")   # e_oil = q/C; rod velocity
+    expected = -(S("c0_rod") + S("c1_rod") * (P - S("p_ref_rod"))) * sp.tanh(v / S("v_eps_rod"))
+    _differs_by(built, cyl, "p_m", expected)
+    assert built.parameters()["c1_rod"].value == 1e-5
+
+
+def test_leak_is_an_r_from_the_zero_junction_to_ambient():
+    tank = pneumatic_tank()
+    c = _one(tank, Place("junction", "tank"), "leak")
+    built = c.build(tank, {"c_leak_tank": 3e-9})
+    P = 101325 + S("m_air") * 287 * 293 / sp.Rational(1, 100)
+    _differs_by(built, tank, "m_air", -S("c_leak_tank") * (P - S("P_amb_tank")))
+    assert built.elements["leak_tank"].kind == "R"
+
+
+def test_heat_transfer_is_an_rc_branch_on_the_chamber():
+    tank = pneumatic_tank()
+    built = _one(tank, Place("junction", "tank"), "heat_transfer").build(tank)
+    P = 101325 + S("m_air") * 287 * 293 / sp.Rational(1, 100)
+    q, C_th, tau = S("q_th_tank"), S("C_th_tank"), S("tau_th_tank")
+    branch_flow = (P - (S("P_th0_tank") + q / C_th)) * C_th / tau   # R_th = tau/C_th across P - P_C
+    _differs_by(built, tank, "m_air", -branch_flow)
+    assert sp.simplify(_rates(built)["q_th_tank"] - branch_flow) == 0
+
+
+def test_input_kinds_route_the_input_through_the_effect():
+    msd = library.build("mass-spring-damper")
+    place = Place("input", "F")
+    x, F, tau = S("x_lag_F"), S("F"), S("tau_lag_F")
+    lag = _one(msd, place, "valve_lag").build(msd)
+    _differs_by(lag, msd, "p_m", x - F)
+    assert sp.simplify(_rates(lag)["x_lag_F"] - (F - x) / tau) == 0
+    assert [d.name for d in lag.inputs()] == ["F"]            # the recorded input keeps its name
+    sat = _one(msd, place, "saturation").build(msd, {"u_min_F": -0.5, "u_max_F": 0.8})
+    _differs_by(sat, msd, "p_m", sp.Min(sp.Max(F, S("u_min_F")), S("u_max_F")) - F)
+
+
+def test_transport_delay_is_the_pade_2_3_approximant():
+    msd = library.build("mass-spring-damper")
+    built = _one(msd, Place("input", "F"), "transport_delay").build(msd)
+    rates = _rates(built)
+    z = [S(f"z{i}_delay_F") for i in (1, 2, 3)]
+    F, T, s = S("F"), S("T_delay_F"), S("s")
+    A = sp.Matrix(3, 3, lambda i, j: sp.diff(rates[z[i].name], z[j]))
+    B = sp.Matrix([sp.diff(rates[zi.name], F) for zi in z])
+    u_eff = rates["p_m"] - _rates(msd)["p_m"] + F            # what the mass now feels instead of F
+    Cm = sp.Matrix([[sp.diff(u_eff, zi) for zi in z]])
+    G = sp.simplify((Cm * (s * sp.eye(3) - A).inv() * B)[0] + sp.diff(u_eff, F))
+    x = s * T   # Pade [2/3] of exp(-x) (Baker & Graves-Morris, Pade Approximants, Table of exp)
+    pade = (1 - 2 * x / 5 + x ** 2 / 20) / (1 + 3 * x / 5 + 3 * x ** 2 / 20 + x ** 3 / 60)
+    assert sp.simplify(G - pade) == 0
+    assert sp.series(pade - sp.exp(-x), s, 0, 6).removeO() == 0   # matches exp(-sT) to order 5
+
+
+def test_input_read_inside_expressions_gets_its_state_on_that_element():
+    pam = library.build("pam-frictionless")
+    built = _one(pam, Place("input", "u1"), "valve_lag").build(pam)
+    assert built.elements["valve1"].kind == "Eq" and "x_lag_u1" in built.elements["valve1"].states
+    assert "u1" in [d.name for d in built.inputs()]
+    assert "x_lag_u1" in built.equations().state_names
+
+
+def test_output_kinds_transform_the_output():
+    msd = library.build("mass-spring-damper")
+    off = _one(msd, Place("output", "x"), "sensor_offset").build(msd)
+    gain = _one(msd, Place("output", "x"), "sensor_gain").build(msd)
+    assert sp.simplify(_outputs(off)["x"] - S("q_k") - S("offset_x")) == 0
+    assert sp.simplify(_outputs(gain)["x"] - S("gain_x") * S("q_k")) == 0
+    assert _rates(off) == _rates(msd) and _outputs(off)["v"] == _outputs(msd)["v"]
+
+
+def test_every_kind_is_reachable_and_explained_with_units():
+    graphs = [library.build("mass-spring-damper"), hydraulic_cylinder(), pneumatic_tank()]
+    seen = {}
+    for g in graphs:
+        places = [Place("junction", n) for n, e in g.elements.items() if e.kind in ("0", "1")]
+        places += [Place("input", d.name) for d in g.inputs()] + [Place("output", o) for o in g.outputs]
+        for p in places:
+            for c in candidates(g, p):
+                seen.setdefault(c.kind, c)
+    assert set(seen) == set(KINDS)
+    assert "0.1 N" in seen["coulomb_friction"].explain()
+    assert "Coulomb friction" in seen["coulomb_friction"].explain({"Fc_v_mass": 0.25})
+    assert "0.25 N" in seen["coulomb_friction"].explain({"Fc_v_mass": 0.25})
+    assert " s" in seen["valve_lag"].explain()
+
+
+def test_guesses_and_bounds_scale_with_the_data():
+    from diagnosis.recording import Experiment
+    msd = library.build("mass-spring-damper")
+    t = np.linspace(0.0, 10.0, 501)
+    small, large = (Experiment(t, {"F": a * np.sign(np.sin(t))}, {"x": t}, {"F": "N", "x": "m"})
+                    for a in (1.0, 100.0))
+    fc = [_one(msd, Place("junction", "v_mass"), "coulomb_friction", experiment=e).params[0] for e in (small, large)]
+    # linear model: efforts scale with the input amplitude (x100)
+    assert fc[1].guess == pytest.approx(100 * fc[0].guess, rel=1e-6)
+    assert fc[1].upper == pytest.approx(100 * fc[0].upper, rel=1e-6)
+    lag = _one(msd, Place("input", "F"), "valve_lag", experiment=small).params[0]
+    assert lag.lower == pytest.approx(0.02 / 5) and lag.upper == pytest.approx(5.0)   # dt/5 .. span/2
+
+
+def test_bad_places_values_and_specs_are_refused_by_name():
+    msd = library.build("mass-spring-damper")
+    with pytest.raises(UnknownNameError, match="v_mass"):
+        candidates(msd, Place("junction", "m"))          # an I, not a junction; lists the junctions
+    with pytest.raises(UnknownNameError, match="known inputs are F"):
+        candidates(msd, Place("input", "V"))
+    with pytest.raises(UnknownNameError, match="x, v"):
+        candidates(msd, Place("output", "y"))
+    c = _one(msd, Place("output", "x"), "sensor_gain")
+    with pytest.raises(UnknownNameError, match="gain_x"):
+        c.build(msd, {"gain": 2.0})
+    with pytest.raises(DiagnosisError, match="unknown kind 'magic'"):
+        Candidate("magic", Place("output", "x"), [])
+    with pytest.raises(DiagnosisError, match="'Fc'"):
+        ParamSpec("Fc", 5.0, 0.0, 1.0, "N", "outside its bounds")
+
+
+def test_nominal_graph_is_not_modified():
+    msd = library.build("mass-spring-damper")
+    before = msd.to_dict()
+    for p in (Place("junction", "v_mass"), Place("input", "F"), Place("output", "x")):
+        for c in candidates(msd, p):
+            c.build(msd)
+    assert msd.to_dict() == before
+
+
+@pytest.mark.parametrize("kind, place", [("coulomb_friction", Place("junction", "v_mass")),
+                                         ("valve_lag", Place("input", "F"))])
+def test_built_candidate_exports_to_a_valid_fmu(tmp_path, kind, place):
+    from fmpy import simulate_fmu
+    from fmpy.validation import validate_fmu
+    from fmus import export
+    from bondgraph import simulate
+    msd = library.build("mass-spring-damper")
+    built = _one(msd, place, kind).build(msd)
+    path = tmp_path / f"{kind}.fmu"
+    export(built, path)
+    assert validate_fmu(str(path)) == []
+    # fmpy (an importer we did not write) runs it to our own simulation's answer (F = 1 N default)
+    result = simulate_fmu(str(path), stop_time=2.0, output_interval=0.01, output=["x"])
+    ours = simulate(built, (0.0, 2.0), output_interval=0.01)
+    assert result["x"][-1] == pytest.approx(ours["x"][-1], abs=1e-4)

@@ -1,0 +1,318 @@
+"""Fit candidate physics by simulation-error least squares, and choose among the fits.
+
+:func:`fit_candidate` builds the candidate graph once, compiles it once
+(:class:`diagnosis.residuals.OutputSimulator`) and varies its parameters,
+which are graph parameters, with :func:`scipy.optimize.least_squares`
+(trust-region reflective, bounds).  The residual vector stacks, for every
+measured output :math:`o`,
+
+.. math:: r_{o,k} = \\frac{\\hat y_o(t_k; \\theta) - y_o(t_k)}{\\mathrm{std}(y_o) \\sqrt{n}},
+
+so the cost :math:`\\tfrac12 \\sum r^2 = \\tfrac12 \\sum_o \\mathrm{NRMSE}_o^2` on the
+training part.  Parameters are scaled by their guess (or a tenth of their
+range) so the optimiser works on numbers of order one, and the
+forward-difference Jacobian is one batch of runs
+(:meth:`OutputSimulator.run_batch`).  The held-out NRMSE comes from one
+simulation of training + held-out part (the held-out part starts where the
+training part leaves the states, not from rest).
+
+:func:`choose` picks by held-out error with a parsimony penalty and answers
+``None`` when nothing explains a significant share (see its docstring).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bondgraph.errors import BondcosimError
+
+from .catalogue_common import ParamSpec
+from .errors import DiagnosisError
+
+__all__ = ["CandidateFit", "fit_candidate", "choose", "noise_floor", "PARAMETER_PRICE", "MIN_SHARE"]
+
+#: relative reduction of the held-out excess error each extra parameter must buy
+PARAMETER_PRICE = 0.10
+#: share of the nominal held-out excess error the winner must explain
+MIN_SHARE = 0.30
+#: nominal excess NRMSE^2 below which an output counts as explained (noise-free data)
+_EXPLAINED = 1e-6
+_FD_STEP = 1e-3  # forward-difference step on the scaled parameters
+
+
+@dataclass
+class CandidateFit:
+    """The outcome of fitting one candidate.
+
+    Attributes
+    ----------
+    candidate : Candidate or None
+        None for a refit of the nominal model's uncertain parameters only.
+    values : dict str -> float
+        Fitted values (candidate and uncertain nominal parameters), SI.
+    train_nrmse, holdout_nrmse : dict str -> float
+        Per output (NaN when the fit failed).
+    n_params : int
+        Number of fitted parameters.
+    success : bool
+    message : str
+        The optimiser's message, or why the fit failed.
+    graph : BondGraph or None
+        The candidate graph (with the guesses as defaults; pass `values` as parameters).
+    n_simulations : int
+        Simulations run.
+    """
+
+    candidate: object
+    values: dict
+    train_nrmse: dict
+    holdout_nrmse: dict
+    n_params: int
+    success: bool
+    message: str
+    graph: object = None
+    n_simulations: int = 0
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def kind(self) -> str:
+        """The candidate's kind ("nominal" for a refit without a candidate)."""
+        return self.candidate.kind if self.candidate is not None else "nominal"
+
+
+def _uncertain_specs(graph, uncertain) -> list[ParamSpec]:
+    """Nominal parameters marked uncertain, fitted within a factor 3 of their value."""
+    params = graph.parameters()
+    specs = []
+    for name in uncertain:
+        if name not in params:
+            raise DiagnosisError(f"uncertain parameter {name!r} is not a parameter of model {graph.name!r}; "
+                                 f"its parameters are {', '.join(params)}")
+        v, unit = float(params[name].value), params[name].unit
+        lo, hi = (v / 3, v * 3) if v > 0 else ((v * 3, v / 3) if v < 0 else (-1.0, 1.0))
+        specs.append(ParamSpec(name, v, lo, hi, unit, f"nominal parameter {name} (uncertain)"))
+    return specs
+
+
+def _joined(train, holdout):
+    """Training and held-out parts as one experiment (the held-out part must come after)."""
+    from .recording import Experiment
+    cat = lambda a, b: {k: np.concatenate([a[k], b[k]]) for k in a}  # noqa: E731
+    return Experiment(np.concatenate([train.t, holdout.t]), cat(train.inputs, holdout.inputs),
+                      cat(train.outputs, holdout.outputs), dict(train.units), train.source)
+
+
+def _state_dict(graph, x0):
+    if x0 is None or isinstance(x0, dict):
+        return x0
+    names = graph.equations().state_names
+    x0 = np.asarray(x0, dtype=float).reshape(-1)
+    if x0.size != len(names):
+        raise DiagnosisError(f"x0: expected {len(names)} states ({', '.join(names)}); found {x0.size}")
+    return dict(zip(names, x0))
+
+
+class _Objective:
+    """Scaled residuals and batch Jacobian of one compiled candidate on the training part."""
+
+    def __init__(self, simulator, train, specs, x0):
+        self.sim, self.specs, self.x0 = simulator, specs, x0
+        self.outputs = list(simulator.output_names)
+        self.measured = {o: np.asarray(train.outputs[o], dtype=float) for o in self.outputs}
+        n = len(train.t)
+        self.weight = {o: 1.0 / ((np.std(y) or 1.0) * np.sqrt(n)) for o, y in self.measured.items()}
+        self.scale = np.array([abs(s.guess) if s.guess != 0 else (s.upper - s.lower) / 10 for s in specs])
+        self.n_runs = 0
+        self._last = (None, None)
+
+    def params(self, theta) -> dict:
+        return {s.name: float(v) for s, v in zip(self.specs, np.asarray(theta) * self.scale)}
+
+    def _vector(self, outputs) -> np.ndarray:
+        return np.concatenate([(outputs[o] - self.measured[o]) * self.weight[o] for o in self.outputs])
+
+    def __call__(self, theta):
+        self.n_runs += 1
+        try:
+            r = self._vector(self.sim(self.params(theta), self.x0))
+        except BondcosimError:
+            r = None
+        if r is None or not np.isfinite(r).all():  # a parameter set the model cannot run: a wall
+            r = np.full(sum(len(y) for y in self.measured.values()), 1e3)
+        self._last = (np.array(theta, dtype=float), r)
+        return r
+
+    def jacobian(self, theta, lower, upper):
+        theta = np.asarray(theta, dtype=float)
+        r0 = self._last[1] if self._last[0] is not None and np.array_equal(self._last[0], theta) else self(theta)
+        steps = np.where(theta + _FD_STEP <= upper, _FD_STEP, -_FD_STEP)
+        steps = np.where((theta + steps < lower), 0.5 * (upper - lower), steps)
+        trials = [theta + np.eye(len(theta))[i] * steps[i] for i in range(len(theta))]
+        self.n_runs += len(trials)
+        try:
+            runs = self.sim.run_batch([self.params(th) for th in trials], self.x0)
+            columns = [self._vector(run.outputs) for run in runs]
+        except BondcosimError:
+            columns = [self(th) for th in trials]
+        J = np.column_stack([(c - r0) / s for c, s in zip(columns, steps)])
+        return np.where(np.isfinite(J), J, 0.0)
+
+
+def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, max_nfev: int = 40) -> CandidateFit:
+    """Fit a candidate's parameters (and uncertain nominal ones) by simulation-error least squares.
+
+    Parameters
+    ----------
+    graph : BondGraph
+        The nominal model.
+    candidate : Candidate or None
+        The effect to add; None refits the nominal model's `uncertain` parameters only.
+    train, holdout : Experiment
+        Training part and the held-out part that follows it (model units, absolute times, s).
+    uncertain : iterable of str
+        Nominal parameters fitted alongside (within a factor 3 of their value).
+    x0 : dict str -> float or array_like, optional
+        Initial state of the nominal model at ``train.t[0]`` (added states start at their own initial values).
+    max_nfev : int
+        Budget of residual evaluations of :func:`scipy.optimize.least_squares`
+        (each Jacobian is one more batch of ``n_params`` runs).
+
+    Returns
+    -------
+    CandidateFit
+        ``success=False`` with the reason in ``message`` when the candidate cannot be built or
+        simulated, or the optimiser stops without converging within the budget.
+    """
+    from scipy.optimize import least_squares
+
+    from .residuals import OutputSimulator, nrmse
+
+    if holdout is not None and holdout.t[0] <= train.t[-1]:
+        raise DiagnosisError(f"the held-out part starts at {holdout.t[0]} s, not after the training part "
+                             f"(ends at {train.t[-1]} s)")
+    outputs = list(train.outputs)
+    specs = (list(candidate.params) if candidate is not None else []) + _uncertain_specs(graph, uncertain)
+    label = str(candidate) if candidate is not None else f"refit of {graph.name}"
+    failed = dict(values={s.name: s.guess for s in specs}, train_nrmse={o: np.nan for o in outputs},
+                  holdout_nrmse={o: np.nan for o in outputs}, n_params=len(specs), success=False)
+    try:
+        model = candidate.build(graph) if candidate is not None else graph
+        x0 = _state_dict(graph, x0)
+        objective = _Objective(OutputSimulator(model, train, outputs=outputs), train, specs, x0)
+    except BondcosimError as exc:
+        return CandidateFit(candidate, message=f"{label} could not be built or compiled: {exc}", **failed)
+    lower = np.array([s.lower for s in specs]) / objective.scale
+    upper = np.array([s.upper for s in specs]) / objective.scale
+    theta0 = np.array([s.guess for s in specs]) / objective.scale
+    if specs:
+        r0 = objective(theta0)
+        if np.all(r0 == 1e3):
+            return CandidateFit(candidate, message=f"{label}: the model does not run at the initial guess "
+                                f"{objective.params(theta0)}", graph=model, n_simulations=objective.n_runs, **failed)
+        result = least_squares(objective, theta0, jac=lambda th: objective.jacobian(th, lower, upper),
+                               bounds=(lower, upper), method="trf", x_scale=1.0, max_nfev=max_nfev)
+        theta, converged = result.x, bool(result.success)
+        message = f"{result.message} ({result.nfev} evaluations, {objective.n_runs} simulations)"
+    else:
+        theta, converged, message = theta0, True, "nothing to fit"
+    values = objective.params(theta)
+    try:
+        train_sim = objective.sim(values, x0)
+        train_nrmse = {o: nrmse(train.outputs[o], train_sim[o]) for o in outputs}
+        holdout_nrmse = {}
+        if holdout is not None:
+            full = _joined(train, holdout)
+            held = OutputSimulator(model.equations(), full, outputs=outputs)(values, x0)
+            mask = full.t >= holdout.t[0]
+            holdout_nrmse = {o: nrmse(holdout.outputs[o], held[o][mask]) for o in outputs}
+    except BondcosimError as exc:
+        return CandidateFit(candidate, message=f"{label}: the fitted model does not run: {exc}", graph=model,
+                            n_simulations=objective.n_runs, **failed)
+    return CandidateFit(candidate, values, train_nrmse, holdout_nrmse, len(specs), converged,
+                        message if converged else f"{label} did not converge: {message}", model,
+                        objective.n_runs + 2)
+
+
+def noise_floor(holdout, noise_sigma: dict | None = None) -> dict:
+    """The held-out NRMSE that measurement noise alone produces, per output.
+
+    Parameters
+    ----------
+    holdout : Experiment
+    noise_sigma : dict str -> float, optional
+        Noise standard deviation of each output (output units); default estimated from the
+        recording (:func:`diagnosis.residuals.noise_sigma`).
+
+    Returns
+    -------
+    dict str -> float
+        :math:`\\sigma_o / \\mathrm{std}(y_o)` on the held-out part.
+    """
+    from .residuals import noise_sigma as estimate
+    out = {}
+    for o, y in holdout.outputs.items():
+        y = np.asarray(y, dtype=float)
+        sigma = noise_sigma[o] if noise_sigma and o in noise_sigma else estimate(y)
+        out[o] = float(sigma / (np.std(y) or 1.0))
+    return out
+
+
+def _excess(nrmse: dict, floor: dict, names) -> float:
+    """Held-out error beyond the noise floor: sum over outputs of max(NRMSE^2 - floor^2, 0)."""
+    return float(sum(max(nrmse[o] ** 2 - floor.get(o, 0.0) ** 2, 0.0) for o in names))
+
+
+def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
+    """The best candidate by held-out error and parsimony, or None ("none").
+
+    Rule (all on the held-out part, per output :math:`o`, with noise floor
+    :math:`\\nu_o` = the NRMSE noise alone gives, from :func:`noise_floor`):
+
+    1. Excess error :math:`E = \\sum_o \\max(\\mathrm{NRMSE}_o^2 - \\nu_o^2, 0)`; the
+       nominal model's :math:`E_0` counts only the outputs whose nominal excess
+       exceeds :math:`0.1\\,\\nu_o^2` (and :math:`10^{-6}`): the others are
+       explained already.  No such output: None.
+    2. Score :math:`S = (E + 10^{-4} E_0)\\,(1 + \\rho)^k` with :math:`k` the number of
+       fitted parameters and :math:`\\rho` = :data:`PARAMETER_PRICE` = 0.10: each
+       extra parameter must buy a 10 % smaller excess error (the small
+       :math:`10^{-4} E_0` term makes fits that are perfect to rounding tie,
+       so the simpler one wins).  Ties: fewer parameters, then catalogue order.
+    3. The winner must explain at least :data:`MIN_SHARE` (30 %) of :math:`E_0`:
+       :math:`1 - E / E_0 \\ge 0.3`; otherwise None: the tool does not invent
+       physics.
+
+    Parameters
+    ----------
+    nominal_holdout : dict str -> float
+        Held-out NRMSE of the nominal model per output.
+    fits : iterable of CandidateFit
+        Failed fits (``success`` False or NaN errors) are ignored.
+    noise : dict str -> float, optional
+        Noise floor per output as an NRMSE (:func:`noise_floor`); default 0.
+
+    Returns
+    -------
+    CandidateFit or None
+    """
+    from .catalogue import KINDS
+    floor = dict(noise or {})
+    names = list(nominal_holdout)
+    significant = [o for o in names if nominal_holdout[o] ** 2 - floor.get(o, 0.0) ** 2
+                   > max(0.1 * floor.get(o, 0.0) ** 2, _EXPLAINED)]
+    if not significant:
+        return None
+    e0 = _excess(nominal_holdout, floor, significant)
+    usable = [f for f in fits if f.success and f.holdout_nrmse
+              and all(np.isfinite(f.holdout_nrmse.get(o, np.nan)) for o in names)]
+    if not usable:
+        return None
+
+    def key(f):
+        score = (_excess(f.holdout_nrmse, floor, names) + 1e-4 * e0) * (1 + PARAMETER_PRICE) ** f.n_params
+        order = KINDS.index(f.candidate.kind) if f.candidate is not None else -1
+        return (round(score / e0, 9), f.n_params, order)
+
+    best = min(usable, key=key)
+    share = 1.0 - _excess(best.holdout_nrmse, floor, significant) / e0
+    return best if share >= MIN_SHARE else None

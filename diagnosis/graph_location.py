@@ -1,0 +1,379 @@
+"""Where on the graph a mismatch sits: the place whose correction explains the residual.
+
+Method
+------
+Each candidate :class:`~diagnosis.place.Place` gets a correction with as
+much freedom as the physics it stands for, estimated from the recorded
+outputs by regularised least squares on the linearised simulation error
+(:mod:`diagnosis.graph_location_linear`), then fed back into a full
+simulation; the place is scored by the share of the nominal residual it
+removes.
+
+* **Junction** (every 0- and 1-junction): the graph gets, for each junction
+  at once, an effort source ``Se`` (1-junction) or a flow source ``Sf``
+  (0-junction) on a new bond into it, driven by a new input ``d``: an
+  unknown extra effort / flow, which is what a missing friction, leak, heat
+  flow or stiffness adds there.  A source on a new bond never changes the
+  causality of the others, so one augmented graph serves every junction.
+  :math:`d(t)` is piecewise linear on K knots (hat functions
+  :math:`\\phi_j`), :math:`d = \\sum_j \\theta_j \\phi_j(t)`, found by
+
+  .. math::
+
+      \\min_\\theta \\sum_o w_o \\lVert r_o - S_o \\theta \\rVert^2
+      + \\lambda \\lVert \\Delta^2 \\theta \\rVert^2,
+
+  with :math:`r_o` the nominal residual of output o, :math:`S_o` its
+  linearised response to each hat function, :math:`w_o = 1/\\sigma_o^2`
+  (measurement noise, :func:`diagnosis.residuals.noise_sigma`) and
+  :math:`\\lambda` by generalised cross-validation [1]_ (a random-walk prior
+  on d, as in an augmented-state smoother, in its least-squares form).
+* **Input** (every recorded input): an actuator correction, the input the
+  model should have received minus the recorded one,
+  :math:`\\delta u = a + b\\,u + c\\,(L_\\tau u - u)` (offset, gain, and a
+  first-order lag :math:`L_\\tau` with :math:`\\tau` from a grid of multiples
+  of the sample interval).  A free :math:`\\delta u(t)` would be the same as
+  an extra effort at the source's junction; the structured one says "the
+  actuator is wrong", not "something at this junction".
+* **Output** (every measured output): a sensor correction
+  :math:`\\delta y = a + b\\,\\hat y` (offset, gain) of that output alone.  A
+  free correction would explain any residual by construction.
+
+Score (``PlaceScore.explained``): with :math:`E_0` the weighted sum of
+squared nominal residuals and :math:`E_1` that after the correction (full
+simulation), the share removed beyond what fitting noise alone would remove,
+
+.. math::
+
+    \\text{explained} = \\max\\left(0, \\frac{E_0 - E_1 - \\nu}{E_0}\\right),
+
+where :math:`\\nu` is the correction's effective number of parameters (trace
+of the hat matrix; 2 for a sensor, 4 for an actuator): each fitted degree of
+freedom removes about :math:`\\sigma^2` of pure noise (an adjusted
+:math:`R^2`).  An un-perturbed recording so scores about 0 everywhere.
+Places are ranked by the score with a small preference (0.01) for the
+simpler place at near ties: output, then input, then junction.
+
+References
+----------
+.. [1] G. H. Golub, M. Heath, G. Wahba, "Generalized cross-validation as a
+   method for choosing a good ridge parameter", Technometrics 21 (1979) 215-223.
+"""
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import DiagnosisError
+from .graph_location_graph import augment, junction_unit, report_bond, with_inputs
+from .place import Place
+
+__all__ = ["PlaceScore", "candidate_places", "locate_on_graph"]
+
+_SIMPLICITY = {"output": 0.0, "input": 0.5, "junction": 1.0}   # x 0.01 preference
+_TIE_PREFERENCE = 0.01
+_RESPONSE_BUDGET = 2e7     # stored response entries (rows x outputs x sequences)
+_MAX_ROWS = 20000          # rows kept for the least squares (longer runs are strided)
+_MAX_KNOTS = 500
+_MIN_KNOTS = 8
+_LAGS = (3.0, 10.0, 30.0, 100.0)   # actuator lag grid, multiples of the median sample interval
+
+
+@dataclass
+class PlaceScore:
+    """How much of the residual a correction at one place explains.
+
+    Attributes
+    ----------
+    place : Place
+    explained : float
+        Share of the nominal residual (noise-weighted sum of squares over the
+        measured outputs) removed by the correction, in [0, 1], net of what
+        fitting noise would remove (see the module docstring).
+    estimate : ndarray, shape (n,)
+        The estimated correction at the experiment's times: extra effort
+        (1-junction) or flow (0-junction) into the junction, the additive
+        correction of the input, or of the output.
+    unit : str
+        Unit of `estimate`.
+    bond : str or None
+        For a junction, a bond of it (its storage element's, else a named
+        one) to report the location by; None for inputs and outputs.
+    dof : float
+        Effective number of fitted parameters of the correction.
+    """
+
+    place: Place
+    explained: float
+    estimate: np.ndarray
+    unit: str
+    bond: str | None
+    dof: float = 0.0
+
+
+def candidate_places(model, *, experiment=None) -> list[Place]:
+    """Every junction, every input and every output of a model.
+
+    Parameters
+    ----------
+    model : BondGraph or StateEquations
+        A StateEquations has no junctions: inputs and outputs only.
+    experiment : Experiment, optional
+        If given, only the inputs it records (bound) and the outputs it measures.
+
+    Returns
+    -------
+    list of Place
+        Junctions (in the graph's order), then inputs, then outputs.
+
+    Examples
+    --------
+    >>> from bondgraph import library
+    >>> [str(p) for p in candidate_places(library.build("rlc"))]
+    ['junction i_loop', 'input V', 'output v_C', 'output i']
+    """
+    from bondgraph import BondGraph
+
+    eqs = model.equations() if isinstance(model, BondGraph) else model
+    places = []
+    if isinstance(model, BondGraph):
+        places += [Place("junction", name, report_bond(model, name))
+                   for name, e in model.elements.items() if e.kind in ("0", "1")]
+    inputs = eqs.input_names if experiment is None else [n for n in eqs.input_names if n in experiment.inputs]
+    outputs = tuple(eqs.outputs) if experiment is None else [n for n in eqs.outputs if n in experiment.outputs]
+    places += [Place("input", n) for n in inputs]
+    places += [Place("output", n) for n in outputs]
+    return places
+
+
+def locate_on_graph(model, experiment, *, places=None, progress=False) -> list[PlaceScore]:
+    """Rank places of a model by the share of the recorded residual a correction there explains.
+
+    Parameters
+    ----------
+    model : BondGraph or StateEquations
+        The nominal model (a StateEquations offers input and output places only).
+    experiment : Experiment
+        Recorded inputs and measured outputs, model units.
+    places : iterable of Place, optional
+        Default :func:`candidate_places` of the model for this experiment.
+    progress : bool
+        Print one line per step to stderr.
+
+    Returns
+    -------
+    list of PlaceScore
+        Best first (see the module docstring for the method and the score).
+
+    Raises
+    ------
+    DiagnosisError
+        No measured output, or a place that is not a junction / recorded input /
+        measured output of the model (the known ones are listed).
+    """
+    from .residuals import OutputSimulator
+
+    outputs = list(experiment.outputs)
+    if not outputs:
+        raise DiagnosisError(f"{experiment.source}: no measured output to locate a mismatch with")
+    known = candidate_places(model, experiment=experiment)
+    by_key = {(k.kind, k.name): k for k in known}
+    places = known if places is None else list(places)
+    for p in places:
+        if (p.kind, p.name) not in by_key:
+            raise DiagnosisError(f"place {p} is not a junction, recorded input or measured output of "
+                                 f"{getattr(model, 'name', 'the model')!r}; known: "
+                                 f"{', '.join(map(str, known))}")
+    places = [by_key[(p.kind, p.name)] for p in places]      # junctions with their report bond
+    junctions = [p.name for p in places if p.kind == "junction"]
+    say = _Say(progress)
+    graph, d_inputs = augment(model, junctions) if junctions else (model, {})
+    exp = with_inputs(experiment, {d: np.zeros_like(experiment.t) for d in d_inputs.values()},
+                      {d: junction_unit(model, j) for j, d in d_inputs.items()})
+    say(f"locate: nominal run of {getattr(model, 'name', 'model')} with {len(junctions)} junction source(s)")
+    sim = OutputSimulator(graph, exp, outputs=outputs)
+    run = sim.run()
+    ctx = _Context(sim, run, experiment, outputs)
+    channels = list(d_inputs.values()) + [p.name for p in places if p.kind == "input"]
+    lin = None
+    if channels:
+        from .graph_location_linear import LinearisedResponse
+        say("locate: linearising along the nominal run")
+        lin = LinearisedResponse(sim.model, run, sim.model.param_vector(None), channels, outputs)
+    scores = []
+    for i, place in enumerate(places, 1):
+        say(f"locate: {place} ({i}/{len(places)})")
+        if place.kind == "output":
+            scores.append(_score_output(ctx, place))
+        elif place.kind == "input":
+            scores.append(_score_input(ctx, lin, place, channels.index(place.name)))
+        else:
+            scores.append(_score_junction(ctx, lin, place, d_inputs[place.name],
+                                          channels.index(d_inputs[place.name]), len(junctions), graph))
+    return sorted(scores, key=lambda s: -(s.explained - _TIE_PREFERENCE * _SIMPLICITY[s.place.kind]))
+
+
+class _Say:
+    def __init__(self, enabled):
+        self.enabled = enabled
+
+    def __call__(self, text):
+        if self.enabled:
+            print(text, file=sys.stderr, flush=True)
+
+
+class _Context:
+    """Nominal residuals, weights and the stored rows shared by every place."""
+
+    def __init__(self, sim, run, experiment, outputs):
+        from .residuals import noise_sigma
+
+        self.sim, self.run, self.t, self.outputs = sim, run, run.t, outputs
+        self.measured = {o: np.asarray(experiment.outputs[o], dtype=float) for o in outputs}
+        self.residual = {o: self.measured[o] - run.outputs[o] for o in outputs}
+        self.weight = {}
+        for o in outputs:
+            y = self.measured[o]
+            sigma = max(noise_sigma(y), 1e-3 * float(np.std(y)), 1e-12 * max(1.0, float(np.max(np.abs(y)))))
+            self.weight[o] = 1.0 / sigma ** 2
+        self.e0 = self.energy(run.outputs)
+        n = self.t.size
+        self.rows = np.arange(0, n, max(1, int(np.ceil(n / _MAX_ROWS))))
+        self.r_rows = np.stack([self.residual[o][self.rows] for o in outputs], axis=1)  # (rows, ny)
+        self.w = np.array([self.weight[o] for o in outputs])
+
+    def energy(self, simulated) -> float:
+        """Noise-weighted sum of squared residuals of `simulated` (dict by output)."""
+        return float(sum(self.weight[o] * np.sum((self.measured[o] - simulated[o]) ** 2) for o in self.outputs))
+
+    def share(self, e1: float, dof: float) -> float:
+        if not np.isfinite(e1) or self.e0 <= 0:
+            return 0.0
+        return float(np.clip((self.e0 - e1 - dof) / self.e0, 0.0, 1.0))
+
+    def simulate_with(self, column: str, values) -> dict | None:
+        """Outputs with input `column` replaced by `values` (None if the simulation fails)."""
+        from bondgraph.errors import BondcosimError
+
+        j = self.sim.model.input_index[column]
+        saved = self.sim.U[:, j].copy()
+        self.sim.U[:, j] = values
+        try:
+            return self.sim.run().outputs
+        except (BondcosimError, FloatingPointError, np.linalg.LinAlgError):
+            return None
+        finally:
+            self.sim.U[:, j] = saved
+
+
+def _score_output(ctx, place) -> PlaceScore:
+    """Sensor correction a + b*y_hat of one output, exact linear least squares."""
+    o = place.name
+    y_hat = ctx.run.outputs[o]
+    basis = np.stack([np.ones_like(y_hat), y_hat - np.mean(y_hat)], axis=1)
+    coef, *_ = np.linalg.lstsq(basis, ctx.residual[o], rcond=None)
+    estimate = basis @ coef
+    corrected = dict(ctx.run.outputs)
+    corrected[o] = y_hat + estimate
+    unit = ctx.sim.equations.units.get(o, "") if hasattr(ctx.sim.equations, "units") else ""
+    return PlaceScore(place, ctx.share(ctx.energy(corrected), 2.0), estimate, str(unit), None, 2.0)
+
+
+def _lagged(u, t, tau):
+    """First-order lag of a held input, exact for zero-order hold: y' = (u - y)/tau."""
+    y = np.empty_like(u)
+    y[0] = u[0]
+    decay = np.exp(-np.diff(t) / tau)
+    for k in range(u.size - 1):
+        y[k + 1] = u[k] + (y[k] - u[k]) * decay[k]
+    return y
+
+
+def _score_input(ctx, lin, place, channel) -> PlaceScore:
+    """Actuator correction a + b u + c (L_tau u - u), tau from a grid; best by simulation."""
+    u = ctx.run.inputs[:, ctx.sim.model.input_index[place.name]].copy()
+    t = ctx.t
+    dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
+    lags = [_lagged(u, t, k * dt) - u for k in _LAGS]
+    sequences = np.stack([np.ones_like(u), u] + lags, axis=1)
+    resp = lin.response(np.full(sequences.shape[1], channel), sequences, ctx.rows)   # (rows, ny, m)
+    best = None
+    for j in range(len(lags)):
+        cols = [0, 1, 2 + j]
+        coef, sse = _weighted_lstsq(resp[:, :, cols], ctx.r_rows, ctx.w)
+        if best is None or sse < best[0]:
+            best = (sse, cols, coef)
+    _, cols, coef = best
+    estimate = sequences[:, cols] @ coef
+    simulated = ctx.simulate_with(place.name, u + estimate)
+    e1 = ctx.energy(simulated) if simulated is not None else np.inf
+    unit = ctx.sim.equations.units.get(place.name, "") if hasattr(ctx.sim.equations, "units") else ""
+    return PlaceScore(place, ctx.share(e1, 4.0), estimate, str(unit), None, 4.0)
+
+
+def _weighted_lstsq(S, r, w):
+    """Least squares of r (rows, ny) on S (rows, ny, m) with output weights w; (coef, sse)."""
+    sw = np.sqrt(w)[None, :, None]
+    A = (S * sw).reshape(-1, S.shape[2])
+    b = (r * np.sqrt(w)[None, :]).reshape(-1)
+    coef, *_ = np.linalg.lstsq(A, b, rcond=None)
+    return coef, float(np.sum((A @ coef - b) ** 2))
+
+
+def _score_junction(ctx, lin, place, d_input, channel, n_junctions, graph) -> PlaceScore:
+    """Free piecewise-linear extra effort/flow, GCV-regularised, scored by simulation."""
+    n_rows, ny = ctx.r_rows.shape
+    knots = int(np.clip(min(n_rows // 4, _RESPONSE_BUDGET / (n_rows * ny * max(1, n_junctions))),
+                        _MIN_KNOTS, _MAX_KNOTS))
+    hats = _hat_basis(ctx.t, knots)
+    resp = lin.response(np.full(knots, channel), hats, ctx.rows)          # (rows, ny, K)
+    theta, dof = _smooth_fit(resp, ctx.r_rows, ctx.w)
+    estimate = hats @ theta
+    simulated = ctx.simulate_with(d_input, estimate)
+    e1 = ctx.energy(simulated) if simulated is not None else np.inf
+    return PlaceScore(place, ctx.share(e1, dof), estimate, junction_unit(graph, place.name),
+                      place.bond, float(dof))
+
+
+def _hat_basis(t, knots):
+    """Hat functions on `knots` equally spaced knots over t: shape (n, knots), rows sum to 1."""
+    grid = np.linspace(t[0], t[-1], knots)
+    eye = np.eye(knots)
+    return np.stack([np.interp(t, grid, eye[j]) for j in range(knots)], axis=1)
+
+
+def _smooth_fit(S, r, w):
+    """Tikhonov fit with a second-difference penalty, lambda by GCV; returns (theta, dof).
+
+    One generalised eigendecomposition :math:`G v = \\mu B v` (:math:`G = S^T W S`,
+    :math:`B = \\Delta^{2T}\\Delta^2 + \\epsilon I`, :math:`V^T B V = I`) serves every
+    :math:`\\lambda`: :math:`\\theta = V (\\mu + \\lambda)^{-1} V^T S^T W r` and the
+    effective number of parameters is :math:`\\nu = \\sum \\mu / (\\mu + \\lambda)`.
+    """
+    from scipy.linalg import eigh
+
+    sw = np.sqrt(w)[None, :, None]
+    A = (S * sw).reshape(-1, S.shape[2])
+    b = (r * np.sqrt(w)[None, :]).reshape(-1)
+    G, g, bb = A.T @ A, A.T @ b, float(b @ b)
+    K, M = G.shape[0], A.shape[0]
+    D2 = np.diff(np.eye(K), 2, axis=0)
+    B = D2.T @ D2 + 1e-8 * np.eye(K)       # the small ridge pins the penalty's null space (a, b t)
+    scale = np.trace(G) / np.trace(B)
+    if not np.isfinite(scale) or scale <= 0:      # the place does not reach any output
+        return np.zeros(K), 0.0
+    mu, V = eigh(G, B)
+    mu = np.clip(mu, 0.0, None)
+    c = V.T @ g
+    best = None
+    for lam in scale * np.logspace(-8, 3, 45):
+        theta_c = c / (mu + lam)
+        theta = V @ theta_c
+        dof = float(np.sum(mu / (mu + lam)))
+        sse = max(bb - 2 * theta @ g + theta @ (G @ theta), 0.0)
+        gcv = sse * M / max(M - dof, 1.0) ** 2
+        if best is None or gcv < best[0]:
+            best = (gcv, theta, dof)
+    return best[1], best[2]

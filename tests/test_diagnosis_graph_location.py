@@ -1,0 +1,149 @@
+"""diagnosis.graph_location: the right place ranks first and its estimate follows the truth.
+
+Truth models are the textbook graphs with a hand-written extra element at a
+known junction (its effort/flow is an output of the truth model, so the true
+d(t) is known exactly), or a sensor offset; recordings get seeded white noise.
+"""
+import math
+
+import numpy as np
+import pytest
+
+from bondgraph import MSe, R, library
+from diagnosis.errors import DiagnosisError
+from diagnosis.graph_location import PlaceScore, candidate_places, locate_on_graph
+from diagnosis.graph_location_linear import LinearisedResponse
+from diagnosis.place import Place
+from diagnosis.recording import Experiment
+from diagnosis.residuals import OutputSimulator
+
+RNG_SEED = 20261123
+
+
+def _record(truth, t, inputs, outputs, noise):
+    """Simulate `truth` on `inputs`; measured outputs with white noise (std per output)."""
+    exp = Experiment(t, inputs, {o: np.zeros_like(t) for o in outputs}, {}, "truth")
+    sim = OutputSimulator(truth, exp, outputs=list(truth.outputs))
+    y = sim()
+    rng = np.random.default_rng(RNG_SEED)
+    measured = {o: y[o] + noise[o] * rng.standard_normal(t.size) for o in outputs}
+    return Experiment(t, inputs, measured, {}, "truth"), y
+
+
+def _msd_force(t):
+    return np.sin(0.7 * t) + 0.5 * np.sign(np.sin(0.23 * t))
+
+
+def _msd_with_friction():
+    """Mass-spring-damper plus an extra effort at junction v_mass: Coulomb-like friction
+    (0.3 N, smoothed over 0.05 m/s) as a modulated effort source driven by the mass velocity."""
+    g = library.build("mass-spring-damper")
+    g.add(MSe("seal", "-0.3*tanh(p_m/(0.05*m))", domain="translation"))
+    g.connect("seal", "v_mass")
+    g.add_output("F_seal", "e_seal", unit="N")
+    return g
+
+
+def test_candidate_places_lists_junctions_inputs_outputs():
+    g = library.build("coupled-tanks")
+    assert [str(p) for p in candidate_places(g)] == [
+        "junction P1", "junction Q12", "junction P2", "input Q_in", "output h1", "output h2", "output Q_out"]
+    t = np.linspace(0, 1, 11)
+    exp = Experiment(t, {"Q_in": t}, {"h2": t}, {}, "x")
+    assert [str(p) for p in candidate_places(g, experiment=exp)] == [
+        "junction P1", "junction Q12", "junction P2", "input Q_in", "output h2"]
+
+
+def test_linearised_response_matches_analytic_step_response():
+    """A unit extra force at v_mass from t = 0: x(t) of m=1, b=0.4, k=4 (underdamped, analytic)."""
+    g = library.build("mass-spring-damper")
+    t = np.arange(0.0, 10.0, 0.01)
+    exp = Experiment(t, {"F": np.zeros_like(t)}, {"x": t, "v": t}, {}, "x")
+    sim = OutputSimulator(g, exp)
+    lin = LinearisedResponse(sim.model, sim.run(), sim.model.param_vector(None), ["F"], ["x", "v"])
+    dy = lin.response([0], np.ones((t.size, 1)), np.arange(t.size))
+    wn, zeta = 2.0, 0.4 / (2 * 2.0)
+    wd = wn * math.sqrt(1 - zeta ** 2)
+    x_exact = (1 - np.exp(-zeta * wn * t) * (np.cos(wd * t) + zeta * wn / wd * np.sin(wd * t))) / 4.0
+    # trapezoidal discretisation at h = 10 ms: error O((wn h)^2) of the 0.25 m response
+    assert np.max(np.abs(dy[:, 0, 0] - x_exact)) < 2e-4
+
+
+def test_extra_effort_at_one_junction_ranks_first_and_follows_truth():
+    truth = _msd_with_friction()
+    t = np.arange(0.0, 20.0, 0.01)
+    exp, y = _record(truth, t, {"F": _msd_force(t)}, ["x", "v"], {"x": 2e-3, "v": 5e-3})
+    scores = locate_on_graph(library.build("mass-spring-damper"), exp)
+    assert all(isinstance(s, PlaceScore) for s in scores)
+    best = scores[0]
+    assert (best.place.kind, best.place.name) == ("junction", "v_mass")
+    assert best.unit == "N" and best.bond == "bond2"    # the bond of the mass m
+    assert best.explained > 0.95
+    assert scores[1].explained < best.explained - 0.2   # next: input F (an actuator lag mimics some of it)
+    d_true = y["F_seal"]
+    assert np.corrcoef(best.estimate, d_true)[0, 1] > 0.95
+    assert np.sqrt(np.mean((best.estimate - d_true) ** 2)) < 0.1    # N, against a 0.3 N friction
+
+
+def test_extra_flow_at_a_zero_junction_ranks_first():
+    """A linear leak out of tank 2 (0-junction P2) of the coupled tanks."""
+    truth = library.build("coupled-tanks")
+    truth.add(R("leak", 8e7, domain="hydraulic"))      # Pa s/m^3: about 3e-5 m^3/s at 2.4 kPa
+    truth.connect("P2", "leak")
+    truth.add_output("Q_leak", "f_leak", unit="m^3/s")
+    t = np.arange(0.0, 600.0, 1.0)
+    q_in = 2e-4 * (1 + 0.5 * np.sign(np.sin(2 * np.pi * t / 300)))
+    exp, y = _record(truth, t, {"Q_in": q_in}, ["h1", "h2"], {"h1": 2e-4, "h2": 2e-4})
+    scores = locate_on_graph(library.build("coupled-tanks"), exp)
+    best = scores[0]
+    assert (best.place.kind, best.place.name) == ("junction", "P2")
+    assert best.unit == "m^3/s"
+    assert best.explained > 0.9
+    assert np.corrcoef(best.estimate, -y["Q_leak"])[0, 1] > 0.9
+
+
+def test_sensor_offset_ranks_the_output_first():
+    g = library.build("mass-spring-damper")
+    t = np.arange(0.0, 20.0, 0.01)
+    exp, _ = _record(g, t, {"F": _msd_force(t)}, ["x", "v"], {"x": 2e-3, "v": 5e-3})
+    exp.outputs["x"] = exp.outputs["x"] + 0.05                 # m, the concealed offset
+    scores = locate_on_graph(g, exp)
+    assert (scores[0].place.kind, scores[0].place.name) == ("output", "x")
+    assert scores[0].explained > 0.95
+    assert abs(np.mean(scores[0].estimate) - 0.05) < 0.005
+    junction = next(s for s in scores if s.place.kind == "junction")
+    assert junction.explained < scores[0].explained
+
+
+@pytest.mark.parametrize("name, inputs, outputs", [
+    ("mass-spring-damper", {"F": _msd_force}, {"x": 2e-3, "v": 5e-3}),
+    ("dc-motor", {"V": lambda t: 6 + 6 * np.sign(np.sin(2 * np.pi * t))}, {"i": 0.05, "w_L": 0.05}),
+])
+def test_unperturbed_recording_no_place_explains_a_significant_share(name, inputs, outputs):
+    g = library.build(name)
+    t = np.arange(0.0, 3.0 if name == "dc-motor" else 20.0, 0.002 if name == "dc-motor" else 0.01)
+    exp, _ = _record(g, t, {k: f(t) for k, f in inputs.items()}, list(outputs), outputs)
+    scores = locate_on_graph(g, exp)
+    assert len(scores) == len(candidate_places(g, experiment=exp))
+    assert max(s.explained for s in scores) < 0.05
+
+
+def test_bad_places_and_experiments_are_named():
+    g = library.build("rlc")
+    t = np.linspace(0, 1, 101)
+    exp = Experiment(t, {"V": np.ones_like(t)}, {"i": np.sin(t)}, {}, "rec.csv")
+    with pytest.raises(DiagnosisError, match="junction nowhere.*known: junction i_loop"):
+        locate_on_graph(g, exp, places=[Place("junction", "nowhere")])
+    with pytest.raises(DiagnosisError, match="output v_C"):
+        locate_on_graph(g, exp, places=[Place("output", "v_C")])     # not measured
+    with pytest.raises(DiagnosisError, match="rec.csv: no measured output"):
+        locate_on_graph(g, Experiment(t, {"V": t}, {}, {}, "rec.csv"))
+
+
+def test_progress_lines(capsys):
+    g = library.build("rlc")
+    t = np.linspace(0, 0.5, 201)
+    exp, _ = _record(g, t, {"V": np.ones_like(t)}, ["i", "v_C"], {"i": 1e-3, "v_C": 1e-3})
+    locate_on_graph(g, exp, progress=True)
+    err = capsys.readouterr().err
+    assert "locate: junction i_loop (1/4)" in err and "locate: output i" in err

@@ -75,6 +75,10 @@ class Candidate:
         The element acted on (the C of ``nonlinear_stiffness`` / ``backlash``).
     initial : dict str -> float
         Initial values of the states the candidate adds.
+    starts : tuple of dict
+        Alternative starting values (by parameter name, within the bounds) the fit
+        compares with the guess before it descends: effects such as a saturation
+        are invisible from a start where they never act.
     """
 
     kind: str
@@ -84,12 +88,19 @@ class Candidate:
     constants: tuple = ()
     target: str | None = None
     initial: dict = field(default_factory=dict)
+    starts: tuple = ()
 
     def __post_init__(self):
         if self.kind not in KINDS:
             raise DiagnosisError(f"unknown kind {self.kind!r}; expected one of {', '.join(KINDS)}")
         if not isinstance(self.place, Place):
             raise DiagnosisError(f"candidate {self.kind}: place must be a Place, got {self.place!r}")
+        specs = {p.name: p for p in self.params}
+        for start in self.starts:
+            for name, value in start.items():
+                if name not in specs or not specs[name].lower <= value <= specs[name].upper:
+                    raise DiagnosisError(f"candidate {self.kind}: start {start} is not within the bounds of "
+                                         f"its parameters {list(specs)}")
 
     @property
     def n_params(self) -> int:
@@ -109,6 +120,23 @@ class Candidate:
             raise UnknownNameError("parameter", unknown[0], known, model=f"candidate {self}")
         known.update({k: float(v) for k, v in values.items()})
         return known
+
+    def settle(self, values: dict, experiment) -> dict:
+        """Fitted `values` with what the training data cannot tell released.
+
+        A saturation limit that no training sample of the input goes beyond has no
+        evidence behind it: it is moved to its outer bound (no limit on that side).
+        Other kinds are returned unchanged.
+        """
+        values = dict(values)
+        if self.kind == "saturation" and experiment is not None and self.place.name in experiment.inputs:
+            u = np.asarray(experiment.inputs[self.place.name], dtype=float)
+            low, high = self.params
+            if not np.any(u < values[low.name]):
+                values[low.name] = low.lower
+            if not np.any(u > values[high.name]):
+                values[high.name] = high.upper
+        return values
 
     def build(self, model_graph, values=None):
         """A new graph: `model_graph` with this effect added.
@@ -202,7 +230,7 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None) -
         protos = make_output(graph, place, None if measured is None else np.asarray(measured, float), taken)
     out = [Candidate(p["kind"], place, list(p["params"]), regime=p.get("regime"),
                      constants=tuple(p.get("constants", ())), target=p.get("target"),
-                     initial=dict(p.get("initial", {}))) for p in protos]
+                     initial=dict(p.get("initial", {})), starts=tuple(p.get("starts", ()))) for p in protos]
     return sorted(out, key=lambda c: KINDS.index(c.kind))
 
 

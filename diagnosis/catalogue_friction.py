@@ -75,6 +75,9 @@ def make_friction(graph, place, scales, taken, experiment=None) -> list[dict]:
             params=[level("c0", f"Coulomb friction level at {j} at the reference pressure"),
                     ParamSpec(name("c1"), 0.0, -10 * E / p_scale, 10 * E / p_scale, f"{e_unit}/Pa",
                               f"change of the friction level at {j} per Pa of {label}")]))
+    for proto in protos:   # the friction level may be far from 10 % of the effort scale
+        first = proto["params"][0]
+        proto["starts"] = [{first.name: f * first.guess} for f in (0.1, 5.0) if f * first.guess <= first.upper]
     return protos
 
 

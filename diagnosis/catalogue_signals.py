@@ -4,7 +4,9 @@ The recorded input ``u`` stays the model's input; the elements that used it
 see an effective input instead (:func:`~diagnosis.catalogue_common.route_input`):
 
 * ``valve_lag``: :math:`\\tau \\dot x = u - x`, effective input :math:`x` (an extra
-  state, starting at the first recorded value of ``u``).
+  state).  Added states start where the input was before the experiment
+  (:func:`resting_input`: the value at which the nominal initial state is at
+  rest, usually 0), so the first command step goes through the lag too.
 * ``transport_delay``: :math:`u(t - T)`, realised as the strictly proper Padé
   [2/3] approximant of :math:`e^{-sT}`,
 
@@ -25,6 +27,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from bondgraph.errors import BondcosimError
+
 from .catalogue_common import ParamSpec, fresh_name, route_input
 
 __all__ = ["INPUT_KINDS", "OUTPUT_KINDS", "make_input", "make_output", "build_signal", "explain_signal"]
@@ -40,23 +44,61 @@ def make_input(graph, place, span: float, dt: float, recorded, taken) -> list[di
     unit = decl.unit
     values = np.asarray(recorded, dtype=float) if recorded is not None else np.array([decl.default - 1.0,
                                                                                        decl.default + 1.0])
-    u0 = float(values[0]) if recorded is not None else float(decl.default)
+    u0 = resting_input(graph, u, recorded)
     lo, hi = float(np.min(values)), float(np.max(values))
     width = max(hi - lo, 1e-12)
     q_lo, q_hi = (float(v) for v in np.percentile(values, [5, 95]))
     mid = float(np.median(values))
     q_lo, q_hi = min(q_lo, mid - 1e-3 * width), max(q_hi, mid + 1e-3 * width)
+    tau, delay = fresh_name(taken, f"tau_lag_{u}"), fresh_name(taken, f"T_delay_{u}")
+    times = [k * dt for k in (0.5, 2, 8, 32) if k * dt < span / 4]
+    u_min, u_max = fresh_name(taken, f"u_min_{u}"), fresh_name(taken, f"u_max_{u}")
+    limits = [(float(np.quantile(values, q)), float(np.quantile(values, 1 - q))) for q in (0.02, 0.1, 0.25)]
+    limits = [(a, b) for a, b in limits if a < mid < b]
+    # one-sided starts first: on a tie (no sample beyond a limit) the limit stays inactive
+    sat_starts = [{u_min: lo - 1e-3 * width, u_max: b} for _, b in limits]
+    sat_starts += [{u_min: a, u_max: hi + 1e-3 * width} for a, _ in limits]
+    sat_starts += [{u_min: a, u_max: b} for a, b in limits]
     return [
-        dict(kind="valve_lag", initial={f"x_lag_{u}": u0}, params=[
-            ParamSpec(fresh_name(taken, f"tau_lag_{u}"), max(5 * dt, span / 100), dt / 5, span / 2, "s",
+        dict(kind="valve_lag", initial={f"x_lag_{u}": u0}, starts=[{tau: v} for v in times], params=[
+            ParamSpec(tau, max(5 * dt, span / 100), dt / 20, span / 2, "s",
                       f"time constant of the actuator lag on {u}")]),
-        dict(kind="transport_delay", initial={f"z1_delay_{u}": u0}, params=[
-            ParamSpec(fresh_name(taken, f"T_delay_{u}"), max(3 * dt, span / 200), dt / 2, span / 4, "s",
-                      f"transport delay of {u}")]),
-        dict(kind="saturation", params=[
-            ParamSpec(fresh_name(taken, f"u_min_{u}"), q_lo, lo - width, mid, unit, f"lower saturation of {u}"),
-            ParamSpec(fresh_name(taken, f"u_max_{u}"), q_hi, mid, hi + width, unit, f"upper saturation of {u}")]),
+        dict(kind="transport_delay", initial={f"z1_delay_{u}": u0}, starts=[{delay: v} for v in times], params=[
+            ParamSpec(delay, max(3 * dt, span / 200), dt / 20, span / 4, "s", f"transport delay of {u}")]),
+        dict(kind="saturation", starts=sat_starts, params=[
+            ParamSpec(u_min, q_lo, lo - width, mid, unit, f"lower saturation of {u}"),
+            ParamSpec(u_max, q_hi, mid, hi + width, unit, f"upper saturation of {u}")]),
     ]
+
+
+def resting_input(graph, u: str, recorded) -> float:
+    """The value of input `u` before the experiment.
+
+    Of 0, the input's default and its first recorded value, the one at which the
+    nominal initial state is closest to rest: the rates :math:`|f_i(x_0, u)|` (other
+    inputs at their defaults) are normalised per state by their largest value over
+    the three, summed, and the smallest sum wins (ties: in that order).  The first
+    recorded value when the model cannot be evaluated.
+    """
+    from bondgraph.evaluate import compile_model
+    decl = next(d for d in graph.inputs() if d.name == u)
+    first = float(recorded[0]) if recorded is not None else float(decl.default)
+    options = (0.0, float(decl.default), first)
+    try:
+        eqs = graph.equations()
+        model = compile_model(eqs, backend="numpy")
+        base = np.array([float(eqs.input_defaults.get(n, 0.0)) for n in model.input_names])
+        trials = np.tile(base, (len(options), 1))
+        trials[:, list(model.input_names).index(u)] = options
+        x0 = np.tile(model.default_state, (len(options), 1))
+        rates = np.abs(np.asarray(model.f(x0, trials), dtype=float)).reshape(len(options), -1)
+    except (BondcosimError, ValueError, TypeError):
+        return first
+    if not np.isfinite(rates).all():
+        return first
+    peak = rates.max(axis=0)
+    score = (rates[:, peak > 0] / peak[peak > 0]).sum(axis=1)
+    return options[int(np.argmin(score))]
 
 
 def make_output(graph, place, measured, taken) -> list[dict]:

@@ -159,6 +159,23 @@ class _Objective:
         return np.where(np.isfinite(J), J, 0.0)
 
 
+def _best_start(objective, candidate, theta0):
+    """The guess or the candidate's alternative start with the smallest training cost (one batch)."""
+    if candidate is None or not candidate.starts:
+        return theta0
+    guess = objective.params(theta0)
+    trials = [theta0] + [np.array([{**guess, **start}[s.name] for s in objective.specs]) / objective.scale
+                         for start in candidate.starts]
+    objective.n_runs += len(trials)
+    try:
+        runs = objective.sim.run_batch([objective.params(th) for th in trials], objective.x0)
+        costs = [float(np.sum(objective._vector(run.outputs) ** 2)) for run in runs]
+    except BondcosimError:
+        return theta0
+    costs = [c if np.isfinite(c) else np.inf for c in costs]
+    return trials[int(np.argmin(costs))]
+
+
 def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, max_nfev: int = 40) -> CandidateFit:
     """Fit a candidate's parameters (and uncertain nominal ones) by simulation-error least squares.
 
@@ -206,6 +223,7 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     upper = np.array([s.upper for s in specs]) / objective.scale
     theta0 = np.array([s.guess for s in specs]) / objective.scale
     if specs:
+        theta0 = _best_start(objective, candidate, theta0)
         r0 = objective(theta0)
         if np.all(r0 == 1e3):
             return CandidateFit(candidate, message=f"{label}: the model does not run at the initial guess "
@@ -217,6 +235,8 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     else:
         theta, converged, message = theta0, True, "nothing to fit"
     values = objective.params(theta)
+    if candidate is not None:
+        values = candidate.settle(values, train)
     try:
         train_sim = objective.sim(values, x0)
         train_nrmse = {o: nrmse(train.outputs[o], train_sim[o]) for o in outputs}
@@ -277,7 +297,8 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
        fitted parameters and :math:`\\rho` = :data:`PARAMETER_PRICE` = 0.10: each
        extra parameter must buy a 10 % smaller excess error (the small
        :math:`10^{-4} E_0` term makes fits that are perfect to rounding tie,
-       so the simpler one wins).  Ties: fewer parameters, then catalogue order.
+       so the simpler one wins).  Ties: fewer parameters, then the smaller raw
+       held-out error (two fits both within the noise floor), then catalogue order.
     3. The winner must explain at least :data:`MIN_SHARE` (30 %) of :math:`E_0`:
        :math:`1 - E / E_0 \\ge 0.3`; otherwise None: the tool does not invent
        physics.
@@ -311,7 +332,8 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
     def key(f):
         score = (_excess(f.holdout_nrmse, floor, names) + 1e-4 * e0) * (1 + PARAMETER_PRICE) ** f.n_params
         order = KINDS.index(f.candidate.kind) if f.candidate is not None else -1
-        return (round(score / e0, 9), f.n_params, order)
+        raw = sum(f.holdout_nrmse[o] ** 2 for o in names)
+        return (round(score / e0, 9), f.n_params, raw, order)
 
     best = min(usable, key=key)
     share = 1.0 - _excess(best.holdout_nrmse, floor, significant) / e0

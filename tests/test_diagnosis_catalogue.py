@@ -217,7 +217,7 @@ def test_guesses_and_bounds_scale_with_the_data():
     assert fc[1].guess == pytest.approx(100 * fc[0].guess, rel=1e-6)
     assert fc[1].upper == pytest.approx(100 * fc[0].upper, rel=1e-6)
     lag = _one(msd, Place("input", "F"), "valve_lag", experiment=small).params[0]
-    assert lag.lower == pytest.approx(0.02 / 5) and lag.upper == pytest.approx(5.0)   # dt/5 .. span/2
+    assert lag.lower == pytest.approx(0.02 / 20) and lag.upper == pytest.approx(5.0)   # dt/20 .. span/2
 
 
 def test_bad_places_values_and_specs_are_refused_by_name():

@@ -47,11 +47,12 @@ def coulomb_truth(fc=0.3, b=0.4):
 
 
 def lag_truth(tau=0.3):
-    """The mass-spring-damper driven through a first-order actuator, written as its own element."""
+    """The mass-spring-damper driven through a first-order actuator (at rest before t = 0), written as
+    its own element."""
     g = BondGraph("msd_actuator_lag")
     g.add_input("F", unit="N")
     g.add(EquationElement("actuator", ports={"out": "out"}, outputs={"e_out": "Fa"},
-                          states={"Fa": "(F - Fa)/tau_a"}, initial={"Fa": float(F[0])}, params={"tau_a": tau}))
+                          states={"Fa": "(F - Fa)/tau_a"}, initial={"Fa": 0.0}, params={"tau_a": tau}))
     g.add(One("v_mass"))
     g.connect(("actuator", "out"), "v_mass")
     for e in (I("m", 1.0, domain="translation"), R("b", 0.4, domain="translation"),
@@ -95,7 +96,7 @@ def test_valve_lag_recovered(msd):
 
 def test_transport_delay_recovered_from_a_shifted_input(msd):
     shift = 5                                              # samples: 0.1 s, exact for a zero-order hold
-    delayed = np.concatenate([np.full(shift, F[0]), F[:-shift]])
+    delayed = np.concatenate([np.zeros(shift), F[:-shift]])   # the command was 0 before t = 0
     train, hold = _record(msd, u=delayed).split(0.3)
     fit = fit_candidate(msd, _candidate(msd, Place("input", "F"), "transport_delay", train), train, hold)
     assert fit.success, fit.message

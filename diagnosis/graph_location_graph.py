@@ -96,7 +96,12 @@ def with_inputs(experiment, extra: dict, units: dict):
 
 
 def junction_unit(graph, junction: str) -> str:
-    """Effort (1-junction) or flow (0-junction) unit, from the domains of the elements around it."""
+    """Effort (1-junction) or flow (0-junction) unit at `junction`.
+
+    From the domain of the nearest element with one (across other junctions, not
+    across transformers), else from a declared output that is the junction's
+    effort / flow on one of its bonds; "" when neither says.
+    """
     from bondgraph.elements.base import unit_of
 
     word = "effort" if graph.elements[junction].kind == "1" else "flow"
@@ -113,6 +118,13 @@ def junction_unit(graph, junction: str) -> str:
                     todo.append(other)
                 elif getattr(element, "domain", "generic") not in ("generic", None):
                     return unit_of(element.domain, word)
+    # no domain around (equation-defined elements, transformers): an output that is this
+    # junction's effort/flow on one of its bonds carries the unit
+    letter = word[0]
+    for bond, _end in graph.bonds_of(junction):
+        for out in graph.outputs.values():
+            if out.unit and str(out.expression).strip() == f"{letter}_{bond.name}":
+                return out.unit
     return ""
 
 

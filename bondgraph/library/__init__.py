@@ -13,6 +13,7 @@ from __future__ import annotations
 from typing import Callable
 
 from .chain import mass_spring_chain
+from .cylinder import pneumatic_cylinder
 from .exoskeleton import exoskeleton
 from .pam import pam
 from .textbook import coupled_tanks, dc_motor, geared_inertias, mass_spring_damper, resistor_loop, rlc_series
@@ -41,6 +42,7 @@ register("pam", pam, "antagonistic PAM joint, seed 000 (4 states, held Kikuuwe f
 register("pam-frictionless", lambda: pam("frictionless"), "the PAM joint with T_f = 0 (smooth)")
 register("pam-locked", lambda: pam("locked"), "the PAM joint held at psi = 0, for torque tests (2 states)")
 register("chain", mass_spring_chain, "5-stage mass-spring-damper chain (the derivation benchmark)")
+register("pneumatic-cylinder", pneumatic_cylinder, "seal-friction rig: ideal cylinder F = p A, imposed rod position (1 state)")
 
 
 def names() -> list[str]:

@@ -76,6 +76,7 @@ def test_manifest_is_the_definitions():
             assert {k: v["value"] for k, v in e["parameters"].items()} == \
                 {p.name: p.value for p in c.effect.params}
             assert all(v["unit"] for v in e["parameters"].values())
+        assert [Place(**q) for q in e["equivalent_places"]] == list(c.equivalent)
         for s in c.outputs:
             assert e["noise"][s.name]["effective_sigma"] == pytest.approx(math.hypot(s.sigma, s.quantum / 12 ** 0.5), rel=1e-5)
 
@@ -98,6 +99,22 @@ def test_bindings_name_real_signals_and_columns(name):
             signal = next(s for s in c.inputs + c.outputs if s.name == model_name)
             assert float(convert(signal.scale, unit, known[model_name])) == pytest.approx(1.0, rel=1e-12)
     assert e["affected_output"] in model_outputs
+
+
+@pytest.mark.parametrize("name", [c.name for c in CASES if c.equivalent])
+def test_equivalent_places_are_rigidly_geared_junctions(name):
+    """An equivalent junction is a 1-junction joined to the effect's 1-junction through one TF:
+    the flows are a fixed multiple of each other and an extra effort at one enters the same
+    equation of motion as the TF-scaled effort at the other."""
+    c = case(name)
+    graph = library.build(c.model)
+    for other in c.equivalent:
+        assert other.kind == c.effect.place.kind == "junction"
+        neighbours = {n: {b.head.element if end == "tail" else b.tail.element for b, end in graph.bonds_of(n)}
+                      for n in (c.effect.place.name, other.name)}
+        shared = neighbours[c.effect.place.name] & neighbours[other.name]
+        assert [graph.elements[n].kind for n in shared] == ["TF"]
+        assert graph.elements[other.name].kind == graph.elements[c.effect.place.name].kind == "1"
 
 
 # -- the generator -------------------------------------------------------------------------------

@@ -20,6 +20,8 @@ Manifest fields (one entry per case)
 ``name``, ``file``, ``model`` (nominal, ``bondgraph.library`` name),
 ``description`` (one line), ``kind`` (issue 6 vocabulary, or ``"none"``),
 ``place`` (``{"kind": "junction"|"input"|"output", "name": ...}`` or null),
+``equivalent_places`` (places no recording can tell from ``place``, e.g. a
+junction rigidly geared to it) and ``equivalence`` (why),
 ``parameters`` (true values with units), ``affected_output``, ``time``
 (time column), ``inputs`` / ``outputs`` (``NAME=COLUMN:UNIT`` bindings),
 ``model_units``, ``seed``, ``sample_rate_Hz``, ``duration_s``,

@@ -67,6 +67,10 @@ class Case:
     ``excite(t, rng)`` returns the raw commands (model units, before the DAC);
     ``min_ratio`` is the documented floor of RMS(truth - nominal) of the
     affected output over the effective noise sigma (0 for null cases).
+    ``equivalent`` lists places that no recording can tell apart from the
+    effect's own (a 1-junction rigidly geared to it through a TF: one degree
+    of freedom, the same law fits there with scaled parameters), and
+    ``equivalence`` says why.
     """
 
     name: str
@@ -83,6 +87,8 @@ class Case:
     seed: int
     min_ratio: float
     time_column: str = "t_s"
+    equivalent: tuple[Place, ...] = ()
+    equivalence: str = ""
 
     @property
     def kind(self) -> str:
@@ -197,7 +203,11 @@ CASES: tuple[Case, ...] = (
          excitation="stepped voltage ramp +-6 V (0.5 V every 0.25 s), plateaus at many load speeds "
                     "of both signs, DAC 0.01 V",
          duration=12.0, rate=200.0,
-         description="load-bearing friction that is higher at low speed (Stribeck)", **_MOTOR),
+         description="load-bearing friction that is higher at low speed (Stribeck)",
+         equivalent=(Place("junction", "w_motor"),),
+         equivalence="TF n rigidly gears w_load to w_motor (one degree of freedom): a friction torque T(w) "
+                     "at the load equals n T(n w_m) at the motor",
+         **_MOTOR),
     Case("dcmotor_saturation", effect=InputSaturation(
             "saturation", Place("input", "V"),
             (_p("limit", 10.0, "V", "the driver delivers at most +-limit"),)),
@@ -231,6 +241,9 @@ CASES: tuple[Case, ...] = (
             law="b_v*f", domain="rotation", zero=("b_v",)),
          affected="tau_s", seed=501, min_ratio=5.0,
          description="extra viscous drag on the motor side (bearing grease), 6 % of the nominal b_f",
+         equivalent=(Place("junction", "w_g"),),
+         equivalence="TF r_g rigidly gears w_g to w_m (one degree of freedom): a viscous b at w_m equals "
+                     "r_g^2 b at w_g",
          **_EXO),
     Case("exo_delay", effect=InputDelay(
             "transport_delay", Place("input", "tau_m"),

@@ -170,6 +170,8 @@ def manifest_entry(case: Case, rec: GeneratedRecording) -> dict:
         "place": None if effect is None else {"kind": effect.place.kind, "name": effect.place.name},
         "parameters": {} if effect is None else
         {p.name: {"value": p.value, "unit": p.unit, "description": p.description} for p in effect.params},
+        "equivalent_places": [{"kind": q.kind, "name": q.name} for q in case.equivalent],
+        "equivalence": case.equivalence,
         "affected_output": case.affected,
         "time": case.time_column,
         "inputs": [s.binding for s in case.inputs],

@@ -66,8 +66,10 @@ def make_input(graph, place, span: float, dt: float, recorded, taken) -> list[di
         dict(kind="transport_delay", initial={f"z1_delay_{u}": u0}, starts=[{delay: v} for v in times], params=[
             ParamSpec(delay, max(3 * dt, span / 200), dt / 20, span / 4, "s", f"transport delay of {u}")]),
         dict(kind="saturation", starts=sat_starts, params=[
-            ParamSpec(u_min, q_lo, lo - width, mid, unit, f"lower saturation of {u}"),
-            ParamSpec(u_max, q_hi, mid, hi + width, unit, f"upper saturation of {u}")]),
+            # a recording of a saturated input has many samples AT the limit: its median may be
+            # the limit itself, so each limit may range over the whole recorded span
+            ParamSpec(u_min, q_lo, lo - width, hi, unit, f"lower saturation of {u}"),
+            ParamSpec(u_max, q_hi, lo, hi + width, unit, f"upper saturation of {u}")]),
     ]
 
 

@@ -8,7 +8,7 @@ import pytest
 
 import bondgraph.library as library
 from bondgraph.library.textbook import mass_spring_damper
-from bondgraph import BondGraph, C, EquationElement, I, One, R
+from bondgraph import BondGraph, C, EquationElement, I, One, R, Se
 from diagnosis.catalogue import candidates
 from diagnosis.errors import DiagnosisError
 from diagnosis.fit import CandidateFit, choose, fit_candidate, noise_floor
@@ -170,3 +170,59 @@ def test_fit_failures_are_reported_not_raised(msd):
         fit_candidate(msd, cand, train, hold, uncertain=("mass",))
     with pytest.raises(DiagnosisError, match="held-out part starts"):
         fit_candidate(msd, cand, hold, train)
+
+
+def test_saturation_recovered_and_a_limit_never_reached_is_released(msd):
+    train, hold = _record(msd, u=np.minimum(F, 1.5)).split(0.3)        # the drive delivers at most 1.5 N
+    cand = _candidate(msd, Place("input", "F"), "saturation", train)
+    fit = fit_candidate(msd, cand, train, hold)
+    assert fit.success, fit.message
+    assert fit.values["u_max_F"] == pytest.approx(1.5, abs=0.01)
+    assert fit.values["u_min_F"] == cand.params[0].lower              # no evidence of a lower limit
+    assert max(fit.holdout_nrmse.values()) < 1e-3
+
+
+def test_hardening_spring_recovered(msd):
+    stiff = BondGraph("msd_hardening")                 # written out by hand: k x + k3 x^3
+    stiff.add(Se("F", 0.0, domain="translation"))
+    stiff.add(One("v_mass"))
+    stiff.connect("F", "v_mass")
+    for e in (I("m", 1.0, domain="translation"), R("b", 0.4, domain="translation"),
+              C("k", law="k_lin*q + k3_true*q**3", params={"k_lin": 4.0, "k3_true": 2.0}, domain="translation")):
+        stiff.add(e)
+        stiff.connect("v_mass", e.name)
+    stiff.add_output("x", "q_k", unit="m")
+    stiff.add_output("v", "f_m", unit="m/s")
+    train, hold = _record(stiff).split(0.3)
+    fit = fit_candidate(msd, _candidate(msd, Place("junction", "v_mass"), "nonlinear_stiffness", train),
+                        train, hold)
+    assert fit.values["k3_k"] == pytest.approx(2.0, rel=0.01)
+
+
+def test_leak_recovered_in_a_pneumatic_tank(rng):
+    from test_diagnosis_catalogue import pneumatic_tank
+    nominal = pneumatic_tank()
+    truth = pneumatic_tank()
+    truth.add(R("hole", flow="G_true*(e - 101325)", params={"G_true": 1e-8}, domain="pneumatic"))
+    truth.connect("tank", "hole")
+    t = np.linspace(0.0, 60.0, 601)
+    m_in = np.where(t % 20.0 < 10.0, 2e-4, 2e-5)                       # kg/s, filling and venting phases
+    units = {"m_in": "kg/s", "P": "Pa"}
+    y = OutputSimulator(truth, Experiment(t, {"m_in": m_in}, {"P": t}, units))()["P"]
+    y = y + 20.0 * rng.standard_normal(y.size)                         # 20 Pa sensor noise
+    train, hold = Experiment(t, {"m_in": m_in}, {"P": y}, units).split(0.3)
+    leak = next(c for c in candidates(nominal, Place("junction", "tank"), experiment=train) if c.kind == "leak")
+    fit = fit_candidate(nominal, leak, train, hold)
+    # 20 Pa on pressures swinging by tens of kPa: the conductance is determined to well under 2 %
+    assert fit.values["c_leak_tank"] == pytest.approx(1e-8, rel=0.02)
+
+
+def test_added_actuator_states_start_where_the_input_rested():
+    from diagnosis.catalogue_signals import resting_input
+    pam = library.build("pam")
+    assert resting_input(pam, "u1", np.array([2.5, 2.5])) == 0.0      # valves closed: P = P_out at rest
+    msd = library.build("mass-spring-damper")
+    assert resting_input(msd, "F", np.array([3.0])) == 0.0
+    preloaded = library.build("mass-spring-damper")
+    preloaded.elements["k"].initial = 0.25                             # k x0 = 1 N: rests under F = 1 N
+    assert resting_input(preloaded, "F", np.array([3.0])) == 1.0

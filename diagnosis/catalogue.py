@@ -211,10 +211,10 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None) -
         if element is None or element.kind not in ("0", "1"):
             junctions = [n for n, e in graph.elements.items() if e.kind in ("0", "1")]
             raise UnknownNameError("junction", place.name, junctions, model=graph.name)
-        scales = junction_scales(graph, place.name, experiment)
-        protos = make_storage(graph, place, scales, taken, experiment)
+        scales, values = junction_scales(graph, place.name, experiment)
+        protos = make_storage(graph, place, scales, taken, values)
         if element.kind == "1":
-            protos = make_friction(graph, place, scales, taken, experiment) + protos
+            protos = make_friction(graph, place, scales, taken, values) + protos
             protos = _regime_first(protos, regime_variables)
     elif place.kind == "input":
         names = [d.name for d in graph.inputs()]

@@ -28,7 +28,7 @@ References
 from __future__ import annotations
 
 from .catalogue_common import ParamSpec, domain_units, fresh_name, junction_domain
-from .catalogue_scales import pressure_variables, simulate_expressions
+from .catalogue_scales import pressure_variables
 
 __all__ = ["FRICTION_KINDS", "make_friction", "build_friction", "explain_friction"]
 
@@ -39,8 +39,9 @@ FRICTION_KINDS = ("coulomb_friction", "viscous_friction", "stribeck_friction", "
 V_EPS_FRACTION = 0.05
 
 
-def make_friction(graph, place, scales, taken, experiment=None) -> list[dict]:
-    """Candidate prototypes (kind, params, constants, regime) for a 1-junction."""
+def make_friction(graph, place, scales, taken, values=None) -> list[dict]:
+    """Candidate prototypes (kind, params, constants, regime) for a 1-junction
+    (`values`: nominal values at the junction, :func:`~diagnosis.catalogue_scales.junction_scales`)."""
     j = place.name
     e_unit, f_unit = domain_units(junction_domain(graph, j))
     E, V = scales.effort, scales.flow
@@ -64,11 +65,10 @@ def make_friction(graph, place, scales, taken, experiment=None) -> list[dict]:
                       f"Dahl pre-sliding stiffness at {j}")]),
     ]
     pressures = pressure_variables(graph)
-    means = simulate_expressions(graph, experiment, pressures) if (experiment is not None and pressures) else {}
     for label, expr in pressures.items():
-        values = means.get(label)
-        p_ref = float(values.mean()) if values is not None else 0.0
-        p_scale = float(values.std()) if values is not None and values.std() > 0 else max(abs(p_ref), 1.0)
+        p = (values or {}).get(f"pressure:{label}")
+        p_ref = float(p.mean()) if p is not None else 0.0
+        p_scale = float(p.std()) if p is not None and p.std() > 0 else max(abs(p_ref), 1.0)
         protos.append(dict(
             kind="pressure_dependent_friction", regime=expr, constants=[
                 v_eps, (name("p_ref"), p_ref, "Pa", f"reference pressure of the friction law at {j}")],

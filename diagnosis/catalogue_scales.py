@@ -87,21 +87,33 @@ def experiment_times(experiment) -> tuple[float, float]:
     return float(t[-1] - t[0]), float(np.median(np.diff(t)))
 
 
-def junction_scales(graph, junction: str, experiment) -> Scales:
-    """Flow, effort and displacement scales at a junction from the nominal simulation."""
+def junction_scales(graph, junction: str, experiment) -> tuple[Scales, dict]:
+    """Scales at a junction and the nominal values the catalogue needs there, from ONE simulation.
+
+    Returns
+    -------
+    (Scales, dict str -> ndarray)
+        The values are keyed ``e_<bond>`` / ``f_<bond>`` for the junction's bonds,
+        ``pressure:<label>`` for :func:`pressure_variables` and ``state:<name>`` for
+        the states of the C elements on the junction (empty without an experiment).
+    """
     if experiment is None:
-        return Scales()
+        return Scales(), {}
     span, dt = experiment_times(experiment)
     bonds = [b for b, _ in graph.bonds_of(junction)]
-    common_flow = graph.elements[junction].kind == "1"
     exprs = {f"f_{b.name}": f"f_{b.name}" for b in bonds}
     exprs.update({f"e_{b.name}": f"e_{b.name}" for b in bonds})
+    exprs.update({f"pressure:{label}": expr for label, expr in pressure_variables(graph).items()})
+    for b, end in graph.bonds_of(junction):
+        other = graph.elements[b.head.element if end == "tail" else b.tail.element]
+        if other.kind == "C":
+            exprs[f"state:{other.state}"] = other.state
     values = simulate_expressions(graph, experiment, exprs)
     if not values:
-        return Scales(span=span, dt=dt)
+        return Scales(span=span, dt=dt), {}
     flows = [values[f"f_{b.name}"] for b in bonds]
     efforts = [values[f"e_{b.name}"] for b in bonds]
-    if common_flow:
+    if graph.elements[junction].kind == "1":
         flow, effort = flows[0], max(efforts, key=rms)
     else:
         flow, effort = max(flows, key=rms), efforts[0] - np.mean(efforts[0])
@@ -109,7 +121,7 @@ def junction_scales(graph, junction: str, experiment) -> Scales:
     displacement = np.concatenate([[0.0], np.cumsum(0.5 * (flow[1:] + flow[:-1]) * np.diff(t))])
     displacement = displacement - np.mean(displacement)
     return Scales(flow=_positive(rms(flow)), effort=_positive(rms(effort)),
-                  displacement=_positive(rms(displacement)), span=span, dt=dt, from_data=True)
+                  displacement=_positive(rms(displacement)), span=span, dt=dt, from_data=True), values
 
 
 def _positive(value: float) -> float:

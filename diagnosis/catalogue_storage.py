@@ -28,7 +28,6 @@ import numpy as np
 from bondgraph.params import DOMAINS
 
 from .catalogue_common import ParamSpec, domain_units, fresh_name, junction_domain, junction_elements, substitute
-from .catalogue_scales import simulate_expressions
 
 __all__ = ["STORAGE_KINDS", "make_storage", "build_storage", "explain_storage"]
 
@@ -36,8 +35,10 @@ STORAGE_KINDS = ("leak", "heat_transfer", "backlash", "nonlinear_stiffness")
 P_AMBIENT = 101325.0  # Pa
 
 
-def make_storage(graph, place, scales, taken, experiment=None) -> list[dict]:
-    """Candidate prototypes for a junction: flow kinds at a 0-junction, stiffness kinds for each C on it."""
+def make_storage(graph, place, scales, taken, values=None) -> list[dict]:
+    """Candidate prototypes for a junction: flow kinds at a 0-junction, stiffness kinds for each C on it
+    (`values`: nominal values at the junction, :func:`~diagnosis.catalogue_scales.junction_scales`)."""
+    values = values or {}
     j = place.name
     dom = junction_domain(graph, j)
     e_unit, f_unit = domain_units(dom)
@@ -45,8 +46,8 @@ def make_storage(graph, place, scales, taken, experiment=None) -> list[dict]:
     protos = []
     if graph.elements[j].kind == "0":
         first_bond = graph.bonds_of(j)[0][0].name
-        values = simulate_expressions(graph, experiment, {"e": f"e_{first_bond}"}) if experiment is not None else {}
-        e0, e_mean = (float(values["e"][0]), float(values["e"].mean())) if values else (0.0, 0.0)
+        e = values.get(f"e_{first_bond}")
+        e0, e_mean = (float(e[0]), float(e.mean())) if e is not None else (0.0, 0.0)
         p_amb = P_AMBIENT if dom == "pneumatic" and e_mean > 5e4 else 0.0
         dev = max(abs(e_mean - p_amb), E)
         protos.append(dict(kind="leak", constants=[(fresh_name(taken, f"P_amb_{j}"), p_amb, e_unit,
@@ -70,7 +71,7 @@ def make_storage(graph, place, scales, taken, experiment=None) -> list[dict]:
         c = element.name
         s_unit = DOMAINS[element.domain].stiffness if element.domain in DOMAINS else ""
         q_unit = DOMAINS[element.domain].displacement if element.domain in DOMAINS else ""
-        X = _displacement_scale(graph, element, experiment, scales)
+        X = _displacement_scale(values.get(f"state:{element.state}"), scales)
         k_lin = E / X
         protos.append(dict(kind="nonlinear_stiffness", target=c, params=[
             ParamSpec(fresh_name(taken, f"k3_{c}"), 0.0, -100 * k_lin / X ** 2, 100 * k_lin / X ** 2,
@@ -82,12 +83,9 @@ def make_storage(graph, place, scales, taken, experiment=None) -> list[dict]:
     return protos
 
 
-def _displacement_scale(graph, element, experiment, scales) -> float:
-    if experiment is None:
-        return scales.displacement
-    values = simulate_expressions(graph, experiment, {"q": element.state})
-    x = values.get("q")
-    scale = float(np.sqrt(np.mean(x ** 2))) if x is not None else 0.0
+def _displacement_scale(q, scales) -> float:
+    """RMS of a C's displacement in the nominal simulation (the junction's scale without one)."""
+    scale = float(np.sqrt(np.mean(q ** 2))) if q is not None else 0.0
     return scale if scale > 0 and np.isfinite(scale) else scales.displacement
 
 

@@ -265,6 +265,9 @@ CASES: tuple[Case, ...] = (
             law="(T_0 + k_p*(P_1 + P_2 - 2*P_out))*tanh(f/w_s)", domain="rotation", zero=("T_0", "k_p")),
          affected="psi", seed=602, min_ratio=5.0,
          description="extra seal friction in the joint that grows with the muscle pressures", **_PAM),
+    Case("pam_null", effect=None, affected="psi", seed=603, min_ratio=0.0,
+         description="null case: the nominal PAM joint (Kikuuwe friction included) with sensor noise only",
+         **_PAM),
 )
 
 

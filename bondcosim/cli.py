@@ -11,6 +11,7 @@ Examples
   bondcosim export-fmu pam -o pam.fmu --fmi 3
   bondcosim fmu-info pam.fmu
   bondcosim cosim pam-pi --json --plot figures
+  bondcosim diagnose mass-spring-damper rec.csv --input F=force:N --output x=pos:mm --report out --json
   bondcosim demo
 """
 from __future__ import annotations
@@ -88,6 +89,25 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--list", action="store_true", help="list the scenarios")
     p.add_argument("--json", action="store_true", help="print the numbers as JSON")
     p.add_argument("--plot", default=None, metavar="DIR", help="save the scenario's plots in DIR")
+
+    p = sub.add_parser("diagnose", help="locate and name what MODEL leaves out of a recording; "
+                       "fit it and show the held-out fit improve")
+    p.add_argument("model", help="built-in name, graph .json file, or .py file with build()")
+    p.add_argument("recording", help="CSV file: a time column and named signals")
+    p.add_argument("--input", action="append", default=[], metavar="NAME=COLUMN[:UNIT]",
+                   help="model input driven by a recorded column, converted from UNIT (repeatable)")
+    p.add_argument("--output", action="append", default=[], required=True, metavar="NAME=COLUMN[:UNIT]",
+                   help="model output measured by a recorded column, converted from UNIT (repeatable)")
+    p.add_argument("--time", default=None, metavar="COLUMN[:UNIT]",
+                   help="time column (default t, time, t_s or the first column)")
+    p.add_argument("--holdout", type=float, default=0.3,
+                   help="fraction of the recording, at its end, held out of fitting (default 0.3)")
+    p.add_argument("--uncertain", action="append", default=[], metavar="PARAM",
+                   help="nominal parameter to refit alongside (repeatable)")
+    p.add_argument("--top", type=int, default=3, help="graph places whose candidates are fitted (default 3)")
+    p.add_argument("--report", default=None, metavar="DIR",
+                   help="write diagnosis.json, diagnosis.txt, plots and improved_model.json in DIR")
+    p.add_argument("--json", action="store_true", help="print the result as JSON (issue 6 schema)")
 
     p = sub.add_parser("demo", help="the main job on built-in defaults: equations, drawings, a simulation")
     p.add_argument("--output-dir", default="demo-output", help="where figures and CSVs go (default demo-output)")
@@ -230,6 +250,19 @@ def _flatten(data, prefix=""):
             yield f"{prefix}{key}", value
 
 
+def _cmd_diagnose(args) -> int:
+    from diagnosis.diagnose import diagnose
+    from .models import load_model
+    report = diagnose(load_model(args.model), args.recording, inputs=args.input, outputs=args.output,
+                      time=args.time, holdout=args.holdout, uncertain=args.uncertain, top=args.top,
+                      progress=True)
+    if args.report:
+        paths = report.save(args.report)
+        print(f"wrote {', '.join(paths.values())}", file=sys.stderr)
+    print(json.dumps(report.to_json(), indent=2) if args.json else report.text)
+    return 0
+
+
 def _cmd_demo(args) -> int:
     from .demo import run_demo
     run_demo(args.output_dir, quick=args.quick)
@@ -238,7 +271,8 @@ def _cmd_demo(args) -> int:
 
 _COMMANDS = {"list": _cmd_list, "equations": _cmd_equations, "draw": _cmd_draw,
              "simulate": _cmd_simulate, "compare": _cmd_compare, "export-fmu": _cmd_export_fmu,
-             "fmu-info": _cmd_fmu_info, "cosim": _cmd_cosim, "demo": _cmd_demo}
+             "fmu-info": _cmd_fmu_info, "cosim": _cmd_cosim, "diagnose": _cmd_diagnose,
+             "demo": _cmd_demo}
 
 
 def main(argv=None) -> int:

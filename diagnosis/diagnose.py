@@ -1,0 +1,235 @@
+"""The diagnosis pipeline: recording + model -> located, named, modelled missing physics.
+
+:func:`diagnose` runs the steps of the package docstring in order:
+
+1. bind the recording to the model (:func:`diagnosis.recording.bind`) and
+   split off the held-out tail;
+2. simulate the nominal model on the whole recording (the held-out part
+   continues from where the training part leaves the states), residuals,
+   noise level per output, nominal held-out NRMSE;
+3. significant time windows (:func:`diagnosis.locate.significant_windows`),
+   regime variables, graph location on the training part
+   (:func:`diagnosis.graph_location.locate_on_graph`);
+4. candidates of the catalogue at the ``top`` places
+   (:func:`diagnosis.catalogue.candidates`), each fitted on the training part
+   (its last :data:`MAX_FIT_SAMPLES` samples for long recordings, started from
+   the nominal state there) (:func:`diagnosis.fit.fit_candidate`), and a refit of the ``uncertain``
+   nominal parameters alone when any are given; the choice by held-out error
+   and parsimony (:func:`diagnosis.fit.choose`), ``none`` when nothing
+   explains a significant share;
+5. the improved graph, its held-out NRMSE (same simulation as the nominal
+   one), the regime of the chosen place's correction, the explanation.
+"""
+from __future__ import annotations
+
+import sys
+import time as _time
+
+import numpy as np
+
+from .errors import DiagnosisError
+
+__all__ = ["diagnose", "MIN_PLACE_SHARE", "MAX_FIT_SAMPLES"]
+
+#: places whose correction explains less than this share of the residual get no candidates
+MIN_PLACE_SHARE = 0.02
+#: candidates are fitted on at most this many training samples (the end of the training
+#: part, started from the nominal simulation's state there): a fit runs ~100 simulations
+MAX_FIT_SAMPLES = 15000
+
+
+class _Progress:
+    """``diagnose: [  12.3 s] step`` lines on stderr."""
+
+    def __init__(self, enabled: bool):
+        self.enabled, self.start, self.timings, self._last = enabled, _time.perf_counter(), {}, None
+
+    def __call__(self, step: str, detail: str = ""):
+        now = _time.perf_counter()
+        if self._last is not None:
+            name, since = self._last
+            self.timings[name] = self.timings.get(name, 0.0) + now - since
+        self._last = (step, now)
+        if self.enabled:
+            print(f"diagnose: [{now - self.start:7.1f} s] {step}{': ' + detail if detail else ''}",
+                  file=sys.stderr, flush=True)
+
+    def done(self):
+        self("done")
+        self.timings.pop("done", None)
+        self.timings["total"] = _time.perf_counter() - self.start
+        return self.timings
+
+
+def _as_graph(graph):
+    from bondgraph import BondGraph
+    if isinstance(graph, BondGraph):
+        return graph
+    if isinstance(graph, str):
+        if graph.endswith(".json"):
+            from bondgraph.io_json import load
+            return load(graph)
+        from bondgraph import library
+        return library.build(graph)
+    raise DiagnosisError(f"model must be a BondGraph, a built-in model name or a .json graph file; "
+                         f"found {type(graph).__name__}")
+
+
+def _as_recording(recording, time):
+    from .recording import Recording
+    if isinstance(recording, Recording):
+        return recording
+    return Recording.from_csv(recording, time=time)
+
+
+def _merge(windows):
+    out = []
+    for a, b in sorted(windows):
+        if out and a <= out[-1][1]:
+            out[-1][1] = max(out[-1][1], b)
+        else:
+            out.append([a, b])
+    return [(a, b) for a, b in out]
+
+
+def _with_values(graph, values: dict):
+    """A copy of `graph` whose parameters named in `values` take those values (SI)."""
+    from bondgraph.io_json import graph_from_dict
+    if not values:
+        return graph
+    data = graph.to_dict()
+    for entry in data.get("parameters", []):
+        if entry["name"] in values:
+            entry["value"] = float(values[entry["name"]])
+    for entry in data.get("elements", []):
+        if entry.get("name") in values:
+            for key in ("value", "stiffness", "compliance", "inertance", "resistance", "modulus"):
+                if isinstance(entry.get(key), (int, float)):
+                    entry[key] = float(values[entry["name"]])
+                    break
+    out = graph_from_dict(data, source=f"{graph.name} with fitted values")
+    params = out.parameters()
+    wrong = [n for n, v in values.items() if n not in params or not np.isclose(params[n].value, v)]
+    if wrong:
+        raise DiagnosisError(f"cannot set fitted parameter(s) {', '.join(wrong)} in graph {graph.name!r}")
+    return out
+
+
+def _fit_window(train, run, x0):
+    """The training samples the fits use: all, or the last :data:`MAX_FIT_SAMPLES`
+    started from the nominal simulation's state at their first time."""
+    n = train.t.size
+    if n <= MAX_FIT_SAMPLES:
+        return train, x0
+    k = n - MAX_FIT_SAMPLES
+    part = train.window(float(train.t[k]), float(train.t[-1]))
+    return part, dict(zip(run.state_names, (float(v) for v in run.states[k])))
+
+
+def _holdout_nrmse(sim, params, x0, experiment, mask):
+    from .residuals import nrmse
+    y = sim(params, x0)
+    return {o: nrmse(experiment.outputs[o][mask], y[o][mask]) for o in experiment.outputs}, y
+
+
+def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0.3, uncertain=(),
+             top: int = 3, progress: bool = False, x0=None):
+    """Locate, name and model what a model leaves out of a recording.
+
+    Parameters
+    ----------
+    graph : BondGraph or str
+        The nominal model, or a built-in model name / ``.json`` graph file.
+    recording : Recording or str or path-like
+        The recording, or a CSV file (:meth:`Recording.from_csv`).
+    inputs, outputs : iterable of str or Binding, or dict str -> str
+        ``"NAME=COLUMN[:UNIT]"`` bindings of model inputs (recorded, zero-order
+        held) and measured model outputs.
+    time : str, optional
+        Time column of a CSV, optionally ``"COLUMN:UNIT"``.
+    holdout : float
+        Fraction of the time span, at the end, held out of location and fitting.
+    uncertain : iterable of str
+        Nominal parameters fitted alongside each candidate (within a factor 3).
+    top : int
+        Number of best-ranked graph places whose candidates are fitted.
+    progress : bool
+        Progress lines (step, elapsed time) on stderr.
+    x0 : dict str -> float, optional
+        Initial state of the nominal model at the first sample (default: its own).
+
+    Returns
+    -------
+    DiagnosisReport
+
+    Raises
+    ------
+    RecordingError, UnitError, UnknownNameError
+        Bad recording or bindings (named).
+    DiagnosisError
+        Bad arguments.
+    """
+    from .catalogue import candidates
+    from .fit import choose, fit_candidate, noise_floor
+    from .graph_location import locate_on_graph
+    from .locate import locate_regime, regime_variables, significant_windows
+    from .recording import bind
+    from .residuals import OutputSimulator, nrmse, residuals
+
+    if int(top) < 1:
+        raise DiagnosisError(f"top must be a positive number of places; found {top!r}")
+    say = _Progress(progress)
+    say("reading and binding the recording")
+    graph = _as_graph(graph)
+    rec = _as_recording(recording, time)
+    exp = bind(rec, graph, inputs, outputs)
+    train, held = exp.split(holdout)
+    mask = exp.t >= held.t[0]
+
+    say("nominal simulation", f"{exp.t.size} samples, {exp.span[1] - exp.span[0]:.4g} s")
+    sim = OutputSimulator(graph, exp)
+    res = residuals(graph, exp, simulator=sim, x0=x0)
+    nominal = {o: nrmse(exp.outputs[o][mask], res.simulated[o][mask]) for o in exp.outputs}
+    windows = _merge([w for o in exp.outputs
+                      for w in significant_windows(exp.t, res.residual[o], res.noise[o])])
+
+    say("regime variables")
+    rv_full = regime_variables(graph, exp, res.run)
+    n_train = train.t.size
+    rv = {k: (v[:n_train], d) for k, (v, d) in rv_full.items()}
+
+    say("graph location", "training part")
+    try:
+        scores = locate_on_graph(graph, train, progress=progress)
+    except (np.linalg.LinAlgError, FloatingPointError) as exc:   # numerics, not the user's input
+        raise DiagnosisError(f"graph location of {graph.name!r} failed on {rec.source}: "
+                             f"{type(exc).__name__}: {exc}") from exc
+    places = [s for s in scores[:int(top)] if s.explained >= MIN_PLACE_SHARE]
+
+    cands = [c for s in places for c in candidates(graph, s.place, regime_variables=rv, experiment=train)]
+    fit_part, fit_x0 = _fit_window(train, res.run, x0)
+    fits = []
+    for i, cand in enumerate(cands, 1):
+        say("fitting", f"{cand} ({i}/{len(cands)})")
+        fits.append(fit_candidate(graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0))
+    if uncertain:
+        say("fitting", f"nominal parameters {', '.join(uncertain)} alone")
+        fits.append(fit_candidate(graph, None, fit_part, held, uncertain=uncertain, x0=fit_x0))
+    say("choosing")
+    chosen = choose(nominal, fits, noise=noise_floor(held, res.noise)) if fits else None
+
+    say("improved model")
+    if chosen is None:
+        improved_graph, improved, y_imp = graph, dict(nominal), res.run.outputs
+    else:
+        cand_names = {p.name for p in chosen.candidate.params} if chosen.candidate else set()
+        base = (chosen.candidate.build(graph, {k: v for k, v in chosen.values.items() if k in cand_names})
+                if chosen.candidate is not None else graph)
+        improved_graph = _with_values(base, {k: v for k, v in chosen.values.items() if k not in cand_names})
+        improved, y_imp = _holdout_nrmse(OutputSimulator(improved_graph, exp), None, x0, exp, mask)
+
+    from .diagnose_text import assemble
+    return assemble(graph=graph, rec=rec, exp=exp, held=held, res=res, nominal=nominal,
+                    improved=improved, y_imp=y_imp, windows=windows, rv=rv, scores=scores,
+                    fits=fits, chosen=chosen, improved_graph=improved_graph,
+                    locate_regime=locate_regime, timings=say.done)

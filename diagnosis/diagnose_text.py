@@ -1,0 +1,105 @@
+"""Assembling a :class:`~diagnosis.report.DiagnosisReport` from the pipeline's results:
+location, missing physics, before/after numbers, plain-language explanation."""
+from __future__ import annotations
+
+import numpy as np
+
+from .report import DiagnosisReport, PlotData
+
+__all__ = ["assemble"]
+
+
+def _pct(nominal, improved):
+    return f"{100 * (1 - improved / nominal):.0f} %" if nominal > 0 else "n/a"
+
+
+def _regime(chosen, scores, res, n_train, rv, locate_regime, units):
+    """The regime of the chosen place's correction (a junction's estimated extra
+    effort/flow), else of the residual of the worst output; training part."""
+    place = chosen.candidate.place if chosen is not None and chosen.candidate is not None else None
+    score = next((s for s in scores if place is not None and s.place == place), None)
+    if score is not None and place.kind == "junction":
+        signal, unit = np.asarray(score.estimate, dtype=float)[:n_train], score.unit
+        label = f"located extra {'effort' if unit else 'correction'} at {place.name} ({unit})"
+    else:
+        worst = max(res.nrmse, key=res.nrmse.get)
+        signal, unit = res.residual[worst][:n_train], units.get(worst, "")
+        label = f"residual of {worst}"
+    if signal.size != n_train or not rv:
+        return None, None, None, ""
+    finding = locate_regime(signal, rv, unit=unit)
+    values = rv[finding.variable][0] if finding.variable else None
+    return finding, values, signal, label
+
+
+def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, rv, scores, fits,
+             chosen, improved_graph, locate_regime, timings) -> DiagnosisReport:
+    """Build the report (see :func:`diagnosis.diagnose.diagnose` for the arguments' meaning)."""
+    n_train = exp.t.size - held.t.size
+    units = dict(exp.units)
+    finding, regime_values, regime_signal, regime_label = (None, None, None, "")
+    if chosen is not None and chosen.candidate is not None:
+        finding, regime_values, regime_signal, regime_label = _regime(chosen, scores, res, n_train, rv,
+                                                                      locate_regime, units)
+        place = chosen.candidate.place
+        names = {p.name for p in chosen.candidate.params}
+        params = {k: float(v) for k, v in chosen.values.items() if k in names}
+        attached = place.name if place.kind == "junction" else str(place)
+        physics = [{"kind": chosen.candidate.kind, "attached_to": str(place),
+                    "parameters": params, "explanation": chosen.candidate.explain(params)}]
+        location = {"junction": attached, "bond": place.bond or "",
+                    "windows": windows, "regime": finding.description if finding else ""}
+    else:
+        refit = {k: float(v) for k, v in chosen.values.items()} if chosen is not None else {}
+        why = ("no candidate explains a significant share of the mismatch beyond the measurement noise"
+               if fits else "no place on the graph explains a significant share of the residual")
+        if refit:
+            why = "no missing physics; the uncertain nominal parameters were refitted"
+        physics = [{"kind": "none", "attached_to": "", "parameters": refit, "explanation": why}]
+        location = {"junction": "", "bond": "", "windows": windows, "regime": ""}
+    fit = {"holdout": [float(held.t[0]), float(held.t[-1])], "nominal": nominal, "improved": improved}
+    text = _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen, physics,
+                 finding)
+    plot = PlotData(exp.t, dict(exp.outputs), dict(res.run.outputs), dict(y_imp), units,
+                    float(held.t[0]), finding.variable if finding else None, regime_values,
+                    regime_signal, regime_label)
+    return DiagnosisReport(location, physics, fit, text, improved_graph, None, scores, fits, chosen,
+                           rec.notes(), timings(), plot)
+
+
+def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen, physics, finding):
+    u = exp.units
+    lines = [f"Recording {rec.source}: {exp.t.size} samples over {exp.span[0]:.4g}-{exp.span[1]:.4g} s; "
+             f"held out {held.span[0]:.4g}-{held.span[1]:.4g} s."]
+    lines += [f"Note: {n}." for n in rec.notes()]
+    for o in exp.outputs:
+        lines.append(f"Output {o}: nominal held-out NRMSE {nominal[o]:.3g} (noise about "
+                     f"{res.noise[o]:.3g} {u.get(o, '')}).")
+    if windows:
+        shown = ", ".join(f"{a:.3g}-{b:.3g} s" for a, b in windows[:6])
+        more = f" and {len(windows) - 6} more" if len(windows) > 6 else ""
+        lines.append(f"The residual exceeds the noise in {len(windows)} window(s): {shown}{more}.")
+    else:
+        lines.append("The residual stays within the measurement noise everywhere.")
+    if scores:
+        best = ", ".join(f"{s.place} {100 * s.explained:.0f} %" for s in scores[:3])
+        lines.append(f"Share of the residual a correction explains, by place: {best}.")
+    m = physics[0]
+    if m["kind"] == "none":
+        lines.append(f"Missing physics: none - {m['explanation']} "
+                     f"({len(fits)} candidate fit(s) tried).")
+    else:
+        lines.append(f"Missing physics: {m['kind']} at {m['attached_to']}. {m['explanation']}")
+        if finding is not None and finding.variable is not None:
+            lines.append(f"Operating regime: {finding.description} "
+                         f"(explains {100 * finding.explained:.0f} % of it).")
+        others = sorted((f for f in fits if f is not chosen and f.success and f.holdout_nrmse),
+                        key=lambda f: sum(f.holdout_nrmse.values()))[:3]
+        if others:
+            lines.append("Runners-up (held-out NRMSE): " + "; ".join(
+                f"{f.candidate or 'nominal refit'} "
+                + ", ".join(f"{o} {v:.3g}" for o, v in f.holdout_nrmse.items()) for f in others) + ".")
+    for o in exp.outputs:
+        lines.append(f"Held-out NRMSE of {o}: nominal {nominal[o]:.3g} -> improved {improved[o]:.3g} "
+                     f"({_pct(nominal[o], improved[o])} lower).")
+    return "\n".join(lines)

@@ -1,0 +1,166 @@
+"""The result of a diagnosis: JSON in the issue's schema, plain-language text, plots, improved graph.
+
+Schema of :meth:`DiagnosisReport.to_json` (issue 6, section 2e)::
+
+    {"location": {"junction": str, "bond": str, "windows": [[t0, t1], ...], "regime": str},
+     "missing_physics": [{"kind": str, "attached_to": str, "parameters": {name: value},
+                          "explanation": str}],
+     "fit": {"holdout": [t0, t1], "nominal": {output: nrmse}, "improved": {output: nrmse}},
+     "improved_model": path}
+
+``missing_physics`` is ``[{"kind": "none", ...}]`` when nothing is missing;
+``junction`` names the place the physics is attached to (a junction's
+element name, or ``"input NAME"`` / ``"output NAME"`` for actuator and sensor
+effects; ``""`` for none); ``bond`` is ``""`` when there is none;
+``improved_model`` is ``null`` until :meth:`DiagnosisReport.save`.
+Times in s, NRMSE dimensionless.
+"""
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["DiagnosisReport", "PlotData"]
+
+
+@dataclass
+class PlotData:
+    """Arrays behind the report's plots (model units, times in s).
+
+    Attributes
+    ----------
+    t : ndarray, shape (n,)
+    measured, nominal, improved : dict str -> ndarray, shape (n,)
+        Per output; ``improved`` is the nominal simulation when nothing was added.
+    units : dict str -> str
+    holdout_start : float
+        First held-out time, s.
+    regime_name : str or None
+    regime_values : ndarray or None, shape (n_train,)
+        The regime variable over the training part.
+    regime_signal : ndarray or None, shape (n_train,)
+        What was placed against it (the located correction or the residual).
+    regime_label : str
+    """
+
+    t: np.ndarray
+    measured: dict
+    nominal: dict
+    improved: dict
+    units: dict
+    holdout_start: float
+    regime_name: str | None = None
+    regime_values: np.ndarray | None = None
+    regime_signal: np.ndarray | None = None
+    regime_label: str = ""
+
+
+def _finite(x):
+    """JSON-safe float (NaN / inf become None)."""
+    x = float(x)
+    return x if np.isfinite(x) else None
+
+
+@dataclass
+class DiagnosisReport:
+    """What :func:`diagnosis.diagnose.diagnose` found.
+
+    Attributes
+    ----------
+    location : dict
+        ``junction``, ``bond``, ``windows`` (list of [t0, t1], s), ``regime``.
+    missing_physics : list of dict
+        ``kind``, ``attached_to``, ``parameters`` (name -> SI value), ``explanation``.
+    fit : dict
+        ``holdout`` [t0, t1] (s), ``nominal`` and ``improved`` held-out NRMSE per output.
+    text : str
+        The plain-language explanation.
+    improved_graph : BondGraph
+        The nominal graph with the winner added (and uncertain parameters refitted);
+        the nominal graph itself when nothing was missing.
+    improved_model : str or None
+        Path of the improved graph's JSON once saved.
+    scores : list of PlaceScore
+        Graph location, best first.
+    fits : list of CandidateFit
+        Every candidate fitted.
+    chosen : CandidateFit or None
+    notes : list of str
+        Recording notes (gaps, constant columns), warnings.
+    timings : dict str -> float
+        Seconds per step.
+    plot_data : PlotData
+    """
+
+    location: dict
+    missing_physics: list
+    fit: dict
+    text: str
+    improved_graph: object
+    improved_model: str | None = None
+    scores: list = field(default_factory=list)
+    fits: list = field(default_factory=list)
+    chosen: object = None
+    notes: list = field(default_factory=list)
+    timings: dict = field(default_factory=dict)
+    plot_data: PlotData | None = None
+
+    @property
+    def kind(self) -> str:
+        """The kind of the (first) missing physics, ``"none"`` when nothing is missing."""
+        return self.missing_physics[0]["kind"] if self.missing_physics else "none"
+
+    def to_json(self) -> dict:
+        """The report in the issue's schema (see the module docstring); JSON-serialisable."""
+        loc = self.location
+        return {
+            "location": {"junction": str(loc.get("junction", "")), "bond": str(loc.get("bond") or ""),
+                         "windows": [[_finite(a), _finite(b)] for a, b in loc.get("windows", [])],
+                         "regime": str(loc.get("regime", ""))},
+            "missing_physics": [{"kind": m["kind"], "attached_to": m["attached_to"],
+                                 "parameters": {k: _finite(v) for k, v in m["parameters"].items()},
+                                 "explanation": m["explanation"]} for m in self.missing_physics],
+            "fit": {"holdout": [_finite(v) for v in self.fit["holdout"]],
+                    "nominal": {k: _finite(v) for k, v in self.fit["nominal"].items()},
+                    "improved": {k: _finite(v) for k, v in self.fit["improved"].items()}},
+            "improved_model": self.improved_model,
+        }
+
+    def improvement(self) -> dict:
+        """Relative reduction of held-out NRMSE per output, ``1 - improved / nominal``."""
+        nom, imp = self.fit["nominal"], self.fit["improved"]
+        return {o: (1.0 - imp[o] / nom[o]) if nom[o] > 0 else 0.0 for o in nom}
+
+    def save(self, directory, *, plots: bool = True) -> dict:
+        """Write the report into `directory` (created if needed).
+
+        Files: ``diagnosis.json`` (the schema), ``diagnosis.txt`` (the text),
+        ``improved_model.json`` (the improved graph, :meth:`BondGraph.save`),
+        and with `plots` ``residual_time.png``, ``residual_regime.png``,
+        ``holdout_fit.png``.  Sets :attr:`improved_model`.
+
+        Returns
+        -------
+        dict str -> str
+            Paths by role (``json``, ``text``, ``model``, and the plot names).
+        """
+        os.makedirs(directory, exist_ok=True)
+        paths = {"model": os.path.join(directory, "improved_model.json")}
+        self.improved_graph.save(paths["model"])
+        self.improved_model = paths["model"]
+        paths["json"] = os.path.join(directory, "diagnosis.json")
+        with open(paths["json"], "w") as fh:
+            json.dump(self.to_json(), fh, indent=2)
+        paths["text"] = os.path.join(directory, "diagnosis.txt")
+        with open(paths["text"], "w") as fh:
+            fh.write(self.text + "\n")
+        if plots and self.plot_data is not None:
+            from .report_plots import save_plots
+            paths.update(save_plots(self, directory))
+        return paths
+
+    def __str__(self) -> str:
+        return self.text

@@ -1,0 +1,197 @@
+"""diagnosis.diagnose end to end on recordings made here by a hand-written truth model
+(independent of the catalogue): a mass-spring-damper with an extra Coulomb force, and
+the nominal model alone (null case); plus bad input, each refused by name."""
+import json
+
+import numpy as np
+import pytest
+
+from bondgraph.errors import BondcosimError, GraphError, UnknownNameError
+from bondgraph.io_json import load
+from diagnosis.diagnose import diagnose
+from diagnosis.errors import RecordingError, UnitError
+
+FS = 50.0          # Hz
+SPAN = 20.0        # s
+SIGMA = 5e-3       # m, position-sensor noise
+QUANTUM = 1e-3     # m, position-sensor resolution
+FC = 0.3           # N, the concealed Coulomb level
+V_SMOOTH = 0.1     # m/s, width of the smoothed sign of the truth's friction
+
+
+def _truth_positions(t, force, *, fc, m=1.0, b=0.4, k=4.0, substeps=20):
+    """m v' = F - b v - k x - fc tanh(v / V_SMOOTH), x' = v; F held over each sample.
+
+    Classic RK4 written out here (not bondgraph's), 20 sub-steps per sample; the
+    nominal library model is this with fc = 0 (m = 1 kg, b = 0.4 N s/m, k = 4 N/m).
+    """
+    def rate(state, f):
+        x, v = state
+        return np.array([v, (f - b * v - k * x - fc * np.tanh(v / V_SMOOTH)) / m])
+
+    state, out = np.zeros(2), np.zeros(t.size)
+    for i in range(t.size - 1):
+        h = (t[i + 1] - t[i]) / substeps
+        for _ in range(substeps):
+            k1 = rate(state, force[i])
+            k2 = rate(state + h / 2 * k1, force[i])
+            k3 = rate(state + h / 2 * k2, force[i])
+            k4 = rate(state + h * k3, force[i])
+            state = state + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        out[i + 1] = state[0]
+    return out
+
+
+def _recording(path, fc, seed):
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, SPAN, 1.0 / FS)
+    force = 2.0 * np.sin(2 * np.pi * 0.3 * t) + np.sin(2 * np.pi * 0.7 * t + 1.0)
+    x = _truth_positions(t, force, fc=fc) + rng.normal(0.0, SIGMA, t.size)
+    x_mm = np.round(x / QUANTUM) * QUANTUM * 1e3            # recorded in mm, 1 mm steps
+    lines = ["time_s,force_N,position_mm"] + [f"{a:.6f},{f:.9g},{p:.6g}" for a, f, p in zip(t, force, x_mm)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+BINDINGS = dict(inputs=["F=force_N:N"], outputs=["x=position_mm:mm"])
+
+
+@pytest.fixture(scope="module")
+def coulomb(tmp_path_factory):
+    path = _recording(tmp_path_factory.mktemp("coulomb") / "msd_coulomb.csv", FC, seed=11)
+    return diagnose("mass-spring-damper", str(path), **BINDINGS)
+
+
+@pytest.fixture(scope="module")
+def null(tmp_path_factory):
+    path = _recording(tmp_path_factory.mktemp("null") / "msd_nominal.csv", 0.0, seed=12)
+    return diagnose("mass-spring-damper", str(path), **BINDINGS)
+
+
+def test_coulomb_named_at_the_mass_junction(coulomb):
+    data = coulomb.to_json()
+    physics = data["missing_physics"]
+    assert [m["kind"] for m in physics] == ["coulomb_friction"]
+    assert physics[0]["attached_to"] == "junction v_mass"
+    assert data["location"]["junction"] == "v_mass"
+    (level,) = physics[0]["parameters"].values()
+    assert level == pytest.approx(FC, rel=0.1)                      # the concealed 0.3 N
+    assert f"{level:.3g} N whenever it moves" in physics[0]["explanation"]
+    assert data["location"]["regime"].startswith("sign of v_m")   # friction follows the velocity sign
+
+
+def test_coulomb_improves_held_out_nrmse(coulomb):
+    fit = coulomb.to_json()["fit"]
+    # the last 30 % of the span: from the first sample at or after 0.7 * 19.98 s = 13.986 s
+    assert fit["holdout"] == [pytest.approx(14.0), pytest.approx(SPAN - 1 / FS)]
+    assert fit["nominal"]["x"] > 0.1                  # the nominal model misses visibly
+    assert coulomb.improvement()["x"] >= 0.5          # the issue's bar: >= 50 % lower
+    # the improved model reaches about the noise floor: sigma_quantised / std(x)
+    assert fit["improved"]["x"] < 3 * np.hypot(SIGMA, QUANTUM / np.sqrt(12)) / 0.7
+    assert coulomb.location["windows"]                # significant somewhere
+    assert "Held-out NRMSE of x: nominal" in coulomb.text
+
+
+def test_report_saves_schema_plots_and_an_improved_graph(coulomb, tmp_path):
+    paths = coulomb.save(tmp_path / "report")
+    data = json.loads(open(paths["json"]).read())
+    assert set(data) == {"location", "missing_physics", "fit", "improved_model"}
+    assert set(data["location"]) == {"junction", "bond", "windows", "regime"}
+    assert set(data["missing_physics"][0]) == {"kind", "attached_to", "parameters", "explanation"}
+    assert set(data["fit"]) == {"holdout", "nominal", "improved"}
+    assert data["improved_model"] == paths["model"]
+    for key in ("residual_time", "residual_regime", "holdout_fit"):
+        assert open(paths[key], "rb").read(8) == b"\x89PNG\r\n\x1a\n"
+    improved = load(paths["model"])
+    (name,) = coulomb.missing_physics[0]["parameters"]
+    assert improved.parameters()[name].value == pytest.approx(coulomb.missing_physics[0]["parameters"][name])
+    assert improved.equations().n_states == 2
+
+
+def test_fitted_nominal_values_are_written_into_the_graph():
+    from bondgraph import library
+    from diagnosis.diagnose import _with_values
+    graph = library.build("mass-spring-damper")
+    changed = _with_values(graph, {"b": 0.7, "k": 5.5})
+    assert {n: p.value for n, p in changed.parameters().items()} == {"m": 1.0, "b": 0.7, "k": 5.5}
+    assert graph.parameters()["b"].value == 0.4          # the nominal graph is not modified
+
+
+def test_long_training_parts_are_fitted_on_their_end(monkeypatch):
+    import diagnosis.diagnose as pipeline
+    from bondgraph import library
+    from diagnosis.recording import Experiment
+    from diagnosis.residuals import OutputSimulator
+    t = np.linspace(0.0, 4.0, 201)
+    exp = Experiment(t, {"F": np.ones_like(t)}, {"x": t.copy()}, {"F": "N", "x": "m"})
+    run = OutputSimulator(library.build("mass-spring-damper"), exp).run()
+    assert pipeline._fit_window(exp, run, None)[0] is exp            # short: all of it
+    monkeypatch.setattr(pipeline, "MAX_FIT_SAMPLES", 50)
+    part, x0 = pipeline._fit_window(exp, run, None)
+    assert part.t.size == 50 and part.t[0] == t[151]
+    assert x0 == {"p_m": run.states[151, 0], "q_k": run.states[151, 1]}
+    # started there, the nominal model continues the nominal run
+    again = OutputSimulator(library.build("mass-spring-damper"), part)(x0=x0)["x"]
+    np.testing.assert_allclose(again, run.outputs["x"][151:], atol=1e-12)
+
+
+def test_nominal_recording_answers_none(null):
+    data = null.to_json()
+    assert [m["kind"] for m in data["missing_physics"]] == ["none"]
+    assert data["location"]["junction"] == "" and data["location"]["windows"] == []
+    assert data["fit"]["improved"] == data["fit"]["nominal"]
+    assert "Missing physics: none" in null.text
+
+
+# -- bad input: each a clear error naming the thing ---------------------------------
+
+@pytest.fixture
+def small_csv(tmp_path):
+    def write(text):
+        path = tmp_path / "bad.csv"
+        path.write_text(text)
+        return str(path)
+    return write
+
+
+GOOD = "t,force,pos\n0,1,0\n0.1,1,0.01\n0.2,1,0.03\n0.3,1,0.06\n"
+
+
+def test_missing_column(small_csv):
+    with pytest.raises(UnknownNameError, match=r"no column 'position'.*columns are force, pos"):
+        diagnose("mass-spring-damper", small_csv(GOOD), inputs=["F=force"], outputs=["x=position"])
+
+
+def test_unknown_model_name(small_csv):
+    with pytest.raises(GraphError, match=r"no built-in model named 'mass-spring'"):
+        diagnose("mass-spring", small_csv(GOOD), inputs=["F=force"], outputs=["x=pos"])
+
+
+def test_nan_gap(small_csv):
+    text = "t,force,pos\n0,1,0\n0.1,1,\n0.2,1,0.03\n0.3,1,0.06\n"
+    with pytest.raises(RecordingError, match=r"column 'pos' .*NaN gaps at data rows 1"):
+        diagnose("mass-spring-damper", small_csv(text), inputs=["F=force"], outputs=["x=pos"])
+
+
+def test_non_increasing_time(small_csv):
+    text = "t,force,pos\n0,1,0\n0.2,1,0.01\n0.1,1,0.03\n0.3,1,0.06\n"
+    with pytest.raises(RecordingError, match=r"time column 't' does not increase at row\(s\) 2"):
+        diagnose("mass-spring-damper", small_csv(text), inputs=["F=force"], outputs=["x=pos"])
+
+
+def test_unknown_unit(small_csv):
+    with pytest.raises(UnitError, match=r"'pos'.*unknown symbol 'furlong'"):
+        diagnose("mass-spring-damper", small_csv(GOOD), inputs=["F=force"], outputs=["x=pos:furlong"])
+
+
+def test_constant_output_column(small_csv):
+    text = "t,force,pos\n0,1,0.2\n0.1,1,0.2\n0.2,1,0.2\n0.3,1,0.2\n"
+    with pytest.raises(RecordingError, match=r"column 'pos' bound to output 'x' is constant"):
+        diagnose("mass-spring-damper", small_csv(text), inputs=["F=force"], outputs=["x=pos"])
+
+
+def test_bad_arguments(small_csv):
+    with pytest.raises(BondcosimError, match="holdout must be a fraction"):
+        diagnose("mass-spring-damper", small_csv(GOOD), inputs=["F=force"], outputs=["x=pos"], holdout=0)
+    with pytest.raises(BondcosimError, match="top must be a positive"):
+        diagnose("mass-spring-damper", small_csv(GOOD), inputs=["F=force"], outputs=["x=pos"], top=0)

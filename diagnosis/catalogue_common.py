@@ -18,7 +18,7 @@ from bondgraph.params import DOMAINS
 from .errors import DiagnosisError
 
 __all__ = ["ParamSpec", "add_parameter", "fresh_name", "substitute", "junction_elements",
-           "junction_domain", "domain_units", "route_input", "expression_fields"]
+           "junction_domain", "junction_units", "domain_units", "route_input", "expression_fields"]
 
 
 @dataclass(frozen=True)
@@ -117,6 +117,20 @@ def domain_units(dom: str) -> tuple[str, str]:
     """(effort unit, flow unit) of a domain."""
     d = DOMAINS[dom]
     return d.effort, d.flow
+
+
+def junction_units(graph, junction: str) -> tuple[str, str]:
+    """(effort unit, flow unit) at a junction: its domain's, else those of outputs that read
+    one of its bonds' effort / flow (``e_<bond>``, ``f_<bond>``), else ("", "")."""
+    effort, flow = domain_units(junction_domain(graph, junction))
+    bonds = {b.name for b, _ in graph.bonds_of(junction)}
+    for out in graph.outputs.values():
+        text = str(out.expression).strip()
+        if not effort and text.startswith("e_") and text[2:] in bonds:
+            effort = out.unit
+        if not flow and text.startswith("f_") and text[2:] in bonds:
+            flow = out.unit
+    return effort, flow
 
 
 def _source_input(entry: dict) -> str | None:

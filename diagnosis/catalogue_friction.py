@@ -27,7 +27,7 @@ References
 """
 from __future__ import annotations
 
-from .catalogue_common import ParamSpec, domain_units, fresh_name, junction_domain
+from .catalogue_common import ParamSpec, fresh_name, junction_domain, junction_units
 from .catalogue_scales import pressure_variables
 
 __all__ = ["FRICTION_KINDS", "make_friction", "build_friction", "explain_friction"]
@@ -43,7 +43,7 @@ def make_friction(graph, place, scales, taken, values=None) -> list[dict]:
     """Candidate prototypes (kind, params, constants, regime) for a 1-junction
     (`values`: nominal values at the junction, :func:`~diagnosis.catalogue_scales.junction_scales`)."""
     j = place.name
-    e_unit, f_unit = domain_units(junction_domain(graph, j))
+    e_unit, f_unit = junction_units(graph, j)
     E, V = scales.effort, scales.flow
     b_unit = f"{e_unit} s/m" if f_unit == "m/s" else (f"{e_unit}/({f_unit})" if f_unit else "")
     name = lambda base: fresh_name(taken, f"{base}_{j}")  # noqa: E731 - short local namer
@@ -97,7 +97,7 @@ def build_friction(data: dict, graph, cand, values: dict) -> None:
         state = f"F_dahl_{j}"
         entry = {"kind": "Eq", "name": element, "ports": {"m": "in"}, "outputs": {"e_m": state},
                  "states": {state: f"{p[1]}*(f_m - Abs(f_m)*{state}/{p[0]})"}, "initial": {state: 0.0},
-                 "units": {state: domain_units(dom)[0]},
+                 "units": {state: junction_units(graph, j)[0]},
                  "description": f"Dahl hysteretic friction at {j}"}
         port = "m"
     else:
@@ -129,8 +129,11 @@ def explain_friction(cand, values: dict, show) -> str:
         return (f"the motion at {j} loses {show(p[0])} when sliding and up to {show(p[1])} more near "
                 f"standstill (fading above about {show(p[2])}): Stribeck friction at {j}")
     if cand.kind == "pressure_dependent_friction":
-        direction = "more" if values.get(p[1], 0.0) > 0 else "less"
-        return (f"the motion at {j} loses about {show(p[0])} whenever it moves, {direction} at higher "
-                f"{cand.regime} ({show(p[1])}): pressure-dependent Coulomb friction at the {j} 1-junction")
+        c1 = values.get(p[1], 0.0)
+        trend = (f"{'more' if c1 > 0 else 'less'} at higher {cand.regime} ({show(p[1])})" if c1
+                 else f"whatever {cand.regime}")
+        p_ref = next(value for name, value, *_ in cand.constants if name.startswith("p_ref"))
+        return (f"the motion at {j} loses about {show(p[0])} whenever it moves (at {cand.regime} = "
+                f"{p_ref:.4g} Pa), {trend}: pressure-dependent Coulomb friction at the {j} 1-junction")
     return (f"the motion at {j} meets a friction of up to {show(p[0])} that builds up elastically "
             f"({show(p[1])}) after each reversal: hysteretic (Dahl) friction at {j}")

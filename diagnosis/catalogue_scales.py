@@ -131,11 +131,11 @@ def _positive(value: float) -> float:
 def pressure_variables(graph) -> dict[str, str]:
     """Pressure-like variables of a graph: label -> expression.
 
-    States of equation elements in Pa (pneumatic chambers) and efforts of C
-    elements of the pneumatic and hydraulic domains; with two or more, also
-    their mean.
+    Inputs in Pa, kPa or bar (an imposed chamber pressure), states of equation
+    elements in those units (pneumatic chambers) and efforts of C elements of
+    the pneumatic and hydraulic domains; with two or more, also their mean.
     """
-    found = {}
+    found = {d.name: d.name for d in graph.inputs() if d.unit in ("Pa", "kPa", "bar")}
     for e in graph.elements.values():
         if e.kind == "Eq":
             for state in e.states:

@@ -27,7 +27,7 @@ import numpy as np
 
 from bondgraph.params import DOMAINS
 
-from .catalogue_common import ParamSpec, domain_units, fresh_name, junction_domain, junction_elements, substitute
+from .catalogue_common import ParamSpec, fresh_name, junction_domain, junction_elements, junction_units, substitute
 
 __all__ = ["STORAGE_KINDS", "make_storage", "build_storage", "explain_storage"]
 
@@ -41,7 +41,7 @@ def make_storage(graph, place, scales, taken, values=None) -> list[dict]:
     values = values or {}
     j = place.name
     dom = junction_domain(graph, j)
-    e_unit, f_unit = domain_units(dom)
+    e_unit, f_unit = junction_units(graph, j)
     E, F = scales.effort, scales.flow
     protos = []
     if graph.elements[j].kind == "0":

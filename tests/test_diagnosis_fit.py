@@ -219,10 +219,31 @@ def test_leak_recovered_in_a_pneumatic_tank(rng):
 
 def test_added_actuator_states_start_where_the_input_rested():
     from diagnosis.catalogue_signals import resting_input
-    pam = library.build("pam")
+    pam = library.build("pam-locked")
     assert resting_input(pam, "u1", np.array([2.5, 2.5])) == 0.0      # valves closed: P = P_out at rest
     msd = library.build("mass-spring-damper")
     assert resting_input(msd, "F", np.array([3.0])) == 0.0
     preloaded = library.build("mass-spring-damper")
     preloaded.elements["k"].initial = 0.25                             # k x0 = 1 N: rests under F = 1 N
     assert resting_input(preloaded, "F", np.array([3.0])) == 1.0
+
+
+def test_real_seal_friction_grows_with_pressure():
+    """Real O-ring recordings (tests/data/pneumatic_cylinder_friction, CC0, SOURCE.md): the ideal
+    model F = p A, the four pressures pooled; the 7 bar tail is held out (extrapolation)."""
+    from test_pneumatic_cylinder import _pooled
+    cylinder = library.build("pneumatic-cylinder")
+    exp, _ = _pooled()
+    train, hold = exp.split(0.3)
+    pdf = _candidate(cylinder, Place("junction", "piston"), "pressure_dependent_friction", train)
+    assert pdf.regime == "p"                                      # the imposed chamber pressure (input, Pa)
+    fits = [fit_candidate(cylinder, pdf, train, hold),
+            fit_candidate(cylinder, _candidate(cylinder, Place("output", "F"), "sensor_offset", train), train, hold)]
+    c1_per_bar = fits[0].values["c1_piston"] * 1e5
+    # SOURCE.md anchor (sign(v) law with an extra offset): 0.65 N/bar; ours (tanh law, no offset)
+    # must find the same order: friction grows by 0.3-1.5 N per bar
+    assert 0.3 < c1_per_bar < 1.5
+    nominal = _nominal_holdout(cylinder, exp, hold)
+    assert fits[0].holdout_nrmse["F"] < 0.5 * nominal["F"]        # held-out error at least halved
+    assert choose(nominal, fits, noise=noise_floor(hold)) is fits[0]
+    assert "more at higher p" in pdf.explain(fits[0].values)

@@ -130,7 +130,7 @@ def _exo_drive(t, rng):
 
 
 def _pam_cocontraction(t, rng):
-    a = pr.held_levels(t, rng, low=-2.5, high=2.5, hold=(0.1, 0.6))
+    a = pr.held_levels(t, rng, low=-4.5, high=4.5, hold=(0.2, 0.8))
     return {"u1": 5.0 + a, "u2": 5.0 - a}
 
 
@@ -169,8 +169,8 @@ _EXO = dict(model="exoskeleton", inputs=(_TAU_M, _W_H), outputs=(_TAU_S, _W_M), 
                        "velocity phases in +-0.4 rad/s held 1-2.5 s; DAC 1 mN m, 0.1 deg/s",
             duration=10.0, rate=200.0)
 _PAM = dict(model="pam", inputs=(_U1, _U2), outputs=(_PSI, _P1, _P2), excite=_pam_cocontraction,
-            excitation="antagonistic valve voltages u1 = 5 + a, u2 = 5 - a, a random in +-2.5 V "
-                       "held 0.1-0.6 s, DAC 0.01 V",
+            excitation="antagonistic valve voltages u1 = 5 + a, u2 = 5 - a, a random in +-4.5 V "
+                       "held 0.2-0.8 s, DAC 0.01 V",
             duration=20.0, rate=200.0)
 
 _COULOMB_LAW = "F_c*tanh(f/v_s)"
@@ -254,9 +254,9 @@ CASES: tuple[Case, ...] = (
          description="null case: the nominal exoskeleton drive with sensor noise only", **_EXO),
     Case("pam_valve_lag", effect=PamValveLag(
             "valve_lag", Place("input", "u1"),
-            (_p("tau", 0.08, "s", "time constant of valve 1's driver: tau du_v/dt = u1 - u_v"),)),
-         affected="psi", seed=601, min_ratio=5.0,
-         description="valve 1 follows its command with an 80 ms first-order lag", **_PAM),
+            (_p("tau", 0.12, "s", "time constant of valve 1's driver: tau du_v/dt = u1 - u_v"),)),
+         affected="P1", seed=601, min_ratio=5.0,
+         description="valve 1 follows its command with a 120 ms first-order lag", **_PAM),
     Case("pam_pressure_friction", effect=ResistiveEffect(
             "pressure_dependent_friction", Place("junction", "seesaw"),
             (_p("T_0", 0.01, "N m", "pressure-independent part of the extra Coulomb torque"),

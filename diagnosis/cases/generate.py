@@ -21,7 +21,7 @@ from bondgraph import simulate
 from .definitions import CASES, Case
 
 __all__ = ["sample_times", "commands", "simulate_case", "GeneratedRecording", "record", "write_case",
-           "manifest_entry", "write_all", "MANIFEST"]
+           "manifest_entry", "write_all", "effect_ratio", "MANIFEST", "HOLDOUT"]
 
 #: File name of the manifest next to the CSV files.
 MANIFEST = "cases.json"
@@ -152,11 +152,20 @@ def write_case(case: Case, outdir) -> tuple[Path, GeneratedRecording]:
     return path, rec
 
 
-def effect_ratio(case: Case, rec: GeneratedRecording) -> float:
-    """RMS(truth - nominal) of the affected output over its effective noise sigma (both noise-free)."""
+#: Fraction of the span, at the end, over which the held-out effect size is documented
+#: (the diagnosis' default hold-out).
+HOLDOUT = 0.3
+
+
+def effect_ratio(case: Case, rec: GeneratedRecording, *, holdout: float | None = None) -> float:
+    """RMS(truth - nominal) of the affected output over its effective noise sigma (both noise-free),
+    over the whole record or over its last `holdout` fraction of the time span."""
     s = case.output(case.affected)
     nominal = simulate_case(case, rec.t, rec.commands, truth=False)[case.affected]
-    return float(np.sqrt(np.mean((s.scale * (rec.clean[case.affected] - nominal)) ** 2)) / s.effective_sigma)
+    diff = s.scale * (rec.clean[case.affected] - nominal)
+    if holdout is not None:
+        diff = diff[rec.t >= rec.t[-1] - holdout * (rec.t[-1] - rec.t[0])]
+    return float(np.sqrt(np.mean(diff ** 2)) / s.effective_sigma)
 
 
 def manifest_entry(case: Case, rec: GeneratedRecording) -> dict:
@@ -185,6 +194,7 @@ def manifest_entry(case: Case, rec: GeneratedRecording) -> dict:
     }
     if effect is not None:
         entry["effect_to_noise"] = round(effect_ratio(case, rec), 2)
+        entry["holdout_effect_to_noise"] = round(effect_ratio(case, rec, holdout=HOLDOUT), 2)
     return entry
 
 

@@ -2,11 +2,16 @@
 location, missing physics, before/after numbers, plain-language explanation."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from .report import DiagnosisReport, PlotData
 
 __all__ = ["assemble"]
+
+#: a regime variable must explain this share of the located correction to be named
+_MIN_REGIME_SHARE = 0.1
 
 
 def _pct(nominal, improved):
@@ -28,6 +33,10 @@ def _regime(chosen, scores, res, n_train, rv, locate_regime, units):
     if signal.size != n_train or not rv:
         return None, None, None, ""
     finding = locate_regime(signal, rv, unit=unit)
+    if finding.explained < _MIN_REGIME_SHARE:
+        finding = replace(finding, description=(
+            f"everywhere: no operating regime explains it (best {finding.feature} of "
+            f"{finding.variable}, {100 * finding.explained:.0f} %)"))
     values = rv[finding.variable][0] if finding.variable else None
     return finding, values, signal, label
 
@@ -91,8 +100,9 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
     else:
         lines.append(f"Missing physics: {m['kind']} at {m['attached_to']}. {m['explanation']}")
         if finding is not None and finding.variable is not None:
-            lines.append(f"Operating regime: {finding.description} "
-                         f"(explains {100 * finding.explained:.0f} % of it).")
+            share = ("" if finding.explained < _MIN_REGIME_SHARE
+                     else f" (explains {100 * finding.explained:.0f} % of it)")
+            lines.append(f"Operating regime: {finding.description}{share}.")
         others = sorted((f for f in fits if f is not chosen and f.success and f.holdout_nrmse),
                         key=lambda f: sum(f.holdout_nrmse.values()))[:3]
         if others:

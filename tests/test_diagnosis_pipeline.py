@@ -42,11 +42,11 @@ def _truth_positions(t, force, *, fc, m=1.0, b=0.4, k=4.0, substeps=20):
     return out
 
 
-def _recording(path, fc, seed):
+def _recording(path, fc, seed, offset=0.0):
     rng = np.random.default_rng(seed)
     t = np.arange(0.0, SPAN, 1.0 / FS)
     force = 2.0 * np.sin(2 * np.pi * 0.3 * t) + np.sin(2 * np.pi * 0.7 * t + 1.0)
-    x = _truth_positions(t, force, fc=fc) + rng.normal(0.0, SIGMA, t.size)
+    x = _truth_positions(t, force, fc=fc) + offset + rng.normal(0.0, SIGMA, t.size)
     x_mm = np.round(x / QUANTUM) * QUANTUM * 1e3            # recorded in mm, 1 mm steps
     lines = ["time_s,force_N,position_mm"] + [f"{a:.6f},{f:.9g},{p:.6g}" for a, f, p in zip(t, force, x_mm)]
     path.write_text("\n".join(lines) + "\n")
@@ -106,6 +106,18 @@ def test_report_saves_schema_plots_and_an_improved_graph(coulomb, tmp_path):
     (name,) = coulomb.missing_physics[0]["parameters"]
     assert improved.parameters()[name].value == pytest.approx(coulomb.missing_physics[0]["parameters"][name])
     assert improved.equations().n_states == 2
+
+
+def test_sensor_offset_is_named_everywhere(tmp_path):
+    """A position sensor reading 0.2 m off: a sensor effect, the same in every regime."""
+    report = diagnose("mass-spring-damper", str(_recording(tmp_path / "offset.csv", 0.0, 13, 0.2)),
+                      **BINDINGS)
+    physics = report.to_json()["missing_physics"][0]
+    assert (physics["kind"], physics["attached_to"]) == ("sensor_offset", "output x")
+    assert list(physics["parameters"].values())[0] == pytest.approx(0.2, abs=0.01)
+    assert report.location["junction"] == "output x"
+    assert report.location["regime"].startswith("everywhere: no operating regime explains it")
+    assert report.improvement()["x"] >= 0.5
 
 
 def test_fitted_nominal_values_are_written_into_the_graph():

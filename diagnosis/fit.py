@@ -159,6 +159,17 @@ class _Objective:
         return np.where(np.isfinite(J), J, 0.0)
 
 
+def _started_mid_run(candidate, train, x0):
+    """With a given start state (a window cut from a longer run), an added actuator state starts
+    at the command recorded then (the actuator had followed it), not where the input rested before
+    the experiment; the Pade states' derivatives start at 0."""
+    if candidate is None or x0 is None or not candidate.initial or candidate.place.name not in train.inputs:
+        return candidate
+    from dataclasses import replace
+    u0 = float(np.asarray(train.inputs[candidate.place.name], dtype=float)[0])
+    return replace(candidate, initial={k: u0 for k in candidate.initial})
+
+
 def _best_start(objective, candidate, theta0):
     """The guess or the candidate's alternative start with the smallest training cost (one batch)."""
     if candidate is None or not candidate.starts:
@@ -190,7 +201,9 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     uncertain : iterable of str
         Nominal parameters fitted alongside (within a factor 3 of their value).
     x0 : dict str -> float or array_like, optional
-        Initial state of the nominal model at ``train.t[0]`` (added states start at their own initial values).
+        Initial state of the nominal model at ``train.t[0]``.  Added states start at their own
+        initial values; given `x0` (a window cut from a longer run), an added actuator state starts
+        at the first recorded command instead.
     max_nfev : int
         Budget of residual evaluations of :func:`scipy.optimize.least_squares`
         (each Jacobian is one more batch of ``n_params`` runs).
@@ -213,6 +226,7 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     label = str(candidate) if candidate is not None else f"refit of {graph.name}"
     failed = dict(values={s.name: s.guess for s in specs}, train_nrmse={o: np.nan for o in outputs},
                   holdout_nrmse={o: np.nan for o in outputs}, n_params=len(specs), success=False)
+    candidate = _started_mid_run(candidate, train, x0)
     try:
         model = candidate.build(graph) if candidate is not None else graph
         x0 = _state_dict(graph, x0)

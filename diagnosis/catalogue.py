@@ -202,6 +202,18 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None) -
     -------
     list of Candidate
         In the order of :data:`KINDS`.
+
+    Examples
+    --------
+    >>> from bondgraph import library
+    >>> msd = library.build("mass-spring-damper")
+    >>> [c.kind for c in candidates(msd, Place("output", "x"))]
+    ['sensor_offset', 'sensor_gain']
+    >>> offset = candidates(msd, Place("output", "x"))[0]
+    >>> offset.build(msd, {"offset_x": 0.01}).equations().h[0]
+    offset_x + q_k
+    >>> offset.explain({"offset_x": 0.01})
+    'the x sensor reads 0.01 m off: a sensor offset on output x'
     """
     if not isinstance(place, Place):
         raise DiagnosisError(f"place must be a diagnosis.place.Place, got {place!r}")

@@ -329,6 +329,17 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
     Returns
     -------
     CandidateFit or None
+
+    Examples
+    --------
+    A fit that removes 96 % of the nominal held-out excess error wins; one that
+    removes 10 % does not:
+
+    >>> from types import SimpleNamespace
+    >>> good = CandidateFit(SimpleNamespace(kind="sensor_offset"), {}, {}, {"x": 0.1}, 1, True, "")
+    >>> weak = CandidateFit(SimpleNamespace(kind="sensor_offset"), {}, {}, {"x": 0.47}, 1, True, "")
+    >>> choose({"x": 0.5}, [good]) is good, choose({"x": 0.5}, [weak]) is None
+    (True, True)
     """
     from .catalogue import KINDS
     floor = dict(noise or {})

@@ -30,11 +30,13 @@ removes.
   on d, as in an augmented-state smoother, in its least-squares form).
 * **Input** (every recorded input): an actuator correction, the input the
   model should have received minus the recorded one,
-  :math:`\\delta u = a + b\\,u + c\\,(L_\\tau u - u)` (offset, gain, and a
-  first-order lag :math:`L_\\tau` with :math:`\\tau` from a grid of multiples
-  of the sample interval).  A free :math:`\\delta u(t)` would be the same as
-  an extra effort at the source's junction; the structured one says "the
-  actuator is wrong", not "something at this junction".
+  :math:`\\delta u = g(u) + c\\,(L u - u)`: :math:`g` piecewise linear in
+  :math:`u` (offset, gain and hinges at the 10/30/50/70/90 % quantiles of
+  :math:`u`: saturation, dead zone) and :math:`L` a first-order lag or a
+  pure delay of 3, 10, 30 or 100 sample intervals (the best of the eight).
+  A free :math:`\\delta u(t)` would be the same as an extra effort at the
+  source's junction; the structured one says "the actuator is wrong", not
+  "something at this junction".
 * **Output** (every measured output): a sensor correction
   :math:`\\delta y = a + b\\,\\hat y` (offset, gain) of that output alone.  A
   free correction would explain any residual by construction.
@@ -48,7 +50,8 @@ simulation), the share removed beyond what fitting noise alone would remove,
     \\text{explained} = \\max\\left(0, \\frac{E_0 - E_1 - \\nu}{E_0}\\right),
 
 where :math:`\\nu` is the correction's effective number of parameters (trace
-of the hat matrix; 2 for a sensor, 4 for an actuator): each fitted degree of
+of the hat matrix; 2 for a sensor, the rank of the static terms + 2 for an
+actuator): each fitted degree of
 freedom removes about :math:`\\sigma^2` of pure noise (an adjusted
 :math:`R^2`).  An un-perturbed recording so scores about 0 everywhere.
 Places are ranked by the score with a small preference (0.01) for the
@@ -75,10 +78,11 @@ __all__ = ["PlaceScore", "candidate_places", "locate_on_graph"]
 _SIMPLICITY = {"output": 0.0, "input": 0.5, "junction": 1.0}   # x 0.01 preference
 _TIE_PREFERENCE = 0.01
 _RESPONSE_BUDGET = 2e7     # stored response entries (rows x outputs x sequences)
-_MAX_ROWS = 20000          # rows kept for the least squares (longer runs are strided)
+_MAX_ROWS = 10000          # rows kept for the least squares (longer runs are strided)
 _MAX_KNOTS = 500
 _MIN_KNOTS = 8
-_LAGS = (3.0, 10.0, 30.0, 100.0)   # actuator lag grid, multiples of the median sample interval
+_LAGS = (3.0, 10.0, 30.0, 100.0)   # actuator lag / delay grid, multiples of the median sample interval
+_HINGES = (0.1, 0.3, 0.5, 0.7, 0.9)  # quantiles of the input where its static correction may bend
 
 
 @dataclass
@@ -277,7 +281,7 @@ def _score_output(ctx, place) -> PlaceScore:
     estimate = basis @ coef
     corrected = dict(ctx.run.outputs)
     corrected[o] = y_hat + estimate
-    unit = ctx.sim.equations.units.get(o, "") if hasattr(ctx.sim.equations, "units") else ""
+    unit = ctx.sim.equations.units.get(o, "")
     return PlaceScore(place, ctx.share(ctx.energy(corrected), 2.0), estimate, str(unit), None, 2.0)
 
 
@@ -291,50 +295,77 @@ def _lagged(u, t, tau):
     return y
 
 
+def _delayed(u, t, tau):
+    """The held input delayed by tau: u(t - tau), its first value before the start."""
+    k = np.searchsorted(t, t - tau, side="right") - 1
+    return u[np.clip(k, 0, None)]
+
+
 def _score_input(ctx, lin, place, channel) -> PlaceScore:
-    """Actuator correction a + b u + c (L_tau u - u), tau from a grid; best by simulation."""
+    """Actuator correction g(u) + c (L u - u): g piecewise linear in u (offset, gain, hinges
+    at quantiles of u: saturation, dead zone), L a first-order lag or a delay from a grid;
+    the best dynamic term by linearised least squares, then scored by simulation."""
     u = ctx.run.inputs[:, ctx.sim.model.input_index[place.name]].copy()
     t = ctx.t
     dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
-    lags = [_lagged(u, t, k * dt) - u for k in _LAGS]
-    sequences = np.stack([np.ones_like(u), u] + lags, axis=1)
+    static = [np.ones_like(u), u]
+    for c in np.unique(np.quantile(u, _HINGES)):
+        hinge = np.maximum(u - c, 0.0)
+        if np.ptp(hinge) > 1e-9 * max(np.ptp(u), 1e-300):
+            static.append(hinge)
+    dynamic = ([_lagged(u, t, k * dt) - u for k in _LAGS] + [_delayed(u, t, k * dt) - u for k in _LAGS])
+    sequences = np.stack(static + dynamic, axis=1)
     resp = lin.response(np.full(sequences.shape[1], channel), sequences, ctx.rows)   # (rows, ny, m)
     best = None
-    for j in range(len(lags)):
-        cols = [0, 1, 2 + j]
-        coef, sse = _weighted_lstsq(resp[:, :, cols], ctx.r_rows, ctx.w)
+    for j in range(len(dynamic)):
+        cols = list(range(len(static))) + [len(static) + j]
+        coef, sse, rank = _weighted_lstsq(resp[:, :, cols], ctx.r_rows, ctx.w)
         if best is None or sse < best[0]:
-            best = (sse, cols, coef)
-    _, cols, coef = best
+            best = (sse, cols, coef, rank)
+    _, cols, coef, rank = best
     estimate = sequences[:, cols] @ coef
     simulated = ctx.simulate_with(place.name, u + estimate)
     e1 = ctx.energy(simulated) if simulated is not None else np.inf
-    unit = ctx.sim.equations.units.get(place.name, "") if hasattr(ctx.sim.equations, "units") else ""
-    return PlaceScore(place, ctx.share(e1, 4.0), estimate, str(unit), None, 4.0)
+    dof = rank + 1.0                       # + the chosen lag / delay
+    unit = ctx.sim.equations.units.get(place.name, "")
+    return PlaceScore(place, ctx.share(e1, dof), estimate, str(unit), None, dof)
 
 
 def _weighted_lstsq(S, r, w):
-    """Least squares of r (rows, ny) on S (rows, ny, m) with output weights w; (coef, sse)."""
+    """Least squares of r (rows, ny) on S (rows, ny, m) with output weights w; (coef, sse, rank)."""
     sw = np.sqrt(w)[None, :, None]
     A = (S * sw).reshape(-1, S.shape[2])
     b = (r * np.sqrt(w)[None, :]).reshape(-1)
-    coef, *_ = np.linalg.lstsq(A, b, rcond=None)
-    return coef, float(np.sum((A @ coef - b) ** 2))
+    if not (np.isfinite(A).all() and np.isfinite(b).all()):
+        return np.zeros(S.shape[2]), np.inf, 0
+    coef, _, rank, _ = np.linalg.lstsq(A, b, rcond=None)
+    return coef, float(np.sum((A @ coef - b) ** 2)), int(rank)
 
 
 def _score_junction(ctx, lin, place, d_input, channel, n_junctions, graph) -> PlaceScore:
-    """Free piecewise-linear extra effort/flow, GCV-regularised, scored by simulation."""
+    """Free piecewise-linear extra effort/flow, GCV-regularised, scored by simulation.
+
+    The linearised fit can overrate a wiggly estimate (stick-slip, saturating
+    laws the linearisation does not see), so the GCV choice and three smoother
+    ones (lambda x 10, 100, 1000) are all simulated and the best score kept.
+    """
+    unit = junction_unit(graph, place.name)
     n_rows, ny = ctx.r_rows.shape
     knots = int(np.clip(min(n_rows // 4, _RESPONSE_BUDGET / (n_rows * ny * max(1, n_junctions))),
                         _MIN_KNOTS, _MAX_KNOTS))
     hats = _hat_basis(ctx.t, knots)
     resp = lin.response(np.full(knots, channel), hats, ctx.rows)          # (rows, ny, K)
-    theta, dof = _smooth_fit(resp, ctx.r_rows, ctx.w)
-    estimate = hats @ theta
-    simulated = ctx.simulate_with(d_input, estimate)
-    e1 = ctx.energy(simulated) if simulated is not None else np.inf
-    return PlaceScore(place, ctx.share(e1, dof), estimate, junction_unit(graph, place.name),
-                      place.bond, float(dof))
+    best = PlaceScore(place, 0.0, np.zeros_like(ctx.t), unit, place.bond, 0.0)
+    if not np.isfinite(resp).all():        # a linearisation that diverged: no estimate here
+        return best
+    for theta, dof in _smooth_fits(resp, ctx.r_rows, ctx.w):
+        estimate = hats @ theta
+        simulated = ctx.simulate_with(d_input, estimate)
+        e1 = ctx.energy(simulated) if simulated is not None else np.inf
+        score = ctx.share(e1, dof)
+        if score > best.explained or best.dof == 0.0:
+            best = PlaceScore(place, score, estimate, unit, place.bond, float(dof))
+    return best
 
 
 def _hat_basis(t, knots):
@@ -344,13 +375,18 @@ def _hat_basis(t, knots):
     return np.stack([np.interp(t, grid, eye[j]) for j in range(knots)], axis=1)
 
 
-def _smooth_fit(S, r, w):
-    """Tikhonov fit with a second-difference penalty, lambda by GCV; returns (theta, dof).
+def _smooth_fits(S, r, w, smoother=(1.0, 10.0, 100.0, 1000.0)):
+    """Tikhonov fits with a second-difference penalty: lambda by GCV, then `smoother` x it.
 
     One generalised eigendecomposition :math:`G v = \\mu B v` (:math:`G = S^T W S`,
     :math:`B = \\Delta^{2T}\\Delta^2 + \\epsilon I`, :math:`V^T B V = I`) serves every
     :math:`\\lambda`: :math:`\\theta = V (\\mu + \\lambda)^{-1} V^T S^T W r` and the
     effective number of parameters is :math:`\\nu = \\sum \\mu / (\\mu + \\lambda)`.
+
+    Returns
+    -------
+    list of (ndarray, shape (K,), float)
+        ``(theta, nu)`` per lambda; empty when the place reaches no output.
     """
     from scipy.linalg import eigh
 
@@ -363,17 +399,19 @@ def _smooth_fit(S, r, w):
     B = D2.T @ D2 + 1e-8 * np.eye(K)       # the small ridge pins the penalty's null space (a, b t)
     scale = np.trace(G) / np.trace(B)
     if not np.isfinite(scale) or scale <= 0:      # the place does not reach any output
-        return np.zeros(K), 0.0
+        return []
     mu, V = eigh(G, B)
     mu = np.clip(mu, 0.0, None)
     c = V.T @ g
-    best = None
-    for lam in scale * np.logspace(-8, 3, 45):
-        theta_c = c / (mu + lam)
-        theta = V @ theta_c
-        dof = float(np.sum(mu / (mu + lam)))
+
+    def fit(lam):
+        theta = V @ (c / (mu + lam))
+        return theta, float(np.sum(mu / (mu + lam)))
+
+    def gcv(lam):
+        theta, dof = fit(lam)
         sse = max(bb - 2 * theta @ g + theta @ (G @ theta), 0.0)
-        gcv = sse * M / max(M - dof, 1.0) ** 2
-        if best is None or gcv < best[0]:
-            best = (gcv, theta, dof)
-    return best[1], best[2]
+        return sse * M / max(M - dof, 1.0) ** 2
+
+    lam_gcv = min(scale * np.logspace(-8, 3, 45), key=gcv)
+    return [fit(lam_gcv * k) for k in smoother]

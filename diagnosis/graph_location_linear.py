@@ -10,13 +10,18 @@ times :math:`t_k`) the model is linearised,
     A_k = \\partial f/\\partial x, \\quad B_k = \\partial f/\\partial u, \\quad
     C_k = \\partial h/\\partial x, \\quad D_k = \\partial h/\\partial u,
 
-and each sample interval :math:`h_k = t_{k+1} - t_k` is discretised with the
-trapezoidal (Tustin) rule, A-stable for any step:
+(:math:`A_k` by central differences over a step of :math:`10^{-5}` of each
+state's scale: a secant, finite where an orifice law's slope is infinite), and
+each sample interval :math:`h_k = t_{k+1} - t_k` is discretised with the
+trapezoidal (Tustin) rule, A-stable for any step, applied on
+:math:`\\eta = h_k/2^s` and followed by s squarings
+:math:`(\\Phi, \\Gamma) \\leftarrow (\\Phi^2, \\Phi\\Gamma + \\Gamma)` so that stiff
+modes decay as in the simulation instead of ringing:
 
 .. math::
 
-    \\Phi_k = (I - A_k h_k/2)^{-1} (I + A_k h_k/2), \\quad
-    \\Gamma_k = (I - A_k h_k/2)^{-1} B_k h_k,
+    \\Phi = (I - A_k \\eta/2)^{-1} (I + A_k \\eta/2), \\quad
+    \\Gamma = (I - A_k \\eta/2)^{-1} B_k \\eta,
 
 so a perturbation :math:`\\delta u_k` of the inputs (held over the interval,
 as the recording's inputs are) moves the outputs by
@@ -28,9 +33,10 @@ as the recording's inputs are) moves the outputs by
 
 This is the first-order (Gauss-Newton) sensitivity of the simulation error
 to the perturbation; it is exact for linear models up to the trapezoidal
-discretisation.  Held variables (sampled friction) are taken at their
-initial values in the Jacobians: the location only needs the direction of
-the response, and every place is scored afterwards by a full simulation.
+discretisation.  Held variables (sampled friction) are re-evaluated by their
+update law at each perturbed point (a held law is a function of the state
+over a sub-step).  The location only needs the direction of the response;
+every place is scored afterwards by a full simulation.
 """
 from __future__ import annotations
 
@@ -57,42 +63,48 @@ class LinearisedResponse:
     """
 
     def __init__(self, compiled, run, params, inputs, outputs):
-        m = compiled
-        self.t = run.t
-        X, U, t = run.states, run.inputs, run.t
+        self._m, self._p = compiled, params
+        self.t = t = run.t
+        X, U = run.states, run.inputs
         self.input_names = tuple(inputs)
         self.output_names = tuple(outputs)
-        ju = [m.input_index[n] for n in inputs]
-        jy = [m.output_index[n] for n in outputs]
+        ju = [compiled.input_index[n] for n in inputs]
+        self._jy = [compiled.output_index[n] for n in outputs]
         n, nx = X.shape
         self.n_states = nx
-        # B_k, D_k: central differences in each input (sources enter linearly: exact then)
         self.B = np.zeros((n, nx, len(ju)))
-        self.D = np.zeros((n, len(jy), len(ju)))
+        self.D = np.zeros((n, len(self._jy), len(ju)))
+        self.C = np.zeros((n, len(self._jy), nx))
+        A = np.zeros((n, nx, nx))
         for c, j in enumerate(ju):
-            delta = 1e-6 * max(1.0, float(np.max(np.abs(U[:, j]))))
-            up, um = U.copy(), U.copy()
-            up[:, j] += delta
-            um[:, j] -= delta
-            if nx:
-                self.B[:, :, c] = (m.f(X, up, t=t, p=params) - m.f(X, um, t=t, p=params)) / (2 * delta)
-            self.D[:, :, c] = (m.h(X, up, t=t, p=params)[:, jy] - m.h(X, um, t=t, p=params)[:, jy]) / (2 * delta)
-        self.C = np.zeros((n, len(jy), nx))
+            self.B[:, :, c], self.D[:, :, c] = self._partials(X, U, t, U, j, 1e-6)
         for j in range(nx):
-            delta = 1e-6 * max(1.0, float(np.max(np.abs(X[:, j]))))
-            xp, xm = X.copy(), X.copy()
-            xp[:, j] += delta
-            xm[:, j] -= delta
-            self.C[:, :, j] = (m.h(xp, U, t=t, p=params)[:, jy] - m.h(xm, U, t=t, p=params)[:, jy]) / (2 * delta)
-        self.Phi = np.zeros((max(n - 1, 0), nx, nx))
-        self.Gamma = np.zeros((max(n - 1, 0), nx, len(ju)))
-        if nx and n > 1:
-            A = m.jac_x(X[:-1], U[:-1], t=t[:-1], p=params)
-            h = np.diff(t)[:, None, None]
-            eye = np.eye(nx)[None]
-            left = eye - 0.5 * h * A
-            self.Phi = np.linalg.solve(left, eye + 0.5 * h * A)
-            self.Gamma = np.linalg.solve(left, self.B[:-1] * h)
+            # a secant over 1e-5 of the state's scale, not the analytic Jacobian: orifice laws
+            # (sqrt of a pressure difference) have infinite slopes at zero flow
+            A[:, :, j], self.C[:, :, j] = self._partials(X, U, t, X, j, 1e-5, states=True)
+        self.Phi, self.Gamma = _discretise(A[:-1], self.B[:-1], np.diff(t))
+
+    def _fh(self, x, u, t):
+        """f and the chosen outputs h, with held variables re-evaluated at (x, u): a held law
+        (Kikuuwe friction) is a function of the state over a sub-step, so its slope belongs in
+        the linearisation (stiction acts as a very stiff damper there)."""
+        m, p = self._m, self._p
+        d = None
+        if m.held_names:
+            d = m.update_held(x, u, t=t, p=p, step=float(m.equations.fixed_step or 0.0))
+        f = m.f(x, u, t=t, p=p, d=d) if x.shape[1] else np.zeros((x.shape[0], 0))
+        return f, m.h(x, u, t=t, p=p, d=d)[:, self._jy]
+
+    def _partials(self, X, U, t, which, j, rel, states=False):
+        scale = float(np.max(np.abs(which[:, j]))) if which.size else 0.0
+        delta = rel * (scale if scale > 0 else 1.0)
+        plus, minus = which.copy(), which.copy()
+        plus[:, j] += delta
+        minus[:, j] -= delta
+        fp, hp = self._fh(plus, U, t) if states else self._fh(X, plus, t)
+        fm, hm = self._fh(minus, U, t) if states else self._fh(X, minus, t)
+        clean = lambda a: np.nan_to_num(a, nan=0.0, posinf=0.0, neginf=0.0)   # noqa: E731
+        return clean((fp - fm) / (2 * delta)), clean((hp - hm) / (2 * delta))
 
     def response(self, channel, sequences, rows):
         """Output responses to perturbation sequences.
@@ -126,3 +138,31 @@ class LinearisedResponse:
             if k < n - 1 and nx:
                 dx = self.Phi[k] @ dx + self.Gamma[k][:, channel] * seq[k]
         return out
+
+
+def _discretise(A, B, h, max_squarings: int = 20):
+    """Held-input discretisation of each interval: Tustin on h / 2^s, then s squarings.
+
+    ``(Phi, Gamma) <- (Phi Phi, Phi Gamma + Gamma)`` doubles the step; s is chosen
+    so that :math:`h |A| / 2^s \\le 0.5`, so stiff modes (stiction, fast followers) decay
+    as they do in the simulation instead of ringing as Tustin would at large
+    :math:`h\\lambda`.
+    """
+    n, nx = A.shape[0], A.shape[1]
+    eye = np.eye(nx)[None]
+    if nx == 0 or n == 0:
+        return np.zeros((n, nx, nx)), np.zeros((n, nx, B.shape[2]))
+    norm = float(np.max(np.abs(A).sum(axis=2).max(axis=1) * h))
+    s = int(np.clip(np.ceil(np.log2(max(norm / 0.5, 1.0))), 0, max_squarings))
+    hs = (h / 2 ** s)[:, None, None]
+    left = eye - 0.5 * hs * A
+    singular = np.abs(np.linalg.det(left)) < 1e-12
+    left[singular] = eye[0]
+    Phi = np.linalg.solve(left, eye + 0.5 * hs * A)
+    Gamma = np.linalg.solve(left, B * hs)
+    for _ in range(s):
+        Gamma = Phi @ Gamma + Gamma
+        Phi = Phi @ Phi
+    bad = ~(np.isfinite(Phi).all(axis=(1, 2)) & np.isfinite(Gamma).all(axis=(1, 2)))
+    Phi[bad], Gamma[bad] = eye[0], 0.0
+    return Phi, Gamma

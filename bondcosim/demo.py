@@ -5,7 +5,8 @@ to PNG, simulate the mass-spring-damper step response and the DC motor
 start-up and plot them, then compare the exoskeleton's and the PAM joint's
 bond graphs with the papers' block-diagram / state-space models, export the
 PAM joint as an FMU and close a PI angle loop around it in the co-simulation
-master, and run the papers' closed-loop scenarios (``cosim.scenarios``).
+master, run the papers' closed-loop scenarios (``cosim.scenarios``), and end
+with one diagnosis of a recording with a concealed effect (``diagnosis``).
 """
 from __future__ import annotations
 
@@ -103,6 +104,10 @@ def run_demo(output_dir="demo-output", *, quick: bool = False) -> dict:
     _step("the papers' closed loops: plant FMUs with estimators and controllers in the master")
     from .demo_scenarios import run_scenarios
     written.update(run_scenarios(out, quick=quick, step=_step))
+
+    _step("diagnosis: a recording the nominal PAM model does not explain - where, what, and the fix")
+    from .demo_diagnosis import run_diagnosis
+    written.update(run_diagnosis(out, quick=quick))
 
     _step(f"done in {time.perf_counter() - start:.1f} s; files in {out.resolve()}")
     for key, path in written.items():

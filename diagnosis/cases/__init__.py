@@ -33,6 +33,24 @@ effective sigma) and ``holdout_effect_to_noise`` (the same over the last 30 %
 of the span, the diagnosis' default hold-out: a 50 % lower held-out NRMSE
 needs it above sqrt(3)).
 
+What makes a case hard
+----------------------
+* Places no data can separate: a 1-junction rigidly geared through a TF is
+  the same degree of freedom (``dcmotor_stribeck``: w_load ~ w_motor;
+  ``exo_viscous``: w_m ~ w_g), so the manifest lists them as equivalent.
+* Actuator effects on a source (``dcmotor_saturation``, ``exo_delay``,
+  ``pam_valve_lag``) look like an extra effort at the source's junction;
+  only the input place explains them with a law of the command.
+* Regime coverage: Stribeck needs low speeds of both signs (a stepped ramp),
+  a hardening spring needs several amplitudes (random force levels), a leak
+  and a level offset in slow tanks separate only through the level history.
+* The PAM plant is non-smooth (held Kikuuwe friction, fixed-step RK4) and
+  already holds pressure-dependent friction; extra seal friction partly hides
+  in its stick band, and a valve lag shows weakly in the pressures (the
+  orifices are slower than the lag) - hence 120 ms and the +-4.5 V excitation.
+* Null cases must come out ``none`` although the residual is never exactly
+  white (quantisation, the sensor resolution close to the noise).
+
 Public names
 ------------
 ``CASES``, ``Case``, ``Signal``, ``case`` (definitions); ``record``,

@@ -20,6 +20,7 @@ import math
 from dataclasses import dataclass
 from typing import Callable
 
+import numpy as np
 
 from ..place import Place
 from . import profiles as pr
@@ -113,7 +114,10 @@ def _motor_staircase(t, rng):
 
 
 def _motor_levels(t, rng):
-    return {"V": pr.held_levels(t, rng, low=-14.0, high=14.0, hold=(0.3, 1.0))}
+    # magnitudes 2-14 V with alternating signs, so that both driver limits (+-10 V) are reached
+    size = pr.held_levels(t, rng, low=2.0, high=14.0, hold=(0.3, 1.0))
+    segment = np.cumsum(np.concatenate(([0], np.diff(size) != 0)))
+    return {"V": np.where(segment % 2 == 0, size, -size)}
 
 
 def _rlc_steps(t, rng):
@@ -213,9 +217,10 @@ CASES: tuple[Case, ...] = (
             (_p("limit", 10.0, "V", "the driver delivers at most +-limit"),)),
          affected="w_L", seed=202, min_ratio=5.0,
          excite=_motor_levels,
-         excitation="voltage command steps, random levels in +-14 V held 0.3-1 s, DAC 0.01 V",
+         excitation="voltage command steps, random magnitudes 2-14 V of alternating sign held "
+                    "0.3-1 s, DAC 0.01 V",
          duration=12.0, rate=200.0,
-         description="the motor driver saturates at +-10 V; the command goes to +-14 V", **_MOTOR),
+         description="the motor driver saturates at +-10 V; the command reaches +-14 V", **_MOTOR),
     Case("rlc_sensor_gain", model="rlc", effect=SensorGain(
             "sensor_gain", Place("output", "v_C"),
             (_p("gain", 0.95, "1", "reading / true capacitor voltage"),)),

@@ -27,8 +27,8 @@ _CHOSEN = os.environ.get("BONDCOSIM_DIAGNOSIS_CASES", "")
 SELECTED = set(CASES) if _CHOSEN == "all" else set(QUICK) | {n for n in _CHOSEN.split(",") if n}
 
 #: cases the tool does not get right yet: name -> the reason measured (strict xfail, so a case
-#: that starts passing fails here until it is removed).  Measured on main at ef693ab with
-#: BONDCOSIM_DIAGNOSIS_CASES=all: all 14 cases pass (5 min 9 s on 2 shared cores).  At 447272b,
+#: that starts passing fails here until it is removed).  Measured on main at c56405e with
+#: BONDCOSIM_DIAGNOSIS_CASES=all: all 14 cases pass (4 min 34 s on 2 shared cores).  At 447272b,
 #: before graph location handled actuator places and held friction laws, dcmotor_saturation and
 #: exo_delay answered 'none' and the three pam cases failed in graph location.
 KNOWN_FAILURES: dict[str, str] = {}

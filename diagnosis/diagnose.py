@@ -18,7 +18,13 @@
    and parsimony (:func:`diagnosis.fit.choose`), ``none`` when nothing
    explains a significant share;
 5. the improved graph, its held-out NRMSE (same simulation as the nominal
-   one), the regime of the chosen place's correction, the explanation.
+   one), the regime of the chosen place's correction, the explanation;
+6. up to ``max_effects - 1`` further rounds: steps 3-5 again on the improved
+   graph against its own residual (its held-out NRMSE is the new reference of
+   :func:`~diagnosis.fit.choose`, with the same noise floor and parsimony price);
+   a further effect is kept only if ``choose`` accepts it, so a recording with
+   one effect answers "nothing more" in round 2.  The effects are reported in
+   the order they were found (each round explains most of what is left).
 """
 from __future__ import annotations
 
@@ -133,7 +139,7 @@ def _holdout_nrmse(sim, params, x0, experiment, mask):
 
 
 def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0.3, uncertain=(),
-             top: int = 3, progress: bool = False, x0=None):
+             top: int = 3, progress: bool = False, x0=None, max_effects: int = 2):
     """Locate, name and model what a model leaves out of a recording.
 
     Parameters
@@ -157,6 +163,10 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         Progress lines (step, elapsed time) on stderr.
     x0 : dict str -> float, optional
         Initial state of the nominal model at the first sample (default: its own).
+    max_effects : int
+        Most missing effects reported: after the first, each further round looks for
+        one more on the improved graph, kept only if it improves the held-out error
+        beyond the noise floor and the parsimony price (1: the single-effect answer).
 
     Returns
     -------
@@ -178,6 +188,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
 
     if int(top) < 1:
         raise DiagnosisError(f"top must be a positive number of places; found {top!r}")
+    if isinstance(max_effects, bool) or not isinstance(max_effects, (int, np.integer)) or max_effects < 1:
+        raise DiagnosisError(f"max_effects must be a positive whole number of effects; found {max_effects!r}")
     say = _Progress(progress)
     say("reading and binding the recording")
     graph = _as_graph(graph)
@@ -227,9 +239,70 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                 if chosen.candidate is not None else graph)
         improved_graph = _with_values(base, {k: v for k, v in chosen.values.items() if k not in cand_names})
         improved, y_imp = _holdout_nrmse(OutputSimulator(improved_graph, exp), None, x0, exp, mask)
+    rounds = [{"chosen": chosen, "fits": fits, "reference": dict(nominal), "improved": dict(improved),
+               "seconds": _time.perf_counter() - say.start}]
+
+    if chosen is not None and chosen.candidate is not None:
+        floor = noise_floor(held, res.noise)
+        while len(rounds) < int(max_effects):
+            start = _time.perf_counter()
+            found = _further_round(improved_graph, exp, train, held, mask, x0, improved, floor,
+                                   rounds, top=int(top), say=say, label=f"round {len(rounds) + 1}")
+            found["seconds"] = _time.perf_counter() - start
+            rounds.append(found)
+            if found["chosen"] is None:
+                break
+            improved_graph, improved, y_imp = found["graph"], found["improved"], found["y"]
 
     from .diagnose_text import assemble
     return assemble(graph=graph, rec=rec, exp=exp, held=held, res=res, nominal=nominal,
                     improved=improved, y_imp=y_imp, windows=windows, rv=rv, scores=scores,
                     fits=fits, chosen=chosen, improved_graph=improved_graph,
-                    locate_regime=locate_regime, timings=say.done)
+                    locate_regime=locate_regime, timings=say.done, rounds=rounds)
+
+
+def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, *, top, say, label):
+    """One more effect on `graph` (the improved graph so far) against its own residual.
+
+    Location, candidates at the ``top`` places (minus the kinds already added at
+    the same place), fits with the earlier effects' values fixed in the graph,
+    and :func:`~diagnosis.fit.choose` against `reference` (the held-out NRMSE of
+    `graph`) with the noise floor `floor`.  Returns a round dict: ``chosen``
+    (CandidateFit or None), ``fits``, ``reference``, ``improved`` and, when
+    something was kept, ``graph`` and ``y`` (its simulated outputs).
+    """
+    from .catalogue import candidates
+    from .fit import choose, fit_candidate
+    from .graph_location import locate_on_graph
+    from .locate import regime_variables
+    from .residuals import OutputSimulator, residuals
+
+    say(f"{label}: residual of the improved model")
+    res = residuals(graph, exp, simulator=OutputSimulator(graph, exp), x0=x0)
+    rv = {k: (v[:train.t.size], d) for k, (v, d) in regime_variables(graph, exp, res.run).items()}
+    say(f"{label}: graph location", "training part")
+    try:
+        scores = locate_on_graph(graph, train)
+    except (np.linalg.LinAlgError, FloatingPointError) as exc:   # numerics: no further effect
+        return {"chosen": None, "fits": [], "reference": dict(reference), "improved": dict(reference),
+                "scores": [], "note": f"graph location failed: {type(exc).__name__}: {exc}"}
+    places = [s for s in scores[:top] if s.explained >= MIN_PLACE_SHARE]
+    done = {(r["chosen"].candidate.kind, r["chosen"].candidate.place) for r in rounds
+            if r["chosen"] is not None and r["chosen"].candidate is not None}
+    cands = [c for s in places for c in candidates(graph, s.place, regime_variables=rv, experiment=train)
+             if (c.kind, c.place) not in done]
+    fit_part, fit_x0 = _fit_window(train, res.run, x0)
+    fits = []
+    for i, cand in enumerate(cands, 1):
+        say(f"{label}: fitting", f"{cand} ({i}/{len(cands)})")
+        fits.append(fit_candidate(graph, cand, fit_part, held, x0=fit_x0))
+    say(f"{label}: choosing")
+    chosen = choose(reference, fits, noise=floor) if fits else None
+    out = {"chosen": chosen, "fits": fits, "reference": dict(reference), "improved": dict(reference),
+           "scores": scores}
+    if chosen is not None:
+        names = {p.name for p in chosen.candidate.params}
+        better = chosen.candidate.build(graph, {k: v for k, v in chosen.values.items() if k in names})
+        improved, y = _holdout_nrmse(OutputSimulator(better, exp), None, x0, exp, mask)
+        out.update(graph=better, improved=improved, y=y)
+    return out

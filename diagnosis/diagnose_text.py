@@ -41,9 +41,18 @@ def _regime(chosen, scores, res, n_train, rv, locate_regime, units):
     return finding, values, signal, label
 
 
+def _effect(fit) -> dict:
+    """One ``missing_physics`` entry of an accepted candidate fit."""
+    names = {p.name for p in fit.candidate.params}
+    params = {k: float(v) for k, v in fit.values.items() if k in names}
+    return {"kind": fit.candidate.kind, "attached_to": str(fit.candidate.place),
+            "parameters": params, "explanation": fit.candidate.explain(params)}
+
+
 def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, rv, scores, fits,
-             chosen, improved_graph, locate_regime, timings) -> DiagnosisReport:
-    """Build the report (see :func:`diagnosis.diagnose.diagnose` for the arguments' meaning)."""
+             chosen, improved_graph, locate_regime, timings, rounds=()) -> DiagnosisReport:
+    """Build the report (see :func:`diagnosis.diagnose.diagnose` for the arguments' meaning;
+    `rounds`: one dict per round, see :func:`diagnosis.diagnose._further_round`)."""
     n_train = exp.t.size - held.t.size
     units = dict(exp.units)
     finding, regime_values, regime_signal, regime_label = (None, None, None, "")
@@ -56,6 +65,7 @@ def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, r
         attached = place.name if place.kind == "junction" else str(place)
         physics = [{"kind": chosen.candidate.kind, "attached_to": str(place),
                     "parameters": params, "explanation": chosen.candidate.explain(params)}]
+        physics += [_effect(r["chosen"]) for r in list(rounds)[1:] if r["chosen"] is not None]
         location = {"junction": attached, "bond": place.bond or "",
                     "windows": windows, "regime": finding.description if finding else ""}
     else:
@@ -68,15 +78,19 @@ def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, r
         location = {"junction": "", "bond": "", "windows": windows, "regime": ""}
     fit = {"holdout": [float(held.t[0]), float(held.t[-1])], "nominal": nominal, "improved": improved}
     text = _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen, physics,
-                 finding)
+                 finding, rounds)
     plot = PlotData(exp.t, dict(exp.outputs), dict(res.run.outputs), dict(y_imp), units,
                     float(held.t[0]), finding.variable if finding else None, regime_values,
                     regime_signal, regime_label)
-    return DiagnosisReport(location, physics, fit, text, improved_graph, None, scores, fits, chosen,
-                           rec.notes(), timings(), plot)
+    report = DiagnosisReport(location, physics, fit, text, improved_graph, None, scores, fits, chosen,
+                             rec.notes(), timings(), plot, rounds=list(rounds))
+    for i, r in enumerate(report.rounds, 1):
+        report.timings[f"round {i}"] = r["seconds"]
+    return report
 
 
-def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen, physics, finding):
+def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen, physics, finding,
+          rounds=()):
     u = exp.units
     lines = [f"Recording {rec.source}: {exp.t.size} samples over {exp.span[0]:.4g}-{exp.span[1]:.4g} s; "
              f"held out {held.span[0]:.4g}-{held.span[1]:.4g} s."]
@@ -109,7 +123,24 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
             lines.append("Runners-up (held-out NRMSE): " + "; ".join(
                 f"{f.candidate or 'nominal refit'} "
                 + ", ".join(f"{o} {v:.3g}" for o, v in f.holdout_nrmse.items()) for f in others) + ".")
+    lines += _further_text(list(rounds)[1:], exp.outputs)
     for o in exp.outputs:
         lines.append(f"Held-out NRMSE of {o}: nominal {nominal[o]:.3g} -> improved {improved[o]:.3g} "
                      f"({_pct(nominal[o], improved[o])} lower).")
     return "\n".join(lines)
+
+
+def _further_text(rounds, outputs):
+    """Lines for rounds 2, 3, ...: each further effect, or why nothing more was added."""
+    lines = []
+    for i, r in enumerate(rounds, 2):
+        c = r["chosen"]
+        if c is None:
+            lines.append(f"Round {i}: nothing more - no further candidate improves the held-out error "
+                         f"beyond the noise and the price of its parameters ({len(r['fits'])} tried).")
+            continue
+        m = _effect(c)
+        gain = ", ".join(f"{o} {r['reference'][o]:.3g} -> {r['improved'][o]:.3g}" for o in outputs)
+        lines.append(f"Also missing (round {i}): {m['kind']} at {m['attached_to']}. {m['explanation']} "
+                     f"(held-out NRMSE {gain}).")
+    return lines

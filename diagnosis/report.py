@@ -93,6 +93,9 @@ class DiagnosisReport:
     timings : dict str -> float
         Seconds per step.
     plot_data : PlotData
+    rounds : list of dict
+        One per diagnosis round: ``chosen`` (CandidateFit or None), ``fits``,
+        ``reference`` and ``improved`` held-out NRMSE per output, ``seconds``.
     """
 
     location: dict
@@ -107,6 +110,7 @@ class DiagnosisReport:
     notes: list = field(default_factory=list)
     timings: dict = field(default_factory=dict)
     plot_data: PlotData | None = None
+    rounds: list = field(default_factory=list)
 
     @property
     def kind(self) -> str:

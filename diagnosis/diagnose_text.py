@@ -135,6 +135,10 @@ def _further_text(rounds, outputs):
     lines = []
     for i, r in enumerate(rounds, 2):
         c = r["chosen"]
+        if c is None and not r["fits"]:
+            lines.append(f"Round {i}: nothing more - no place on the improved graph explains a "
+                         f"significant share of what is left of the residual.")
+            continue
         if c is None:
             lines.append(f"Round {i}: nothing more - no further candidate improves the held-out error "
                          f"beyond the noise and the price of its parameters ({len(r['fits'])} tried).")

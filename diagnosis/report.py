@@ -95,7 +95,8 @@ class DiagnosisReport:
     plot_data : PlotData
     rounds : list of dict
         One per diagnosis round: ``chosen`` (CandidateFit or None), ``fits``,
-        ``reference`` and ``improved`` held-out NRMSE per output, ``seconds``.
+        ``reference`` and ``improved`` held-out NRMSE per output, ``seconds``; from
+        round 2 on also ``scores`` (the graph location of what was left).
     """
 
     location: dict

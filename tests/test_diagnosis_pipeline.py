@@ -153,6 +153,68 @@ def test_nominal_recording_answers_none(null):
     assert data["location"]["junction"] == "" and data["location"]["windows"] == []
     assert data["fit"]["improved"] == data["fit"]["nominal"]
     assert "Missing physics: none" in null.text
+    assert len(null.rounds) == 1                       # nothing found: no second round
+
+
+# -- more than one effect: further rounds on the improved graph ---------------------
+
+OFFSET = 0.02      # m, the concealed position-sensor offset of the two-effect recording
+
+
+@pytest.fixture(scope="module")
+def two_effects_csv(tmp_path_factory):
+    return str(_recording(tmp_path_factory.mktemp("two") / "msd_coulomb_offset.csv", FC, 14, OFFSET))
+
+
+def test_one_effect_second_round_answers_nothing_more(coulomb):
+    """The Coulomb recording has one effect: round 2 locates what is left of the residual on
+    the improved graph, finds it at no place (it is noise), and keeps nothing, so the report
+    is round 1's (one effect, same held-out numbers)."""
+    from diagnosis.diagnose import MIN_PLACE_SHARE
+    first, second = coulomb.rounds
+    assert first["chosen"] is coulomb.chosen and second["chosen"] is None
+    assert len(second["scores"]) == 3                                # it did look, everywhere
+    assert max(s.explained for s in second["scores"]) < MIN_PLACE_SHARE
+    assert coulomb.scores[0].explained > 0.9                         # round 1: 92-100 % by place
+    assert second["reference"] == coulomb.fit["improved"] == first["improved"]
+    assert "Round 2: nothing more - no place on the improved graph" in coulomb.text
+    assert coulomb.timings["round 2"] > 0 and coulomb.timings["round 1"] > 0
+
+
+def test_two_effects_friction_then_sensor_offset(two_effects_csv):
+    """Coulomb friction (0.3 N) and a position-sensor offset (20 mm) concealed together: both
+    named, at their places, with their values; each round lowers the held-out NRMSE."""
+    report = diagnose("mass-spring-damper", two_effects_csv, **BINDINGS)
+    physics = report.to_json()["missing_physics"]
+    assert [(m["kind"], m["attached_to"]) for m in physics] == [("coulomb_friction", "junction v_mass"),
+                                                                ("sensor_offset", "output x")]
+    assert physics[0]["parameters"]["Fc_v_mass"] == pytest.approx(FC, rel=0.1)
+    assert physics[1]["parameters"]["offset_x"] == pytest.approx(OFFSET, rel=0.1)
+    assert report.location["junction"] == "v_mass"                   # the first effect's place
+    first, second = report.rounds
+    assert second["reference"] == first["improved"]
+    assert second["improved"]["x"] < 0.5 * first["improved"]["x"] < 0.5 * first["reference"]["x"]
+    # both effects: down to about the noise floor, sigma_quantised / std(x)
+    assert report.fit["improved"]["x"] < 3 * np.hypot(SIGMA, QUANTUM / np.sqrt(12)) / 0.7
+    assert "Also missing (round 2): sensor_offset at output x" in report.text
+    assert set(report.improved_graph.parameters()) >= {"Fc_v_mass", "offset_x"}
+
+
+def test_max_effects_one_is_the_single_effect_answer(two_effects_csv):
+    """Round 1 is unchanged by the further rounds: max_effects=1 gives its numbers alone."""
+    one = diagnose("mass-spring-damper", two_effects_csv, **BINDINGS, max_effects=1)
+    assert [m["kind"] for m in one.missing_physics] == ["coulomb_friction"]
+    assert len(one.rounds) == 1 and "round 2" not in one.text.lower()
+    assert one.fit["improved"]["x"] > 2 * np.hypot(SIGMA, QUANTUM / np.sqrt(12)) / 0.7   # offset left
+
+
+def test_cli_max_effects(two_effects_csv, capsys):
+    from bondcosim.cli import main
+    args = ["diagnose", "mass-spring-damper", two_effects_csv, "--input", "F=force_N:N",
+            "--output", "x=position_mm:mm", "--json", "--max-effects", "1"]
+    assert main(args) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert [m["kind"] for m in data["missing_physics"]] == ["coulomb_friction"]
 
 
 # -- bad input: each a clear error naming the thing ---------------------------------
@@ -207,3 +269,7 @@ def test_bad_arguments(small_csv):
         diagnose("mass-spring-damper", small_csv(GOOD), inputs=["F=force"], outputs=["x=pos"], holdout=0)
     with pytest.raises(BondcosimError, match="top must be a positive"):
         diagnose("mass-spring-damper", small_csv(GOOD), inputs=["F=force"], outputs=["x=pos"], top=0)
+    for bad in (0, -1, 1.5, True, "2"):
+        with pytest.raises(BondcosimError, match=f"max_effects must be a positive whole number.*{bad!r}"):
+            diagnose("mass-spring-damper", small_csv(GOOD), inputs=["F=force"], outputs=["x=pos"],
+                     max_effects=bad)

@@ -8,6 +8,7 @@ created free symbol.
 """
 from __future__ import annotations
 
+import re
 import tokenize
 from typing import Mapping
 
@@ -41,6 +42,9 @@ _PARSER_NAMESPACE = {
     "Symbol": sp.Symbol, "Function": sp.Function,
 }
 _TRANSFORMS = standard_transformations + (convert_xor,)
+#: parsed expressions by (text, what its identifiers resolve to): sympy expressions are immutable, and parsing nested
+#: Min/Max (the pam valve law) takes about 1 s, once per graph derivation without this
+_PARSED: dict = {}
 
 
 def sym(name: str) -> sp.Symbol:
@@ -78,6 +82,13 @@ def parse(text: str, names: Mapping[str, sp.Basic], *, owner: str) -> sp.Expr:
     if not isinstance(text, str) or not text.strip():
         raise ExpressionError(f"{owner}: expected a non-empty expression, got {text!r}",
                               owner=owner, expression=str(text))
+    try:   # the result depends only on what the text's identifiers resolve to
+        key = (text, tuple((w, names.get(w)) for w in sorted(set(re.findall(r"[A-Za-z_]\w*", text)))))
+        hash(key)
+    except TypeError:   # an unhashable entry: parse without the cache
+        key = None
+    if key is not None and key in _PARSED:
+        return _PARSED[key]
     namespace = dict(_PARSER_NAMESPACE)
     namespace.update(FUNCTIONS)
     try:
@@ -102,6 +113,8 @@ def parse(text: str, names: Mapping[str, sp.Basic], *, owner: str) -> sp.Expr:
             f"known names are {', '.join(sorted(names)) or '(none)'} and the functions "
             f"{', '.join(sorted(k for k in FUNCTIONS if k.islower()))}",
             owner=owner, expression=text, unknown=bad)
+    if key is not None and len(_PARSED) < 4096:
+        _PARSED[key] = expr
     return expr
 
 

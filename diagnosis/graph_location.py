@@ -287,9 +287,17 @@ def _score_output(ctx, place) -> PlaceScore:
 
 def _lagged(u, t, tau):
     """First-order lag of a held input, exact for zero-order hold: y' = (u - y)/tau."""
+    decay = np.exp(-np.diff(t) / tau)
+    if u.size > 1 and np.allclose(decay, decay[0], rtol=1e-9, atol=0.0):   # uniform sampling: a filter
+        from scipy.signal import lfilter
+        a = float(decay[0])
+        y = np.empty_like(u)
+        y[0] = u[0]
+        # y[k+1] = a y[k] + (1 - a) u[k], started from y[0] = u[0]
+        y[1:], _ = lfilter([1.0 - a], [1.0, -a], u[:-1], zi=[a * u[0]])
+        return y
     y = np.empty_like(u)
     y[0] = u[0]
-    decay = np.exp(-np.diff(t) / tau)
     for k in range(u.size - 1):
         y[k + 1] = u[k] + (y[k] - u[k]) * decay[k]
     return y
@@ -371,8 +379,12 @@ def _score_junction(ctx, lin, place, d_input, channel, n_junctions, graph) -> Pl
 def _hat_basis(t, knots):
     """Hat functions on `knots` equally spaced knots over t: shape (n, knots), rows sum to 1."""
     grid = np.linspace(t[0], t[-1], knots)
-    eye = np.eye(knots)
-    return np.stack([np.interp(t, grid, eye[j]) for j in range(knots)], axis=1)
+    j = np.clip(np.searchsorted(grid, t, side="right") - 1, 0, knots - 2)   # interval of each t
+    w = np.clip((t - grid[j]) / (grid[j + 1] - grid[j]), 0.0, 1.0)
+    rows = np.arange(t.size)
+    out = np.zeros((t.size, knots))
+    out[rows, j], out[rows, j + 1] = 1.0 - w, w
+    return out
 
 
 def _smooth_fits(S, r, w, smoother=(1.0, 10.0, 100.0, 1000.0)):

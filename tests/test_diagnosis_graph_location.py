@@ -172,3 +172,27 @@ def test_concealed_effect_cases_rank_the_true_place_first(name):
         (p["kind"], p["name"]) for p in entry.get("equivalent_places") or []]
     assert (scores[0].place.kind, scores[0].place.name) in allowed
     assert scores[0].explained > 0.5
+
+
+def test_lag_filter_matches_the_exact_recursion_uniform_and_uneven():
+    """_lagged: y[k+1] = u[k] + (y[k] - u[k]) exp(-dt_k / tau), y[0] = u[0] (exact for a held input)."""
+    from diagnosis.graph_location import _lagged
+    rng = np.random.default_rng(RNG_SEED)
+    for t in (np.arange(400) * 1e-3, np.cumsum(rng.uniform(0.5e-3, 1.5e-3, 400))):
+        u = np.repeat(rng.uniform(-1.0, 1.0, 8), 50)
+        ref = np.empty_like(u)
+        ref[0] = u[0]
+        for k in range(u.size - 1):
+            ref[k + 1] = u[k] + (ref[k] - u[k]) * math.exp(-(t[k + 1] - t[k]) / 0.01)
+        np.testing.assert_allclose(_lagged(u, t, 0.01), ref, rtol=0, atol=1e-12)
+
+
+def test_hat_basis_equals_interpolated_unit_vectors():
+    """_hat_basis column j = np.interp(t, knots, e_j); rows sum to 1."""
+    from diagnosis.graph_location import _hat_basis
+    t = np.sort(np.random.default_rng(RNG_SEED).uniform(0.0, 3.0, 700))
+    H = _hat_basis(t, 11)
+    grid = np.linspace(t[0], t[-1], 11)
+    ref = np.stack([np.interp(t, grid, np.eye(11)[j]) for j in range(11)], axis=1)
+    np.testing.assert_allclose(H, ref, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(H.sum(axis=1), 1.0, atol=1e-14)

@@ -24,7 +24,10 @@
    :func:`~diagnosis.fit.choose`, with the same noise floor and parsimony price);
    a further effect is kept only if ``choose`` accepts it, so a recording with
    one effect answers "nothing more" in round 2.  The effects are reported in
-   the order they were found (each round explains most of what is left).
+   the order they were found (each round explains most of what is left);
+7. with two or more effects, a joint refit of all their parameters (and the
+   ``uncertain`` ones) on the training part, started from the round-by-round
+   values and kept when the held-out excess error does not grow.
 """
 from __future__ import annotations
 
@@ -253,6 +256,14 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
             if found["chosen"] is None:
                 break
             improved_graph, improved, y_imp = found["graph"], found["improved"], found["y"]
+        effects = [r["chosen"] for r in rounds if r["chosen"] is not None]
+        if len(effects) >= 2:
+            say("joint refit", f"{len(effects)} effects")
+            joint = _joint_refit(improved_graph, effects, exp, train, held, mask, x0, improved, floor,
+                                 uncertain)
+            rounds[-1]["joint"] = joint
+            if joint["kept"]:
+                improved_graph, improved, y_imp = joint["graph"], joint["improved"], joint["y"]
 
     from .diagnose_text import assemble
     return assemble(graph=graph, rec=rec, exp=exp, held=held, res=res, nominal=nominal,
@@ -305,4 +316,32 @@ def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, 
         better = chosen.candidate.build(graph, {k: v for k, v in chosen.values.items() if k in names})
         improved, y = _holdout_nrmse(OutputSimulator(better, exp), None, x0, exp, mask)
         out.update(graph=better, improved=improved, y=y)
+    return out
+
+
+
+def _joint_refit(graph, effects, exp, train, held, mask, x0, reference, floor, uncertain):
+    """All accepted effects' parameters (and the `uncertain` ones) refitted together on the
+    training part of `graph` (the improved graph), started from their round-by-round values.
+
+    Returns a dict: ``fit`` (CandidateFit), ``reference`` and ``improved`` held-out NRMSE
+    (whole-recording simulations as for every round), ``kept`` (the held-out excess error
+    beyond the noise floor did not grow), ``graph`` and ``y`` of the refitted model.
+    """
+    from .fit import _excess, fit_candidate
+    from .residuals import OutputSimulator, residuals
+
+    names = [p.name for e in effects for p in e.candidate.params] + list(uncertain)
+    res = residuals(graph, exp, simulator=OutputSimulator(graph, exp), x0=x0)
+    part, part_x0 = _fit_window(train, res.run, x0)
+    fit = fit_candidate(graph, None, part, held, uncertain=names, x0=part_x0)
+    out = {"fit": fit, "reference": dict(reference), "improved": dict(reference), "kept": False}
+    if not all(np.isfinite(v) for v in fit.values.values()) or not np.all(np.isfinite(
+            list(fit.holdout_nrmse.values()))):
+        return out
+    better = _with_values(graph, fit.values)
+    improved, y = _holdout_nrmse(OutputSimulator(better, exp), None, x0, exp, mask)
+    outputs = list(reference)
+    kept = _excess(improved, floor, outputs) <= _excess(reference, floor, outputs)
+    out.update(improved=improved, kept=kept, graph=better, y=y)
     return out

@@ -41,10 +41,11 @@ def _regime(chosen, scores, res, n_train, rv, locate_regime, units):
     return finding, values, signal, label
 
 
-def _effect(fit) -> dict:
-    """One ``missing_physics`` entry of an accepted candidate fit."""
+def _effect(fit, refit=None) -> dict:
+    """One ``missing_physics`` entry of an accepted candidate fit (values of a kept joint
+    refit, dict name -> value, replace the round's)."""
     names = {p.name for p in fit.candidate.params}
-    params = {k: float(v) for k, v in fit.values.items() if k in names}
+    params = {k: float(v) for k, v in {**fit.values, **(refit or {})}.items() if k in names}
     return {"kind": fit.candidate.kind, "attached_to": str(fit.candidate.place),
             "parameters": params, "explanation": fit.candidate.explain(params)}
 
@@ -60,12 +61,11 @@ def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, r
         finding, regime_values, regime_signal, regime_label = _regime(chosen, scores, res, n_train, rv,
                                                                       locate_regime, units)
         place = chosen.candidate.place
-        names = {p.name for p in chosen.candidate.params}
-        params = {k: float(v) for k, v in chosen.values.items() if k in names}
         attached = place.name if place.kind == "junction" else str(place)
-        physics = [{"kind": chosen.candidate.kind, "attached_to": str(place),
-                    "parameters": params, "explanation": chosen.candidate.explain(params)}]
-        physics += [_effect(r["chosen"]) for r in list(rounds)[1:] if r["chosen"] is not None]
+        joint = next((r["joint"] for r in rounds if "joint" in r), None)
+        refit = joint["fit"].values if joint is not None and joint["kept"] else None
+        physics = [_effect(chosen, refit)]
+        physics += [_effect(r["chosen"], refit) for r in list(rounds)[1:] if r["chosen"] is not None]
         location = {"junction": attached, "bond": place.bond or "",
                     "windows": windows, "regime": finding.description if finding else ""}
     else:
@@ -147,4 +147,11 @@ def _further_text(rounds, outputs):
         gain = ", ".join(f"{o} {r['reference'][o]:.3g} -> {r['improved'][o]:.3g}" for o in outputs)
         lines.append(f"Also missing (round {i}): {m['kind']} at {m['attached_to']}. {m['explanation']} "
                      f"(held-out NRMSE {gain}).")
+    joint = next((r["joint"] for r in rounds if "joint" in r), None)
+    if joint is not None:
+        gain = ", ".join(f"{o} {joint['reference'][o]:.3g} -> {joint['improved'][o]:.3g}" for o in outputs)
+        verdict = ("kept; the values above are the joint ones" if joint["kept"]
+                   else "not kept: it does not lower the held-out error")
+        lines.append(f"Joint refit of all effects' parameters on the training part: held-out NRMSE "
+                     f"{gain} ({verdict}).")
     return lines

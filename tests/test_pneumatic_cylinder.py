@@ -134,9 +134,9 @@ def _offset_by_pressure(exp, parts):
 
 def test_end_to_end_diagnosis_finds_seal_friction_and_a_force_offset():
     """diagnose() on the pooled O-ring recording (every fourth sample: 25 Hz, to keep the test
-    short), two rounds: pressure-dependent friction at the piston 1-junction, then a force-sensor
-    error at output F; the held-out fit improves beyond friction only.  The held-out part (last
-    30 %) is the 5-7 bar end: laws fitted on lower pressures must extrapolate.
+    short), two rounds and a joint refit: pressure-dependent friction at the piston 1-junction,
+    then a force-sensor error at output F; the held-out fit improves beyond friction only.  The
+    held-out part (last 30 %) is the 5-7 bar end: laws fitted on lower pressures must extrapolate.
     Anchors (SOURCE.md): F = p A RMSE 7.42 N pooled; (c0 + c1 p) sign(v) + offset, fitted
     in-sample on all four pressures, 1.06 N (c0 = 3.4 N, c1 = 0.65 N/bar); held-out at 50 Hz
     9.29 N nominal, 3.50 N with friction only."""
@@ -153,40 +153,57 @@ def test_end_to_end_diagnosis_finds_seal_friction_and_a_force_offset():
     assert (data["location"]["junction"], data["location"]["bond"]) == ("piston", "rod")
     friction, force = data["missing_physics"]
     assert (friction["kind"], friction["attached_to"]) == ("pressure_dependent_friction", "junction piston")
-    # a force offset: the data prefer its pressure-proportional form (a gain error of the
-    # load cell, held-out NRMSE 0.060) to a constant one (sensor_offset, 0.064), both far
-    # better than friction alone (0.092)
+    # a force offset: the data prefer its pressure-proportional form (a gain error of the load
+    # cell: held-out NRMSE 0.060) to a constant one (sensor_offset: 0.064), both well below
+    # friction alone (0.092)
     assert (force["kind"], force["attached_to"]) == ("sensor_gain", "output F")
-    offset_fit = next(f for f in report.rounds[1]["fits"] if f.candidate.kind == "sensor_offset")
-    assert offset_fit.holdout_nrmse["F"] < 0.75 * report.rounds[1]["reference"]["F"]
+    first, second = report.rounds
+    offset_fit = next(f for f in second["fits"] if f.candidate.kind == "sensor_offset")
+    assert offset_fit.holdout_nrmse["F"] < 0.75 * second["reference"]["F"]
+    assert second["improved"]["F"] < 0.75 * second["reference"]["F"]
+    assert second["joint"]["kept"] and data["fit"]["improved"] == second["joint"]["improved"]
     # the friction law c0 + c1 (p - p_ref) (N, Pa), p_ref the mean training pressure
     c0, c1 = friction["parameters"]["c0_piston"], friction["parameters"]["c1_piston"]
     p_ref = report.improved_graph.parameters()["p_ref_piston"].value
     train_p = exp.inputs["p"][keep][exp.t[keep] < data["fit"]["holdout"][0]]
     assert p_ref == pytest.approx(float(np.mean(train_p)), rel=1e-9)
-    # the offset, as the gain makes it at 5 and 7 bar (N), against the per-file offsets by hand
-    gain = force["parameters"]["gain_F"]
-    by_hand = _offset_by_pressure(exp, parts)                # 0.77 / 2.24 / 2.24 / 3.41 N
-    assert by_hand == pytest.approx([0.77, 2.24, 2.24, 3.41], abs=0.01)
-    for bar, ref in zip((5, 7), by_hand[2:]):
-        assert (gain - 1) * bar * 1e5 * BORE_AREA == pytest.approx(ref, rel=0.35)
-    # at 1 and 7 bar within 25 % of SOURCE.md's in-sample c0 + c1 p (4.05 / 7.95 N)
+    # at 1 and 7 bar within 10 % of SOURCE.md's in-sample c0 + c1 p (4.05 / 7.95 N); the
+    # slope c1 (N/bar) within 10 % of 0.65 N/bar (measured 3.98 / 7.96 N, 0.663 N/bar)
     level = [c0 + c1 * (bar * 1e5 - p_ref) for bar in (1, 7)]
-    assert level == pytest.approx([3.4 + 0.65, 3.4 + 0.65 * 7], rel=0.25)
-    # held-out RMSE in newtons, each model simulated on the whole recording
+    assert level == pytest.approx([3.4 + 0.65, 3.4 + 0.65 * 7], rel=0.1)
+    assert c1 * 1e5 == pytest.approx(0.65, rel=0.1)
+    # the offset by hand grows with pressure (0.77 / 2.24 / 2.24 / 3.41 N at 1/3/5/7 bar) ...
+    gain = force["parameters"]["gain_F"]
+    by_hand = _offset_by_pressure(exp, parts)
+    assert by_hand == pytest.approx([0.77, 2.24, 2.24, 3.41], abs=0.01)
+    # ... the gain's offset (g - 1) p A over the held-out 5-7 bar: within 15 % of it (3.12 vs 2.83 N)
+    made = [(gain - 1) * bar * 1e5 * BORE_AREA for bar in (5, 7)]
+    assert np.mean(made) == pytest.approx(np.mean(by_hand[2:]), rel=0.15)
+    # ... and g against a static least-squares fit of F - p A = (a + b p) sign(v) + (g - 1) p A
+    # on all samples (numpy, no simulation): g - 1 = 0.0102 (fitted here: 0.0106)
+    v, p = np.gradient(exp.inputs["x"], exp.t), exp.inputs["p"]
+    basis = np.column_stack([np.sign(v), np.sign(v) * p, p * BORE_AREA])
+    static = np.linalg.lstsq(basis, exp.outputs["F"] - p * BORE_AREA, rcond=None)[0]
+    assert gain - 1 == pytest.approx(static[2], rel=0.1)
+    # RMSE in newtons, each model simulated on the whole recording
     t0, t1 = data["fit"]["holdout"]
     bound = bind(rec, pneumatic_cylinder(), **BINDINGS)
     held = bound.t >= t0
-    friction_only = report.rounds[0]["chosen"].candidate.build(pneumatic_cylinder(), {"c0_piston": c0,
-                                                                                      "c1_piston": c1})
-    rmse = {}
+    friction_only = first["chosen"].candidate.build(pneumatic_cylinder(), {
+        k: first["chosen"].values[k] for k in ("c0_piston", "c1_piston")})
+    rmse, whole = {}, {}
     for label, graph in (("nominal", pneumatic_cylinder()), ("friction", friction_only),
                          ("both", report.improved_graph)):
-        f = OutputSimulator(graph, bound)()["F"]
-        rmse[label] = float(np.sqrt(np.mean((bound.outputs["F"][held] - f[held]) ** 2)))
+        err = bound.outputs["F"] - OutputSimulator(graph, bound)()["F"]
+        rmse[label] = float(np.sqrt(np.mean(err[held] ** 2)))
+        whole[label] = float(np.sqrt(np.mean(err ** 2)))
     assert rmse["nominal"] == pytest.approx(9.29, abs=0.05)     # SOURCE.md-anchored, 5-7 bar end
     assert rmse["friction"] == pytest.approx(3.50, rel=0.1)     # friction only (3.50 N at 50 Hz)
-    assert rmse["both"] < 0.7 * rmse["friction"] and rmse["both"] < 2.5 * 1.06
+    assert rmse["both"] < 0.5 * rmse["friction"]                # measured 1.53 N vs 3.40 N
+    # over the whole recording: near the in-sample anchor 1.06 N though fitted on 1-5 bar only
+    assert whole["nominal"] == pytest.approx(7.42, abs=0.05)
+    assert whole["both"] < 1.25 * 1.06                          # measured 1.25 N
     assert data["fit"]["improved"]["F"] == pytest.approx(rmse["both"] / rmse["nominal"]
                                                          * data["fit"]["nominal"]["F"], rel=1e-6)
     assert "Also missing (round 2): sensor_gain at output F" in report.text
+    assert "Joint refit of all effects' parameters" in report.text

@@ -251,21 +251,18 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     values = objective.params(theta)
     if candidate is not None:
         values = candidate.settle(values, train)
-    try:
-        train_sim = objective.sim(values, x0)
-        train_nrmse = {o: nrmse(train.outputs[o], train_sim[o]) for o in outputs}
-        holdout_nrmse = {}
-        if holdout is not None:
-            full = _joined(train, holdout)
-            held = OutputSimulator(model.equations(), full, outputs=outputs)(values, x0)
-            mask = full.t >= holdout.t[0]
-            holdout_nrmse = {o: nrmse(holdout.outputs[o], held[o][mask]) for o in outputs}
+    try:   # one run of training + held-out part (the training outputs are its first samples)
+        full = _joined(train, holdout) if holdout is not None else train
+        y = objective.sim.on(full)(values, x0)
+        n = train.t.size
+        train_nrmse = {o: nrmse(train.outputs[o], y[o][:n]) for o in outputs}
+        holdout_nrmse = {o: nrmse(holdout.outputs[o], y[o][n:]) for o in outputs} if holdout is not None else {}
     except BondcosimError as exc:
         return CandidateFit(candidate, message=f"{label}: the fitted model does not run: {exc}", graph=model,
                             n_simulations=objective.n_runs, **failed)
     return CandidateFit(candidate, values, train_nrmse, holdout_nrmse, len(specs), converged,
                         message if converged else f"{label} did not converge: {message}", model,
-                        objective.n_runs + 2)
+                        objective.n_runs + 1)
 
 
 def noise_floor(holdout, noise_sigma: dict | None = None) -> dict:

@@ -111,3 +111,18 @@ def test_residuals_fields():
     assert res.run.states.shape == (t.size, 2) and res.run.state_names == ("p_m", "q_k")
     with pytest.raises(UnknownNameError, match="unknown output 'y'"):
         residuals(graph, exp, outputs=["y"])
+
+
+def test_simulator_on_another_experiment_reuses_the_compiled_model():
+    """OutputSimulator.on: the same compiled model on another grid gives the analytic step response
+    there (m=1, b=0.4, k=4), and the outputs of a freshly compiled simulator."""
+    t1, t2 = np.linspace(0.0, 1.0, 101), np.linspace(0.0, 3.0, 601)
+    exp1 = Experiment(t1, {"F": np.ones_like(t1)}, {"x": t1}, {"F": "N", "x": "m"})
+    exp2 = Experiment(t2, {"F": np.ones_like(t2)}, {"x": t2}, {"F": "N", "x": "m"})
+    sim = OutputSimulator(library.build("mass-spring-damper"), exp1)
+    other = sim.on(exp2)
+    assert other.model is sim.model
+    y = other({"k": 4.0})["x"]
+    np.testing.assert_allclose(y, _msd_step(t2), atol=1e-6)
+    np.testing.assert_array_equal(y, OutputSimulator(library.build("mass-spring-damper"), exp2)()["x"])
+    assert sim()["x"].shape == t1.shape          # the original keeps its own grid

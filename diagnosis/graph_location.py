@@ -206,16 +206,24 @@ def locate_on_graph(model, experiment, *, places=None, progress=False) -> list[P
         from .graph_location_linear import LinearisedResponse
         say("locate: linearising along the nominal run")
         lin = LinearisedResponse(sim.model, run, sim.model.param_vector(None), channels, outputs)
+    # the perturbation sequences of every input and junction place, propagated in one pass
+    sequences = {}
+    for i, place in enumerate(places):
+        if place.kind == "input":
+            sequences[i] = (channels.index(place.name), *_input_sequences(ctx, place))
+        elif place.kind == "junction":
+            hats = _hat_basis(ctx.t, _knots(ctx, len(junctions)))
+            sequences[i] = (channels.index(d_inputs[place.name]), hats, None)
+    responses = _responses(lin, ctx.rows, {i: (ch, seq) for i, (ch, seq, _) in sequences.items()})
     scores = []
-    for i, place in enumerate(places, 1):
-        say(f"locate: {place} ({i}/{len(places)})")
+    for i, place in enumerate(places):
+        say(f"locate: {place} ({i + 1}/{len(places)})")
         if place.kind == "output":
             scores.append(_score_output(ctx, place))
         elif place.kind == "input":
-            scores.append(_score_input(ctx, lin, place, channels.index(place.name)))
+            scores.append(_score_input(ctx, place, sequences[i][1], sequences[i][2], responses[i]))
         else:
-            scores.append(_score_junction(ctx, lin, place, d_inputs[place.name],
-                                          channels.index(d_inputs[place.name]), len(junctions), graph))
+            scores.append(_score_junction(ctx, place, d_inputs[place.name], sequences[i][1], responses[i], graph))
     return sorted(scores, key=lambda s: -(s.explained - _TIE_PREFERENCE * _SIMPLICITY[s.place.kind]))
 
 
@@ -309,10 +317,23 @@ def _delayed(u, t, tau):
     return u[np.clip(k, 0, None)]
 
 
-def _score_input(ctx, lin, place, channel) -> PlaceScore:
-    """Actuator correction g(u) + c (L u - u): g piecewise linear in u (offset, gain, hinges
-    at quantiles of u: saturation, dead zone), L a first-order lag or a delay from a grid;
-    the best dynamic term by linearised least squares, then scored by simulation."""
+def _responses(lin, rows, blocks) -> dict:
+    """Linearised responses of several blocks ``key -> (channel, sequences (n, m))`` in one pass
+    along the run (the propagation loop over the samples dominates; its cost hardly grows with m):
+    ``key -> (rows, ny, m)``."""
+    if not blocks:
+        return {}
+    keys = list(blocks)
+    widths = [blocks[k][1].shape[1] for k in keys]
+    channel = np.concatenate([np.full(w, blocks[k][0]) for k, w in zip(keys, widths)])
+    resp = lin.response(channel, np.concatenate([blocks[k][1] for k in keys], axis=1), rows)
+    edges = np.cumsum([0] + widths)
+    return {k: resp[:, :, a:b] for k, a, b in zip(keys, edges[:-1], edges[1:])}
+
+
+def _input_sequences(ctx, place):
+    """The correction terms of an input place as columns: the static ones (offset, gain, hinges
+    at quantiles of u) then the dynamic ones (lags, then delays); (sequences (n, m), n_static)."""
     u = ctx.run.inputs[:, ctx.sim.model.input_index[place.name]].copy()
     t = ctx.t
     dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
@@ -322,11 +343,18 @@ def _score_input(ctx, lin, place, channel) -> PlaceScore:
         if np.ptp(hinge) > 1e-9 * max(np.ptp(u), 1e-300):
             static.append(hinge)
     dynamic = ([_lagged(u, t, k * dt) - u for k in _LAGS] + [_delayed(u, t, k * dt) - u for k in _LAGS])
-    sequences = np.stack(static + dynamic, axis=1)
-    resp = lin.response(np.full(sequences.shape[1], channel), sequences, ctx.rows)   # (rows, ny, m)
+    return np.stack(static + dynamic, axis=1), len(static)
+
+
+def _score_input(ctx, place, sequences, n_static, resp) -> PlaceScore:
+    """Actuator correction g(u) + c (L u - u): g piecewise linear in u (offset, gain, hinges
+    at quantiles of u: saturation, dead zone), L a first-order lag or a delay from a grid;
+    the best dynamic term by linearised least squares (`resp`: the responses to `sequences`,
+    :func:`_input_sequences`), then scored by simulation."""
+    u = ctx.run.inputs[:, ctx.sim.model.input_index[place.name]].copy()
     best = None
-    for j in range(len(dynamic)):
-        cols = list(range(len(static))) + [len(static) + j]
+    for j in range(sequences.shape[1] - n_static):
+        cols = list(range(n_static)) + [n_static + j]
         coef, sse, rank = _weighted_lstsq(resp[:, :, cols], ctx.r_rows, ctx.w)
         if best is None or sse < best[0]:
             best = (sse, cols, coef, rank)
@@ -350,7 +378,14 @@ def _weighted_lstsq(S, r, w):
     return coef, float(np.sum((A @ coef - b) ** 2)), int(rank)
 
 
-def _score_junction(ctx, lin, place, d_input, channel, n_junctions, graph) -> PlaceScore:
+def _knots(ctx, n_junctions) -> int:
+    """Hat functions per junction: a quarter of the rows kept, within the response budget."""
+    n_rows, ny = ctx.r_rows.shape
+    return int(np.clip(min(n_rows // 4, _RESPONSE_BUDGET / (n_rows * ny * max(1, n_junctions))),
+                       _MIN_KNOTS, _MAX_KNOTS))
+
+
+def _score_junction(ctx, place, d_input, hats, resp, graph) -> PlaceScore:
     """Free piecewise-linear extra effort/flow, GCV-regularised, scored by simulation.
 
     The linearised fit can overrate a wiggly estimate (stick-slip, saturating
@@ -358,11 +393,6 @@ def _score_junction(ctx, lin, place, d_input, channel, n_junctions, graph) -> Pl
     ones (lambda x 10, 100, 1000) are all simulated and the best score kept.
     """
     unit = junction_unit(graph, place.name)
-    n_rows, ny = ctx.r_rows.shape
-    knots = int(np.clip(min(n_rows // 4, _RESPONSE_BUDGET / (n_rows * ny * max(1, n_junctions))),
-                        _MIN_KNOTS, _MAX_KNOTS))
-    hats = _hat_basis(ctx.t, knots)
-    resp = lin.response(np.full(knots, channel), hats, ctx.rows)          # (rows, ny, K)
     best = PlaceScore(place, 0.0, np.zeros_like(ctx.t), unit, place.bond, 0.0)
     if not np.isfinite(resp).all():        # a linearisation that diverged: no estimate here
         return best

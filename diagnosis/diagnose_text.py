@@ -135,6 +135,9 @@ def _further_text(rounds, outputs):
     lines = []
     for i, r in enumerate(rounds, 2):
         c = r["chosen"]
+        if c is None and r.get("note"):
+            lines.append(f"Round {i}: nothing more - {r['note']}.")
+            continue
         if c is None and not r["fits"]:
             lines.append(f"Round {i}: nothing more - no place on the improved graph explains a "
                          f"significant share of what is left of the residual.")

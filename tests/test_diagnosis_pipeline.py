@@ -208,6 +208,24 @@ def test_max_effects_one_is_the_single_effect_answer(two_effects_csv):
     assert one.fit["improved"]["x"] > 2 * np.hypot(SIGMA, QUANTUM / np.sqrt(12)) / 0.7   # offset left
 
 
+def test_failed_further_location_keeps_the_first_effect(two_effects_csv, monkeypatch):
+    """A numerical failure of round 2's graph location ends the rounds, said in the text."""
+    import diagnosis.graph_location as graph_location
+    real, calls = graph_location.locate_on_graph, []
+
+    def flaky(*args, **kwargs):
+        calls.append(1)
+        if len(calls) > 1:
+            raise np.linalg.LinAlgError("singular innovation covariance")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(graph_location, "locate_on_graph", flaky)
+    report = diagnose("mass-spring-damper", two_effects_csv, **BINDINGS)
+    assert [m["kind"] for m in report.missing_physics] == ["coulomb_friction"] and len(calls) == 2
+    assert ("Round 2: nothing more - graph location failed: LinAlgError: singular innovation "
+            "covariance") in report.text
+
+
 def test_cli_max_effects(two_effects_csv, capsys):
     from bondcosim.cli import main
     args = ["diagnose", "mass-spring-damper", two_effects_csv, "--input", "F=force_N:N",

@@ -181,10 +181,15 @@ def test_one_effect_second_round_answers_nothing_more(coulomb):
     assert coulomb.timings["round 2"] > 0 and coulomb.timings["round 1"] > 0
 
 
-def test_two_effects_friction_then_sensor_offset(two_effects_csv):
+@pytest.fixture(scope="module")
+def two_effects(two_effects_csv):
+    return diagnose("mass-spring-damper", two_effects_csv, **BINDINGS)
+
+
+def test_two_effects_friction_then_sensor_offset(two_effects):
     """Coulomb friction (0.3 N) and a position-sensor offset (20 mm) concealed together: both
     named, at their places, with their values; each round lowers the held-out NRMSE."""
-    report = diagnose("mass-spring-damper", two_effects_csv, **BINDINGS)
+    report = two_effects
     physics = report.to_json()["missing_physics"]
     assert [(m["kind"], m["attached_to"]) for m in physics] == [("coulomb_friction", "junction v_mass"),
                                                                 ("sensor_offset", "output x")]
@@ -198,14 +203,6 @@ def test_two_effects_friction_then_sensor_offset(two_effects_csv):
     assert report.fit["improved"]["x"] < 3 * np.hypot(SIGMA, QUANTUM / np.sqrt(12)) / 0.7
     assert "Also missing (round 2): sensor_offset at output x" in report.text
     assert set(report.improved_graph.parameters()) >= {"Fc_v_mass", "offset_x"}
-
-
-def test_max_effects_one_is_the_single_effect_answer(two_effects_csv):
-    """Round 1 is unchanged by the further rounds: max_effects=1 gives its numbers alone."""
-    one = diagnose("mass-spring-damper", two_effects_csv, **BINDINGS, max_effects=1)
-    assert [m["kind"] for m in one.missing_physics] == ["coulomb_friction"]
-    assert len(one.rounds) == 1 and "round 2" not in one.text.lower()
-    assert one.fit["improved"]["x"] > 2 * np.hypot(SIGMA, QUANTUM / np.sqrt(12)) / 0.7   # offset left
 
 
 def test_failed_further_location_keeps_the_first_effect(two_effects_csv, monkeypatch):
@@ -226,13 +223,20 @@ def test_failed_further_location_keeps_the_first_effect(two_effects_csv, monkeyp
             "covariance") in report.text
 
 
-def test_cli_max_effects(two_effects_csv, capsys):
+def test_max_effects_one_is_round_one_alone(two_effects_csv, two_effects, capsys):
+    """``--max-effects 1`` (CLI): the single-effect answer, the numbers of round 1 of the
+    two-round diagnosis (the further rounds leave round 1 unchanged); the offset is left."""
     from bondcosim.cli import main
     args = ["diagnose", "mass-spring-damper", two_effects_csv, "--input", "F=force_N:N",
             "--output", "x=position_mm:mm", "--json", "--max-effects", "1"]
     assert main(args) == 0
     data = json.loads(capsys.readouterr().out)
+    first = two_effects.rounds[0]
     assert [m["kind"] for m in data["missing_physics"]] == ["coulomb_friction"]
+    assert data["missing_physics"][0]["parameters"] == pytest.approx(
+        {"Fc_v_mass": first["chosen"].values["Fc_v_mass"]}, rel=1e-12)
+    assert data["fit"]["improved"] == pytest.approx(first["improved"], rel=1e-12)
+    assert data["fit"]["improved"]["x"] > 2 * np.hypot(SIGMA, QUANTUM / np.sqrt(12)) / 0.7
 
 
 # -- bad input: each a clear error naming the thing ---------------------------------

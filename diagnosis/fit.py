@@ -39,6 +39,12 @@ MIN_SHARE = 0.30
 #: nominal excess NRMSE^2 below which an output counts as explained (noise-free data)
 _EXPLAINED = 1e-6
 _FD_STEP = 1e-3  # forward-difference step on the scaled parameters
+#: stopping tolerances of least_squares on the scaled parameters (order one) and the cost: a
+#: relative 1e-5 is far below what the noise lets a fit resolve; scipy's 1e-8 took up to twice
+#: the iterations for no change of the held-out error
+_XTOL, _FTOL = 1e-5, 1e-6
+#: evaluations a fit gets before `abandon_above` is checked
+_ABANDON_AFTER = 3
 
 
 @dataclass
@@ -113,6 +119,10 @@ def _state_dict(graph, x0):
     return dict(zip(names, x0))
 
 
+class _Abandoned(Exception):
+    """A fit stopped early: its training cost stays above the caller's threshold."""
+
+
 class _Objective:
     """Scaled residuals and batch Jacobian of one compiled candidate on the training part."""
 
@@ -125,6 +135,7 @@ class _Objective:
         self.scale = np.array([abs(s.guess) if s.guess != 0 else (s.upper - s.lower) / 10 for s in specs])
         self.n_runs = 0
         self._last = (None, None)
+        self.evaluations, self.best_cost, self.abandon_above = 0, np.inf, None
 
     def params(self, theta) -> dict:
         return {s.name: float(v) for s, v in zip(self.specs, np.asarray(theta) * self.scale)}
@@ -141,6 +152,11 @@ class _Objective:
         if r is None or not np.isfinite(r).all():  # a parameter set the model cannot run: a wall
             r = np.full(sum(len(y) for y in self.measured.values()), 1e3)
         self._last = (np.array(theta, dtype=float), r)
+        self.evaluations += 1
+        self.best_cost = min(self.best_cost, 0.5 * float(r @ r))
+        if (self.abandon_above is not None and self.evaluations > _ABANDON_AFTER
+                and self.best_cost > self.abandon_above):
+            raise _Abandoned(self.best_cost)
         return r
 
     def jacobian(self, theta, lower, upper):
@@ -187,7 +203,8 @@ def _best_start(objective, candidate, theta0):
     return trials[int(np.argmin(costs))]
 
 
-def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, max_nfev: int = 40) -> CandidateFit:
+def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, max_nfev: int = 40,
+                  abandon_above: float | None = None) -> CandidateFit:
     """Fit a candidate's parameters (and uncertain nominal ones) by simulation-error least squares.
 
     Parameters
@@ -207,6 +224,11 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     max_nfev : int
         Budget of residual evaluations of :func:`scipy.optimize.least_squares`
         (each Jacobian is one more batch of ``n_params`` runs).
+    abandon_above : float, optional
+        Training cost :math:`\\tfrac12 \\sum_o \\mathrm{NRMSE}_o^2` above which the fit is given up
+        (``success=False``) once :data:`_ABANDON_AFTER` evaluations have not gone below it: a
+        caller fitting several candidates passes a cost the best one so far makes hopeless to
+        beat.  Every fit reports its training cost in ``extra["train_cost"]``.
 
     Returns
     -------
@@ -242,8 +264,16 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
         if np.all(r0 == 1e3):
             return CandidateFit(candidate, message=f"{label}: the model does not run at the initial guess "
                                 f"{objective.params(theta0)}", graph=model, n_simulations=objective.n_runs, **failed)
-        result = least_squares(objective, theta0, jac=lambda th: objective.jacobian(th, lower, upper),
-                               bounds=(lower, upper), method="trf", x_scale=1.0, max_nfev=max_nfev)
+        objective.abandon_above = abandon_above
+        try:
+            result = least_squares(objective, theta0, jac=lambda th: objective.jacobian(th, lower, upper),
+                                   bounds=(lower, upper), method="trf", x_scale=1.0, max_nfev=max_nfev,
+                                   xtol=_XTOL, ftol=_FTOL)
+        except _Abandoned as stop:
+            return CandidateFit(candidate, message=f"{label}: abandoned after {objective.evaluations} "
+                                f"evaluations, training cost {stop.args[0]:.4g} > {abandon_above:.4g}",
+                                graph=model, n_simulations=objective.n_runs,
+                                extra={"train_cost": stop.args[0]}, **failed)
         theta, converged = result.x, bool(result.success)
         message = f"{result.message} ({result.nfev} evaluations, {objective.n_runs} simulations)"
     else:
@@ -262,7 +292,8 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
                             n_simulations=objective.n_runs, **failed)
     return CandidateFit(candidate, values, train_nrmse, holdout_nrmse, len(specs), converged,
                         message if converged else f"{label} did not converge: {message}", model,
-                        objective.n_runs + 1)
+                        objective.n_runs + 1,
+                        {"train_cost": 0.5 * float(sum(v ** 2 for v in train_nrmse.values()))})
 
 
 def noise_floor(holdout, noise_sigma: dict | None = None) -> dict:

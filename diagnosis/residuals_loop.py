@@ -56,7 +56,7 @@ def integrate_samples(model, t, U, subs, x, d, p):
     D = np.empty((t.size, *d.shape))
     X[0], D[0] = x, d
     hs = (np.diff(t) / subs).tolist()
-    ms = [int(m) for m in subs]
+    ms = np.asarray(subs, dtype=int).tolist()
     ts = t.tolist()
     rk4 = _c_function(model)
     if rk4 is None:

@@ -259,3 +259,17 @@ def test_a_window_cut_mid_run_starts_the_added_lag_at_the_command(msd):
     fit = fit_candidate(msd, _candidate(msd, Place("input", "F"), "valve_lag", train), train, hold, x0=x0)
     # the truth's actuator state at the cut is not exactly F there (it lags), so a small bias is left
     assert fit.values["tau_lag_F"] == pytest.approx(0.3, rel=0.05)
+
+
+def test_a_fit_far_behind_a_threshold_is_abandoned_early(msd, rng):
+    """abandon_above: a training cost no evaluation gets below stops the fit after 3 evaluations;
+    an unreachable-to-miss threshold changes nothing; the training cost is 0.5 sum NRMSE^2."""
+    train, hold = _record(coulomb_truth(), rng=rng, noise=0.02).split(0.3)
+    cand = _candidate(msd, Place("junction", "v_mass"), "coulomb_friction", train)
+    full = fit_candidate(msd, cand, train, hold)
+    assert full.extra["train_cost"] == pytest.approx(0.5 * sum(v ** 2 for v in full.train_nrmse.values()))
+    same = fit_candidate(msd, cand, train, hold, abandon_above=10.0)
+    assert same.success and same.values == full.values
+    stopped = fit_candidate(msd, cand, train, hold, abandon_above=1e-9)
+    assert not stopped.success and "abandoned after 4 evaluations" in stopped.message
+    assert stopped.extra["train_cost"] > 1e-9 and stopped.n_simulations < full.n_simulations

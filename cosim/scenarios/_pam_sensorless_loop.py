@@ -30,13 +30,14 @@ import bondgraph.library as library
 from bondgraph.blockdiagram import pam as pam_bd
 from bondgraph.errors import CosimError
 from bondgraph.evaluate import compile_model
-from estimators import DiscretePI, JulierSigmaPoints, StateMap
+from estimators import DiscretePI, JulierSigmaPoints
 
 from ..blocks import Table
 from ..component import Port, PythonBlock
 from ..estimator_blocks import UKFBlock
 from ..fmu_component import FMUComponent
 from ..master import CoSimulation
+from ._pam_paper_ukf import KAPPA, PAPER_P0, PAPER_Q, PAPER_R, paper_state_map
 from ._pam_rig import export_rig, rig_start_values
 
 __all__ = ["DiscretePIBlock", "PressureSensors", "build_loop", "BETA", "SAMPLE", "NOISE_PA",
@@ -47,10 +48,8 @@ SAMPLE = 1e-3       # s, sampling period T_stp = communication step
 #: Pressure-sensor noise, Pa (standard deviation): E8F2-B10C, 1 MPa full scale, +-1 % FS;
 #: it matches the paper's R = diag(1e8, 1e8) Pa^2.
 NOISE_PA = 1e4
-# Section IV of [1] (line "The UKF parameters are determined as"), x = (psi, dpsi, P1, P2):
-UKF_P0 = np.diag([1e-5, 1e-4, 1e6, 1e6])   # rad^2, (rad/s)^2, Pa^2, Pa^2
-UKF_Q = np.diag([1e-5, 1e-4, 1e6, 1e6])
-UKF_R = np.diag([1e8, 1e8])                 # Pa^2
+# Section IV of [1]: P(0), Q, R of the UKF, x = (psi, dpsi, P1, P2)
+UKF_P0, UKF_Q, UKF_R = PAPER_P0, PAPER_Q, PAPER_R
 
 
 class DiscretePIBlock(PythonBlock):
@@ -127,15 +126,13 @@ def _ukf_block(locked: bool) -> UKFBlock:
     name = "pam-locked" if locked else "pam"
     model = compile_model(library.build(name).equations())
     rest = pam_bd.equilibrium([BETA, BETA], variant="locked" if locked else "full")  # rad, rad/s, Pa, Pa
-    points = JulierSigmaPoints(2 if locked else 4, kappa=0.0)
+    points = JulierSigmaPoints(2 if locked else 4, kappa=KAPPA)
     if locked:   # psi = dpsi = 0: the filter keeps the pressure block of P(0), Q
         return UKFBlock.from_model("ukf", model, dt=SAMPLE, outputs=("P1", "P2"), x0=rest[2:],
                                    P0=UKF_P0[2:, 2:], Q=UKF_Q[2:, 2:], R=UKF_R, points=points,
                                    estimates=("tau",))
     J = model.default_params[model.param_index["J"]]
-    smap = StateMap.scaled(model.state_names, {"psi": ("q_psi", 1.0), "dpsi": ("p_J", J),
-                                               "P1": ("P_1", 1.0), "P2": ("P_2", 1.0)},
-                           units=("rad", "rad/s", "Pa", "Pa"))
+    smap = paper_state_map(model.state_names, J)
     return UKFBlock.from_model("ukf", model, dt=SAMPLE, outputs=("P1", "P2"), x0=rest, P0=UKF_P0,
                                Q=UKF_Q, R=UKF_R, points=points, state_map=smap,
                                estimates=("psi", "tau"))

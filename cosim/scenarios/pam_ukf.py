@@ -64,6 +64,7 @@ from estimators.ukf_model import StateMap
 from ..blocks import Table
 from ..fmu_component import FMUComponent
 from ..master import CoSimulation
+from ._pam_paper_ukf import KAPPA, PAPER_P0, PAPER_Q, PAPER_R, paper_state_map
 from ._pam_rig import RIG_PERTURBATION, add_pressure_noise, export_rig, nominal_equations, rig_start_values
 from ._pam_ukf_metrics import indices
 
@@ -79,11 +80,6 @@ U_PRE = (5.0, 5.0)                    # V, valve commands the rig rests under be
 SIGMA_P = 1e4                         # Pa, pressure-sensor noise (std) = sqrt(R_ii)
 SEED = 5                              # numpy.random.default_rng seed of the noise
 T_CONVERGE = 1.0                      # s, indices from here on (after the shared initial error)
-KAPPA = 0.0                           # Julier sigma-point parameter, Section IV of [1]
-# Section IV of [1]: P(0) = Q = diag(1e-5 rad^2, 1e-4 (rad/s)^2, 1e6 Pa^2, 1e6 Pa^2), R = diag(1e8, 1e8) Pa^2
-P0_DIAG = (1e-5, 1e-4, 1e6, 1e6)
-Q_DIAG = (1e-5, 1e-4, 1e6, 1e6)
-R_DIAG = (1e8, 1e8)
 
 #: Section IV-A of [1]: offline estimation (Figs. 9, 10), angle in deg, torque in N m.
 PAPER_OFFLINE = {
@@ -158,10 +154,7 @@ def _profile(t, u, who: str):
 @lru_cache(maxsize=1)
 def _state_map() -> StateMap:
     """The paper's :math:`x = (\\psi, \\dot\\psi, P_1, P_2)` over the model's states (p_J = J psi')."""
-    J = parameter_values()["J"]
-    return StateMap.scaled(nominal_equations().state_names,
-                           {"psi": ("q_psi", 1.0), "dpsi": ("p_J", J), "P1": ("P_1", 1.0), "P2": ("P_2", 1.0)},
-                           units=("rad", "rad/s", "Pa", "Pa"))
+    return paper_state_map(nominal_equations().state_names, parameter_values()["J"])
 
 
 def estimator_start(u0, *, locked: bool = False) -> np.ndarray:
@@ -201,7 +194,7 @@ def make_ukf(x0, *, locked: bool = False) -> UnscentedKalmanFilter:
     n = 2 if locked else 4
     return UnscentedKalmanFilter.from_model(
         nominal_equations(locked=locked), dt=SAMPLE_TIME, substeps=round(SAMPLE_TIME / FRICTION_STEP), outputs=("P1", "P2"),
-        x0=x0, P0=np.diag(P0_DIAG[keep]), Q=np.diag(Q_DIAG[keep]), R=np.diag(R_DIAG),
+        x0=x0, P0=PAPER_P0[keep, keep], Q=PAPER_Q[keep, keep], R=PAPER_R,
         points=JulierSigmaPoints(n, kappa=KAPPA), state_map=None if locked else _state_map())
 
 

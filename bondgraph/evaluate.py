@@ -342,6 +342,19 @@ class CompiledModel:
         if nz:
             self._z_warm[n] = z
 
+    def rk4_samples(self, t, U, substeps, x, d, p):
+        """RK4 over every sample interval of `t`, inputs held per interval, a batch at once.
+
+        The loop of :meth:`rk4_step` over a whole recording without its per-call
+        argument checks (:mod:`bondgraph.evaluate_samples`): `x`, `d` are
+        C-contiguous ``(n_batch, n)`` arrays, overwritten with the final values;
+        `U` has one input row per sample; `substeps` one entry per interval;
+        `p` is ``(1 or n_batch, n_params)``.  Returns ``X`` ``(n_t, n_batch,
+        n_states)`` and ``D`` ``(n_t, n_batch, n_held)``.
+        """
+        from .evaluate_samples import rk4_samples
+        return rk4_samples(self, t, U, substeps, x, d, p)
+
     def rk4_step(self, x, u=None, *, t0=0.0, h, substeps=1, p=None, d=None):
         """`substeps` classic RK4 sub-steps of `h` s from `t0`, inputs held: one sample.
 

@@ -241,8 +241,6 @@ class OutputSimulator:
         """
         from bondgraph.errors import SimulationError
 
-        from .residuals_loop import integrate_samples
-
         m = self.model
         P = np.ascontiguousarray(np.vstack([m.param_vector(q) for q in params_list]))
         n = P.shape[0]
@@ -255,7 +253,7 @@ class OutputSimulator:
             raise SimulationError(f"model {self.equations.name!r}: {subs.max()} RK4 sub-steps of "
                                   f"{h_max:.3g} s per sample interval needed (stiff model or sparse "
                                   "samples); resample the recording", time=float(self.t[0]))
-        X, D = integrate_samples(m, self.t, self.U, subs, x, d, P)
+        X, D = m.rk4_samples(self.t, self.U, subs, x, d, P)
         runs = []
         for i in range(n):
             Xi, Di = np.ascontiguousarray(X[:, i]), np.ascontiguousarray(D[:, i])

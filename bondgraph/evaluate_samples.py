@@ -1,18 +1,19 @@
-"""The sample loop of :class:`diagnosis.residuals.OutputSimulator`.
+"""RK4 over many sample intervals in one call: :meth:`CompiledModel.rk4_samples`.
 
 One compiled RK4 call per sample interval, inputs held over it.  On the C
 backend the loop calls ``bc_rk4`` (its C contract is documented in
 :mod:`bondgraph.codegen_c`) with the argument pointers computed once, which
 takes the per-sample cost from about 13 us (``CompiledModel.rk4_step``
 argument normalisation) to about 5 us on pam; other backends go through
-``CompiledModel._rk4``.  Both give identical numbers (tested).  A batch of
-rows (parameter sets) is integrated in the same calls.
+``CompiledModel._rk4``.  Both give identical numbers (tested in
+``tests/test_diagnosis_residuals.py``).  A batch of rows (parameter sets) is
+integrated in the same calls.
 """
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["integrate_samples"]
+__all__ = ["rk4_samples"]
 
 
 def _c_function(model):
@@ -21,7 +22,7 @@ def _c_function(model):
     return getattr(main, "rk4", None) if model.backend == "c" else None
 
 
-def integrate_samples(model, t, U, subs, x, d, p):
+def rk4_samples(model, t, U, subs, x, d, p):
     """Integrate a batch over the sample intervals of `t`.
 
     Parameters

@@ -1,0 +1,173 @@
+"""Truth plants of the generalisation benchmark: hand-written right-hand sides.
+
+A :class:`TruthPlant` is a plant written directly as numpy state equations,
+independently of the bond-graph code and of the diagnosis catalogue (it
+imports neither), beside the name of the nominal library model it mirrors.
+With no effect, its outputs equal the nominal model's (a test checks every
+plant against ``bondgraph.simulate`` of its nominal model); a concealed effect
+enters through one of four doors:
+
+* ``extra`` -- an effort added at a 1-junction or a flow added at a
+  0-junction, keyed by the junction's element name in the nominal graph
+  (friction, a constant load, a leak, a changed spring law, an end stop);
+* a plant-specific law hook (:attr:`TruthPlant.laws`): some effects change a
+  constitutive law that is not a junction sum (a chamber's heat exchange);
+* the inputs before the plant (actuator saturation, delay, lag: done by the
+  effect, see :mod:`diagnosis.benchmark.effects`);
+* the outputs after the plant (sensor offset, gain, range).
+
+Sign convention of ``extra``: the effort (1-junction) or flow (0-junction)
+that the effect puts INTO the junction, i.e. it adds to the sum that drives
+the junction's storage.  Friction at a 1-junction of velocity ``v`` is
+``extra = -F(v)``; a leak out of a 0-junction at pressure ``p`` is
+``extra = -Q(p)``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+__all__ = ["InputSpec", "OutputSpec", "JunctionSpec", "StorageSpec", "TruthPlant"]
+
+
+@dataclass(frozen=True)
+class InputSpec:
+    """One input: its nominal-model name, SI unit, command range and DAC resolution.
+
+    ``hold`` is the (shortest, longest) time a random level is held, s: long
+    enough for the plant to respond, short enough to excite its dynamics.
+    ``ambient`` is the value the input rests at (pam valves: 5 V closed).
+    """
+
+    name: str
+    unit: str
+    low: float
+    high: float
+    quantum: float
+    hold: tuple[float, float]
+    ambient: float = 0.0
+
+
+@dataclass(frozen=True)
+class OutputSpec:
+    """One measured output: nominal-model name and SI unit."""
+
+    name: str
+    unit: str
+
+
+@dataclass(frozen=True)
+class JunctionSpec:
+    """A junction of the nominal graph where an effort (1) or flow (0) may be added.
+
+    ``kind`` is ``"1"`` (common flow: ``signals[name]`` is that flow, e.g. a
+    velocity) or ``"0"`` (common effort: ``signals[name]`` is that effort,
+    e.g. a pressure).  ``ambient`` is the effort a leak flows towards (0 for
+    gauge pressures, the atmosphere for absolute ones).  ``pressures`` names
+    the signals that may modulate a friction law there (pneumatic plants).
+    ``equivalent`` lists junctions no recording can tell apart from this one
+    (rigidly geared through a TF: one degree of freedom).
+    """
+
+    name: str
+    kind: str
+    domain: str
+    ambient: float = 0.0
+    pressures: tuple[str, ...] = ()
+    equivalent: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class StorageSpec:
+    """A storage element (C) of the nominal graph whose law an effect may change.
+
+    ``junction`` is the junction where a change of its effort acts (the
+    1-junction whose velocity loads a spring, or the 0-junction of a tank);
+    ``signals[name]`` is its content (displacement, twist, volume) and
+    ``stiffness`` its nominal linear coefficient (effort per content) when the
+    law is linear, else ``None``.  ``sign``: +1 when an added spring effort
+    ``e(q)`` enters ``junction`` as ``-e(q)`` (a spring opposing the motion that
+    loads it), -1 when it enters as ``+e(q)``.
+    """
+
+    name: str
+    junction: str
+    stiffness: float | None
+    sign: float = 1.0
+    content_range: tuple[float, float] | None = None
+
+
+@dataclass
+class TruthPlant:
+    """A plant as hand-written state equations, mirroring a nominal library model.
+
+    Parameters
+    ----------
+    name : str
+        Benchmark name of the plant.
+    model : str
+        The nominal model the diagnosis is given (a ``bondgraph.library`` name).
+    inputs, outputs : tuple
+        :class:`InputSpec` / :class:`OutputSpec`, in the nominal model's names and units.
+    states : tuple of str
+        Names of the truth states (documentation; any order).
+    x0 : ndarray
+        Initial state (equal to the nominal model's initial state).
+    rhs : callable ``(x, u, extra) -> dx``
+        ``x`` state (n,), ``u`` dict input name -> value, ``extra`` dict junction
+        name -> added effort/flow (missing keys are 0).
+    signals : callable ``(x, u) -> dict``
+        Local variables an effect may need: the flow of each 1-junction and the
+        effort of each 0-junction in :attr:`junctions` (by junction name), each
+        storage's content (by storage name), pressures (by name).
+    measure : callable ``(x, u) -> dict``
+        The outputs, nominal-model names, SI.
+    junctions, storages : tuple
+        Where effects may act (:class:`JunctionSpec`, :class:`StorageSpec`).
+    rate : float, Hz
+        Sample rate of its recordings.
+    duration : float, s
+        Length of its recordings.
+    substeps : int
+        RK4 sub-steps per sample (``method="rk4"``).
+    method : {"rk4", "lsoda"}
+        ``"lsoda"`` for stiff plants (scipy, ``max_step`` one sample).
+    drifts : bool
+        The nominal model integrates its inputs (no restoring force): an
+        unmodelled effect makes its simulation drift away from the recording.
+    laws : dict
+        Plant-specific effect hooks (``name -> callable``), documented per plant.
+    """
+
+    name: str
+    model: str
+    inputs: tuple[InputSpec, ...]
+    outputs: tuple[OutputSpec, ...]
+    states: tuple[str, ...]
+    x0: np.ndarray
+    rhs: Callable
+    signals: Callable
+    measure: Callable
+    junctions: tuple[JunctionSpec, ...] = ()
+    storages: tuple[StorageSpec, ...] = ()
+    rate: float = 100.0
+    duration: float = 20.0
+    substeps: int = 4
+    method: str = "rk4"
+    drifts: bool = False
+    laws: dict = field(default_factory=dict)
+    description: str = ""
+
+    def junction(self, name: str) -> JunctionSpec:
+        for j in self.junctions:
+            if j.name == name:
+                return j
+        raise KeyError(f"plant {self.name}: no junction {name!r}; it has {[j.name for j in self.junctions]}")
+
+    def storage(self, name: str) -> StorageSpec:
+        for s in self.storages:
+            if s.name == name:
+                return s
+        raise KeyError(f"plant {self.name}: no storage {name!r}; it has {[s.name for s in self.storages]}")

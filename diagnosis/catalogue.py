@@ -19,6 +19,7 @@ Which kinds at which place (:func:`candidates`):
   (:mod:`diagnosis.catalogue_friction`, :mod:`diagnosis.catalogue_storage`);
 * 0-junction: ``leak``, ``heat_transfer`` (pneumatic / thermal only),
   ``nonlinear_stiffness`` for each C on it;
+* 0- and 1-junction: ``constant_load`` (:mod:`diagnosis.catalogue_loads`);
 * input: ``valve_lag``, ``transport_delay``, ``saturation``;
 * output: ``sensor_offset``, ``sensor_gain`` (:mod:`diagnosis.catalogue_signals`).
 """
@@ -33,6 +34,7 @@ from bondgraph.io_json import graph_from_dict
 
 from .catalogue_common import ParamSpec, add_parameter
 from .catalogue_friction import FRICTION_KINDS, build_friction, explain_friction, make_friction
+from .catalogue_loads import LOAD_KINDS, build_load, explain_load, make_load
 from .catalogue_scales import experiment_times, junction_scales
 from .catalogue_signals import (INPUT_KINDS, OUTPUT_KINDS, build_signal, explain_signal, make_input,
                                 make_output)
@@ -42,12 +44,13 @@ from .place import Place
 
 __all__ = ["KINDS", "ParamSpec", "Candidate", "candidates"]
 
-#: The vocabulary of issue 6, in its order.
+#: The vocabulary, in its order (issue 6's kinds, then constant_load).
 KINDS = ("coulomb_friction", "viscous_friction", "stribeck_friction", "pressure_dependent_friction", "leak",
          "heat_transfer", "valve_lag", "transport_delay", "hysteresis", "backlash", "nonlinear_stiffness",
-         "saturation", "sensor_offset", "sensor_gain")
+         "saturation", "sensor_offset", "sensor_gain", "constant_load")
 
 _FAMILIES = {**{k: (build_friction, explain_friction) for k in FRICTION_KINDS},
+             **{k: (build_load, explain_load) for k in LOAD_KINDS},
              **{k: (build_storage, explain_storage) for k in STORAGE_KINDS},
              **{k: (build_signal, explain_signal) for k in INPUT_KINDS + OUTPUT_KINDS}}
 assert set(_FAMILIES) == set(KINDS)
@@ -224,7 +227,7 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None) -
             junctions = [n for n, e in graph.elements.items() if e.kind in ("0", "1")]
             raise UnknownNameError("junction", place.name, junctions, model=graph.name)
         scales, values = junction_scales(graph, place.name, experiment)
-        protos = make_storage(graph, place, scales, taken, values)
+        protos = make_storage(graph, place, scales, taken, values) + make_load(graph, place, scales, taken)
         if element.kind == "1":
             protos = make_friction(graph, place, scales, taken, values) + protos
             protos = _regime_first(protos, regime_variables)

@@ -76,23 +76,25 @@ def pneumatic_tank():
 
 
 def test_kinds_are_the_issue_vocabulary_in_order():
-    # issue 6, section 2c, verbatim order
+    # issue 6, section 2c, verbatim order; then issue 11's constant load
     assert KINDS == ("coulomb_friction", "viscous_friction", "stribeck_friction", "pressure_dependent_friction",
                      "leak", "heat_transfer", "valve_lag", "transport_delay", "hysteresis", "backlash",
-                     "nonlinear_stiffness", "saturation", "sensor_offset", "sensor_gain")
+                     "nonlinear_stiffness", "saturation", "sensor_offset", "sensor_gain", "constant_load")
 
 
 def test_places_offer_the_kinds_that_make_sense():
     msd = library.build("mass-spring-damper")
     at = lambda g, p: [c.kind for c in candidates(g, p)]  # noqa: E731
     assert at(msd, Place("junction", "v_mass")) == ["coulomb_friction", "viscous_friction", "stribeck_friction",
-                                                    "hysteresis", "backlash", "nonlinear_stiffness"]
+                                                    "hysteresis", "backlash", "nonlinear_stiffness",
+                                                    "constant_load"]
     assert at(msd, Place("input", "F")) == ["valve_lag", "transport_delay", "saturation"]
     assert at(msd, Place("output", "x")) == ["sensor_offset", "sensor_gain"]
     cyl = hydraulic_cylinder()
     assert "pressure_dependent_friction" in at(cyl, Place("junction", "rod"))
-    assert at(cyl, Place("junction", "chamber")) == ["leak", "nonlinear_stiffness"]  # hydraulic: no heat transfer
-    assert at(pneumatic_tank(), Place("junction", "tank")) == ["leak", "heat_transfer", "nonlinear_stiffness"]
+    assert at(cyl, Place("junction", "chamber")) == ["leak", "nonlinear_stiffness", "constant_load"]  # no heat transfer
+    assert at(pneumatic_tank(), Place("junction", "tank")) == ["leak", "heat_transfer", "nonlinear_stiffness",
+                                                             "constant_load"]
 
 
 @pytest.mark.parametrize("kind, expected", [
@@ -102,6 +104,7 @@ def test_places_offer_the_kinds_that_make_sense():
     ("hysteresis", "-F_dahl_v_mass"),
     ("nonlinear_stiffness", "-k3_k*q_k**3"),
     ("backlash", "k*q_k - k*(q_k - Max(-b_play_k, Min(b_play_k, q_k)))"),
+    ("constant_load", "-F0_v_mass"),
 ])
 def test_junction_kinds_add_exactly_their_effort(kind, expected):
     msd = library.build("mass-spring-damper")
@@ -132,6 +135,13 @@ def test_leak_is_an_r_from_the_zero_junction_to_ambient():
     P = 101325 + S("m_air") * 287 * 293 / sp.Rational(1, 100)
     _differs_by(built, tank, "m_air", -S("c_leak_tank") * (P - S("P_amb_tank")))
     assert built.elements["leak_tank"].kind == "R"
+
+
+def test_constant_load_at_a_zero_junction_is_a_constant_flow():
+    tank = pneumatic_tank()
+    built = _one(tank, Place("junction", "tank"), "constant_load").build(tank, {"Q0_tank": 1e-6})
+    _differs_by(built, tank, "m_air", -S("Q0_tank"))
+    assert built.parameters()["Q0_tank"].value == 1e-6
 
 
 def test_heat_transfer_is_an_rc_branch_on_the_chamber():

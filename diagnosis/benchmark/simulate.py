@@ -35,7 +35,8 @@ class NoEffect:
         return u
 
     def extra(self, sig: dict, u: dict, z: np.ndarray) -> tuple[dict, np.ndarray]:
-        """Efforts/flows added at junctions and the effect's state derivatives."""
+        """Efforts/flows added at junctions and the effect's state derivatives, given the
+        plant's local signals `sig` and the commands `u` as recorded (before any lag)."""
         return {}, np.zeros(0)
 
     def sensed(self, y: dict) -> dict:
@@ -43,7 +44,8 @@ class NoEffect:
         return y
 
 
-def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None) -> dict:
+def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None, *, x0=None,
+                   signals: bool = False) -> dict:
     """Noise-free outputs of `plant` (with `effect`) at the sample times `t`.
 
     Parameters
@@ -55,6 +57,11 @@ def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None) -> di
         Commands in the plant's SI units, held from each sample to the next.
     effect : object, optional
         A :mod:`diagnosis.benchmark.effects` effect (default: none).
+    x0 : ndarray, optional
+        Plant state at ``t[0]`` (default ``plant.x0``); the effect's own states start at theirs.
+    signals : bool
+        Also return the plant's local signals along the run (``"_signals"``: name -> ndarray)
+        and its states (``"_states"``, shape (n, len(plant.x0))).
 
     Returns
     -------
@@ -66,12 +73,12 @@ def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None) -> di
     u = {k: np.asarray(v, float) for k, v in effect.delayed_inputs(t, u).items()}
     names = list(u)
     nx = len(plant.x0)
-    s0 = np.concatenate([np.asarray(plant.x0, float), effect.z0(plant)])
+    s0 = np.concatenate([np.asarray(plant.x0 if x0 is None else x0, float), effect.z0(plant)])
 
     def f(s, uk):
         x, z = s[:nx], s[nx:]
         ue = effect.inputs_now(uk, z)
-        ext, dz = effect.extra(plant.signals(x, ue), ue, z)
+        ext, dz = effect.extra(plant.signals(x, ue), uk, z)
         return np.concatenate([plant.rhs(x, ue, ext), dz])
 
     n = t.size
@@ -109,6 +116,7 @@ def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None) -> di
         raise ValueError(f"plant {plant.name}: unknown method {plant.method!r} (rk4 or lsoda)")
 
     out = {o.name: np.full(n, np.nan) for o in plant.outputs}
+    local = {}
     for k in range(n):
         if not np.all(np.isfinite(states[k])):
             break
@@ -117,5 +125,10 @@ def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None) -> di
         y = effect.sensed(plant.measure(x, ue))
         for o in plant.outputs:
             out[o.name][k] = y[o.name]
+        if signals:
+            for key, v in plant.signals(x, ue).items():
+                local.setdefault(key, np.full(n, np.nan))[k] = v
     out["_finite"] = finite
+    if signals:
+        out["_signals"], out["_states"] = local, states[:, :nx]
     return out

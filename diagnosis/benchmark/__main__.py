@@ -1,0 +1,97 @@
+"""``python -m diagnosis.benchmark [--cases N] [--seed S] [--report DIR] [--jobs J] [--plants A,B]``.
+
+Draws N cases (default 80), diagnoses each recording as a user would, and
+writes into DIR (default ``benchmark-report``): one JSON file per case
+(``cases/LABEL.json``; a rerun with the same DIR skips finished cases),
+``results.json`` (all scores and the summary), ``results.md`` (the tables)
+and ``results.png`` (confusion matrix, held-out improvement, time per case).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+
+from .draw import draw_cases
+from .plants import PLANTS
+from .report import summarise, write_report
+from .run import run_case
+
+
+def _work(args):
+    spec, workdir, max_effects = args
+    import os
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    return run_case(spec, PLANTS, workdir, max_effects=max_effects)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m diagnosis.benchmark", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--cases", type=int, default=80, help="number of cases (default 80)")
+    ap.add_argument("--seed", type=int, default=2026, help="benchmark seed (default 2026)")
+    ap.add_argument("--report", default="benchmark-report", help="output directory")
+    ap.add_argument("--jobs", type=int, default=1, help="cases diagnosed in parallel (processes)")
+    ap.add_argument("--plants", default="", help="comma-separated plant names (default: all)")
+    ap.add_argument("--only", default="", help="comma-separated case indices to run")
+    ap.add_argument("--max-effects", type=int, default=2, help="passed to diagnose (default 2)")
+    a = ap.parse_args(argv)
+    if a.cases < 1 or a.jobs < 1:
+        ap.error("--cases and --jobs must be positive")
+    plants = PLANTS
+    if a.plants:
+        unknown = [p for p in a.plants.split(",") if p not in PLANTS]
+        if unknown:
+            ap.error(f"unknown plant(s) {', '.join(unknown)}; known: {', '.join(PLANTS)}")
+        plants = {p: PLANTS[p] for p in a.plants.split(",")}
+    specs = draw_cases(a.cases, a.seed, plants)
+    if a.only:
+        keep = {int(i) for i in a.only.split(",")}
+        specs = [s for s in specs if s.index in keep]
+    out = Path(a.report)
+    (out / "cases").mkdir(parents=True, exist_ok=True)
+    (out / "recordings").mkdir(exist_ok=True)
+    results, todo = [], []
+    for s in specs:
+        f = out / "cases" / f"{s.label}.json"
+        if f.exists():
+            results.append(json.loads(f.read_text()))
+        else:
+            todo.append(s)
+    print(f"benchmark: {len(specs)} cases ({len(results)} done before), seed {a.seed}, {a.jobs} job(s)",
+          file=sys.stderr, flush=True)
+    start = time.perf_counter()
+    jobs = [(s, out / "recordings", a.max_effects) for s in todo]
+    done = 0
+
+    def record(r):
+        nonlocal done
+        done += 1
+        results.append(r)
+        (out / "cases" / f"{r['label']}.json").write_text(json.dumps(r, indent=1))
+        el = time.perf_counter() - start
+        eta = el / done * (len(todo) - done)
+        verdict = ("GEN-ERROR " + r["generator_error"]) if "generator_error" in r else (
+            f"{'ok ' if r['kind_ok'] else 'BAD'} {r['kind']} -> {r['answer_kind']}"
+            f" ({'place ok' if r['place_ok'] else 'place ' + (r['answer_place'] or '-')})"
+            f" {r['seconds_diagnose']:.0f} s")
+        print(f"benchmark: [{done}/{len(todo)} {el:6.0f} s, eta {eta:5.0f} s] {r['label']}: {verdict}",
+              file=sys.stderr, flush=True)
+
+    if a.jobs == 1:
+        for j in jobs:
+            record(_work(j))
+    else:
+        with ProcessPoolExecutor(a.jobs) as pool:
+            for fut in as_completed([pool.submit(_work, j) for j in jobs]):
+                record(fut.result())
+    summary = summarise(results)
+    write_report(results, summary, out, seed=a.seed)
+    print(json.dumps(summary["headline"], indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

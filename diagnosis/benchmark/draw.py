@@ -1,0 +1,326 @@
+"""Random benchmark cases: plant x effect kind x place x magnitude x excitation x sensors.
+
+:func:`draw_cases` draws the case list (cheap, no simulation); :func:`realise`
+makes one case's recording.  All randomness comes from seeded generators, so a
+case is reproduced from ``(benchmark seed, case index)``.
+
+Magnitude.  An effect is sized by the change it makes to the affected output:
+its magnitude ``m`` is calibrated (secant steps in log m) until
+``rms(truth - nominal) / std(y)`` is a drawn target ``r`` (3-30 %), the
+*affected* output being the one it changes most.  The sensor noise is then
+set from a drawn effect-to-noise ratio ``R`` (3-30): ``sigma = rms(diff) / R``
+on the affected output and the same share of each output's spread on the
+others; the quantum (resolution) is a drawn fraction (0.2-1.5) of sigma.
+On a plant whose nominal model integrates its inputs (``plant.drifts``)
+the difference is measured segment-wise instead: the nominal model restarted
+from the truth's state every tenth of the record (an open-loop difference
+there is mostly drift, which any tiny effect produces).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .effects import KIND_PLACES, make_effect, places_for
+from .plant import TruthPlant
+from .simulate import simulate_truth
+
+__all__ = ["CaseSpec", "Realised", "draw_cases", "realise", "excitation", "EXCITATIONS"]
+
+EXCITATIONS = ("levels", "prbs", "levels+sine")
+KINDS = tuple(KIND_PLACES)
+#: Cases drawn on a plant whose nominal integrates its inputs, every this many.
+DRIFT_EVERY = 7
+#: Null cases, every this many (offset 3).
+NULL_EVERY = 6
+
+
+@dataclass(frozen=True)
+class CaseSpec:
+    """One drawn case (before simulation)."""
+
+    index: int
+    seed: int
+    plant: str
+    kind: str                       # "none" for a null case
+    door: str = ""                  # junction / storage / input / output
+    name: str = ""
+    target_change: float = 0.0     # rms(diff) / std(y) aimed at
+    ratio: float = 0.0             # effect-to-noise aimed at
+    excitation: str = "levels"
+    noise_share: float = 0.0       # null cases: sigma / std(y)
+
+    @property
+    def label(self) -> str:
+        where = f"@{self.door}:{self.name}" if self.kind != "none" else ""
+        return f"{self.index:03d}-{self.plant}-{self.kind}{where}"
+
+
+def draw_cases(n: int, seed: int, plants: dict) -> list[CaseSpec]:
+    """`n` cases over `plants` (name -> factory): kinds balanced, >= 15 % nulls, drifting plants
+    every :data:`DRIFT_EVERY` th case."""
+    rng = np.random.default_rng(seed)
+    built = {name: f() for name, f in plants.items()}
+    drifting = [p for p, pl in built.items() if pl.drifts]
+    specs = []
+    for i in range(n):
+        case_seed = int(rng.integers(2 ** 31))
+        exc = str(rng.choice(EXCITATIONS))
+        if i % NULL_EVERY == 3:
+            plant = str(rng.choice(sorted(built)))
+            specs.append(CaseSpec(i, case_seed, plant, "none", excitation=exc,
+                                  noise_share=float(math.exp(rng.uniform(math.log(0.003), math.log(0.03))))))
+            continue
+        pool = drifting if (i % DRIFT_EVERY == 0 and drifting) else sorted(built)
+        options = [(p, k) for p in pool for k in KINDS if places_for(built[p], k)]
+        kinds = sorted({k for _, k in options})
+        kind = str(rng.choice(kinds))
+        plant = str(rng.choice(sorted({p for p, k in options if k == kind})))
+        door, name = places_for(built[plant], kind)[int(rng.integers(len(places_for(built[plant], kind))))]
+        specs.append(CaseSpec(i, case_seed, plant, kind, door, name,
+                              target_change=float(math.exp(rng.uniform(math.log(0.03), math.log(0.3)))),
+                              ratio=float(math.exp(rng.uniform(math.log(3.0), math.log(30.0)))),
+                              excitation=exc))
+    return specs
+
+
+def excitation(plant: TruthPlant, t: np.ndarray, rng, kind: str) -> dict:
+    """Commands (SI, DAC-quantised, held per sample) for each input of `plant`."""
+    u = {}
+    for spec in plant.inputs:
+        if spec.high <= spec.low:
+            u[spec.name] = np.full(t.size, spec.low)
+            continue
+        if kind == "prbs":
+            a, b = np.sort(rng.uniform(spec.low, spec.high, 2))
+            a, b = spec.low + 0.5 * (a - spec.low), spec.high - 0.5 * (spec.high - b)
+            bit = spec.hold[0]
+            bits = rng.integers(0, 2, size=int(t[-1] / bit) + 2)
+            v = np.where(bits[(t / bit).astype(int)] == 1, b, a)
+        else:
+            v = np.empty_like(t)
+            start = 0
+            while start < t.size:
+                stop = max(int(np.searchsorted(t, t[start] + rng.uniform(*spec.hold))), start + 1)
+                v[start:stop] = rng.uniform(spec.low, spec.high)
+                start = stop
+            if kind == "levels+sine":
+                span = spec.high - spec.low
+                period = rng.uniform(*spec.hold) * 2.0
+                v = np.clip(v + 0.2 * span * np.sin(2 * np.pi * t / period), spec.low, spec.high)
+        u[spec.name] = np.round(v / spec.quantum) * spec.quantum
+    return u
+
+
+def _rms(x):
+    return float(np.sqrt(np.mean(np.square(x))))
+
+
+@dataclass
+class Realised:
+    """A realised case: commands, noise-free truth and nominal outputs, the effect, its size."""
+
+    spec: CaseSpec
+    plant: TruthPlant
+    t: np.ndarray
+    u: dict
+    truth: dict
+    nominal: dict
+    effect: object = None
+    affected: str = ""
+    change: float = 0.0           # achieved rms(diff) / std(y) of the affected output
+    sigma: dict = field(default_factory=dict)
+    quantum: dict = field(default_factory=dict)
+    nominal_drifts: bool = False  # the nominal's open-loop error exceeds the output's spread
+    calibration_runs: int = 0
+
+
+def _segment_difference(plant, t, u, effect, truth_states, n_segments=10):
+    """Outputs of the nominal plant restarted from the truth's state every 1/n of the record."""
+    n = t.size
+    edges = np.linspace(0, n - 1, n_segments + 1).astype(int)
+    out = {o.name: np.full(n, np.nan) for o in plant.outputs}
+    for a, b in zip(edges[:-1], edges[1:]):
+        seg = simulate_truth(plant, t[a:b + 1], {k: v[a:b + 1] for k, v in u.items()},
+                             x0=truth_states[a])
+        for o in plant.outputs:
+            out[o.name][a:b + 1] = seg[o.name]
+    return out
+
+
+def _change(plant, nominal, truth):
+    """(affected output, rms(diff)/std(y)) over the outputs."""
+    best, size = "", -1.0
+    for o in plant.outputs:
+        y = nominal[o.name]
+        d = truth[o.name] - y
+        if not np.all(np.isfinite(d)):
+            return o.name, float("inf")
+        c = _rms(d) / max(float(np.std(y)), 1e-300)
+        if c > size:
+            best, size = o.name, c
+    return best, size
+
+
+def realise(spec: CaseSpec, plant: TruthPlant) -> Realised:
+    """Simulate `spec`: excitation, nominal run, calibrated effect, truth run, sensor noise."""
+    rng = np.random.default_rng(spec.seed)
+    n = int(round(plant.duration * plant.rate)) + 1
+    t = np.arange(n) / plant.rate
+    u = excitation(plant, t, rng, spec.excitation)
+    nominal = simulate_truth(plant, t, u, signals=True)
+    if not nominal["_finite"]:
+        raise RuntimeError(f"{spec.label}: the plant's own simulation is not finite")
+    rec = Realised(spec, plant, t, u, nominal, nominal)
+    if spec.kind == "none":
+        rec.sigma = {o.name: spec.noise_share * float(np.std(nominal[o.name])) for o in plant.outputs}
+    else:
+        _calibrate(rec, rng)
+    rec.quantum = {o: s * float(rng.uniform(0.2, 1.5)) for o, s in rec.sigma.items()}
+    return rec
+
+
+def _scales(nominal):
+    sig = nominal["_signals"]
+    return {"rms": {k: _rms(v) for k, v in sig.items()},
+            "lo": {k: float(np.min(v)) for k, v in sig.items()},
+            "hi": {k: float(np.max(v)) for k, v in sig.items()}}
+
+
+def _shape(spec, plant, rec, rng, scales):
+    """Shape constants drawn once per case (relative to the nominal motion)."""
+    k, sh = spec.kind, {}
+    j = plant.storage(spec.name).junction if spec.door == "storage" else spec.name
+    v_rms = scales["rms"].get(j, 1.0) or 1.0
+    hold = float(np.mean([i.hold[0] + i.hold[1] for i in plant.inputs])) / 2.0
+    sh["eps"] = 0.01 * v_rms
+    sh["sign"] = float(rng.choice([-1.0, 1.0]))
+    if k == "stribeck_friction":
+        sh["fs_over_fc"], sh["vs"] = float(rng.uniform(1.5, 3.0)), float(rng.uniform(0.1, 0.5)) * v_rms
+    if k == "hysteresis":
+        sh["delta"] = float(rng.uniform(0.01, 0.1)) * v_rms * hold
+    if k == "pressure_dependent_friction":
+        p = sum(scales["rms"][name] for name in plant.junction(j).pressures)
+        sh["c0"], sh["p_ref"] = float(rng.uniform(0.1, 0.5)) * p, 0.0
+    if k == "valve_lag":
+        sh["u0"] = float(rec.u[spec.name][0])
+    if spec.door == "input" and k == "saturation":
+        i = next(i for i in plant.inputs if i.name == spec.name)
+        sh["lo"], sh["hi"], sh["skew"] = i.low, i.high, float(rng.uniform(-0.3, 0.3))
+    if spec.door == "output" and k == "saturation":
+        y = rec.nominal[spec.name]
+        sh["lo"], sh["hi"] = float(np.min(y)), float(np.max(y))
+    if spec.door == "storage" and k == "saturation":
+        lo, hi = scales["lo"][spec.name], scales["hi"][spec.name]
+        sh["lo"], sh["hi0"], sh["span"] = -math.inf, hi, hi - lo
+    return sh
+
+
+def _initial_magnitude(spec, plant, rec, scales, sh, probe_gain):
+    k, r = spec.kind, spec.target_change
+    dt = 1.0 / plant.rate
+    if k in ("saturation",):
+        return 0.3
+    if k in ("transport_delay", "valve_lag"):
+        return 5 * dt
+    if k == "sensor_offset":
+        return r * float(np.std(rec.nominal[spec.name]))
+    if k == "sensor_gain":
+        y = rec.nominal[spec.name]
+        return r * float(np.std(y)) / max(_rms(y), 1e-300)
+    j = plant.storage(spec.name).junction if spec.door == "storage" else spec.name
+    g = probe_gain()
+    base = r / g      # a constant effort/flow of this size changes the output by about r
+    if k == "viscous_friction":
+        return base / (scales["rms"][j] or 1.0)
+    if k == "leak":
+        return base / (scales["rms"][j] - plant.junction(j).ambient or 1.0)
+    if k == "pressure_dependent_friction":
+        return base / (sh["c0"] + sum(scales["rms"][p] for p in plant.junction(j).pressures))
+    if k == "nonlinear_stiffness":
+        return base / max(scales["rms"][spec.name], 1e-300) ** 3
+    if k == "backlash":
+        return 0.1 * scales["rms"][spec.name]
+    return base
+
+
+def _calibrate(rec: Realised, rng) -> None:
+    spec, plant = rec.spec, rec.plant
+    scales = _scales(rec.nominal)
+    sh = _shape(spec, plant, rec, rng, scales)
+    runs = 0
+
+    def truth_of(m):
+        nonlocal runs
+        runs += 1
+        if spec.kind == "saturation" and spec.door == "storage":
+            sh["hi"] = sh["hi0"] - m * sh["span"]
+            k_stop = (1.0 / (5.0 / plant.rate) if plant.junction(plant.storage(spec.name).junction).kind == "0"
+                      else 20.0 * (plant.storage(spec.name).stiffness or 1.0))
+            eff = make_effect(spec.kind, plant, spec.door, spec.name, k_stop, scales, sh)
+        else:
+            if spec.kind == "hysteresis":
+                sh["sigma"] = m / sh["delta"]
+            eff = make_effect(spec.kind, plant, spec.door, spec.name, m, scales, sh)
+        out = simulate_truth(plant, rec.t, rec.u, eff, signals=plant.drifts)
+        if plant.drifts and out["_finite"]:
+            ref = _segment_difference(plant, rec.t, rec.u, eff, out["_states"])
+        else:
+            ref = rec.nominal
+        name, c = _change(plant, ref, out)
+        return eff, out, name, c
+
+    def probe_gain():
+        j = plant.storage(spec.name).junction if spec.door == "storage" else spec.name
+        size = 1.0
+        for _ in range(8):
+            probe = make_effect("constant_load", plant, "junction", j, size, scales, {"sign": 1.0})
+            out = simulate_truth(plant, rec.t, rec.u, probe, signals=plant.drifts)
+            ref = (_segment_difference(plant, rec.t, rec.u, probe, out["_states"])
+                   if plant.drifts and out["_finite"] else rec.nominal)
+            _, c = _change(plant, ref, out)
+            if not np.isfinite(c) or c > 1.0:
+                size /= 30.0
+            elif c < 1e-4:
+                size *= 30.0
+            else:
+                return c / size
+        return 1.0
+
+    bounded = spec.kind == "saturation"
+    m = _initial_magnitude(spec, plant, rec, scales, sh, probe_gain)
+    target = spec.target_change
+    best = None
+    log_m, prev = math.log(m), None
+    for _ in range(5):
+        m = math.exp(log_m)
+        if bounded:
+            m = min(max(m, 0.02), 0.9)
+        eff, out, name, c = truth_of(m)
+        if np.isfinite(c) and c > 0 and (best is None or abs(math.log(c / target)) < abs(math.log(best[3] / target))):
+            best = (eff, out, name, c, m)
+        if not np.isfinite(c) or c <= 0:
+            log_m -= math.log(10.0)
+            prev = None
+            continue
+        g = math.log(c / target)
+        if abs(g) < math.log(1.3):
+            break
+        slope = 1.0 if prev is None or prev[0] == log_m else (g - prev[1]) / (log_m - prev[0])
+        if not np.isfinite(slope) or abs(slope) < 0.1:
+            slope = 1.0 if slope >= 0 else -1.0
+        prev = (log_m, g)
+        log_m -= g / slope
+    if best is None:
+        raise RuntimeError(f"{spec.label}: no finite truth run while sizing the effect")
+    eff, out, name, c, m = best
+    rec.effect, rec.truth, rec.affected, rec.change = eff, out, name, c
+    rec.calibration_runs = runs + 0
+    diff_rms = c * float(np.std(rec.nominal[name]))
+    share = diff_rms / spec.ratio / max(float(np.std(rec.nominal[name])), 1e-300)
+    rec.sigma = {o.name: (diff_rms / spec.ratio if o.name == name else share * float(np.std(rec.nominal[o.name])))
+                 for o in plant.outputs}
+    rec.nominal_drifts = not rec.nominal["_finite"] or any(
+        _rms(out[o.name] - rec.nominal[o.name]) > float(np.std(out[o.name])) for o in plant.outputs)

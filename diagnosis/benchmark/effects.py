@@ -1,0 +1,208 @@
+"""Concealed effects of the benchmark's truth plants, written apart from the catalogue.
+
+Each effect is a small class with one magnitude ``m`` (the size the case
+generator calibrates: a friction level, a leak conductance, a delay, an
+offset) and shape constants drawn once per case.  They act through the doors
+of :mod:`diagnosis.benchmark.plant`: an effort or flow added at a junction
+(``extra``, own states for a Dahl element), a changed storage law (the
+effort change of a spring or a tank, added at the junction it acts on),
+the inputs before the plant (clipping, delay, lag) or the outputs after it
+(offset, gain, range).  None of this imports the diagnosis catalogue.
+
+The kinds and where they may sit (:data:`KIND_PLACES`):
+
+============================  ================================================
+junction (1: common flow)     coulomb_friction, viscous_friction,
+                              stribeck_friction, hysteresis (Dahl),
+                              constant_load, pressure_dependent_friction
+                              (where the plant has pressures there)
+junction (0: common effort)   leak (laminar, towards the ambient effort),
+                              constant_load (a constant flow)
+storage (a C element)         nonlinear_stiffness (cubic hardening),
+                              backlash (a dead band in a linear spring),
+                              saturation (an end stop / overflow at the
+                              content's range)
+input                         saturation, transport_delay, valve_lag
+output                        sensor_offset, sensor_gain, saturation (range)
+============================  ================================================
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .plant import TruthPlant
+from .simulate import NoEffect
+
+__all__ = ["KIND_PLACES", "TruthEffect", "make_effect", "places_for"]
+
+#: Sharpness of the truth's sign laws: tanh(v / (SHARP * v_rms)).
+SHARP = 0.01
+
+KIND_PLACES = {
+    "coulomb_friction": ("junction1",), "viscous_friction": ("junction1",),
+    "stribeck_friction": ("junction1",), "hysteresis": ("junction1",),
+    "pressure_dependent_friction": ("junction1p",), "constant_load": ("junction1", "junction0"),
+    "leak": ("junction0",), "nonlinear_stiffness": ("storage_linear",), "backlash": ("storage_linear1",),
+    "saturation": ("input", "output", "storage_range"), "transport_delay": ("input",),
+    "valve_lag": ("input",), "sensor_offset": ("output",), "sensor_gain": ("output",),
+}
+
+
+def places_for(plant: TruthPlant, kind: str) -> list[tuple[str, str]]:
+    """The (door, name) pairs where `kind` may sit on `plant`."""
+    out = []
+    for door in KIND_PLACES[kind]:
+        if door == "junction1":
+            out += [("junction", j.name) for j in plant.junctions if j.kind == "1"]
+        elif door == "junction1p":
+            out += [("junction", j.name) for j in plant.junctions if j.kind == "1" and j.pressures]
+        elif door == "junction0":
+            out += [("junction", j.name) for j in plant.junctions if j.kind == "0"]
+        elif door == "storage_linear":
+            out += [("storage", s.name) for s in plant.storages if s.stiffness is not None]
+        elif door == "storage_linear1":
+            out += [("storage", s.name) for s in plant.storages if s.stiffness is not None
+                    and plant.junction(s.junction).kind == "1"]
+        elif door == "storage_range":
+            out += [("storage", s.name) for s in plant.storages if s.content_range is not None]
+        elif door == "input":
+            out += [("input", i.name) for i in plant.inputs if i.high > i.low]
+        elif door == "output":
+            out += [("output", o.name) for o in plant.outputs]
+    return out
+
+
+class TruthEffect(NoEffect):
+    """One concealed effect: `kind` at (`door`, `name`) of `plant`, magnitude `m`.
+
+    ``scales`` holds the nominal run's typical values (``rms`` of each signal
+    and input, ``range`` of each storage content and input, ``std`` of each
+    output), so that shape constants are relative to the motion actually seen.
+    ``shape`` holds the constants drawn once per case (fractions, signs).
+    """
+
+    def __init__(self, kind, plant, door, name, m, scales, shape):
+        self.kind, self.plant, self.door, self.name = kind, plant, door, name
+        self.m, self.scales, self.shape = float(m), scales, dict(shape)
+        self.n_states = 1 if kind in ("hysteresis", "valve_lag") else 0
+        if door == "storage":
+            self.storage = plant.storage(name)
+            self.junction = self.storage.junction
+        elif door == "junction":
+            self.junction = name
+
+    # -- where, as the diagnosis reports it ---------------------------------------------
+    @property
+    def place(self) -> str:
+        """The place as the report's ``attached_to`` says it (storage effects act at a junction)."""
+        return f"junction {self.junction}" if self.door == "storage" else f"{self.door} {self.name}"
+
+    def accepted_places(self) -> set[str]:
+        """The place, its indistinguishable equivalents, and the storage element's own name."""
+        out = {self.place}
+        if self.door in ("junction", "storage"):
+            out |= {f"junction {e}" for e in self.plant.junction(self.junction).equivalent}
+        if self.door == "storage":
+            out |= {f"storage {self.name}", f"element {self.name}"}
+        return out
+
+    def describe(self) -> dict:
+        return {"kind": self.kind, "place": f"{self.door} {self.name}", "magnitude": self.m,
+                "shape": self.shape}
+
+    # -- the doors ---------------------------------------------------------------------
+    def z0(self, plant):
+        return np.zeros(self.n_states) if self.kind != "valve_lag" else \
+            np.array([self.shape["u0"]])
+
+    def delayed_inputs(self, t, u):
+        if self.door != "input" or self.kind not in ("saturation", "transport_delay"):
+            return u
+        u = dict(u)
+        v = np.asarray(u[self.name], float)
+        if self.kind == "saturation":
+            lo, hi = self.shape["lo"], self.shape["hi"]
+            # m in (0, 1]: the usable fraction of the command's span around its centre
+            mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+            u[self.name] = np.clip(v, mid - self.m * half - self.shape["skew"] * half,
+                                   mid + self.m * half - self.shape["skew"] * half)
+        else:   # a delay of m seconds, whole samples plus the fraction held (ZOH stays exact on
+            dt = float(t[1] - t[0])  # the sample grid only for whole samples: round to them)
+            k = max(1, int(round(self.m / dt)))
+            u[self.name] = np.concatenate([np.full(k, v[0]), v[:-k]])
+        return u
+
+    def inputs_now(self, u, z):
+        if self.kind == "valve_lag":
+            u = dict(u)
+            u[self.name] = z[0]
+        return u
+
+    def extra(self, sig, u, z):
+        k, m, sh = self.kind, self.m, self.shape
+        if k == "valve_lag":
+            return {}, np.array([(u[self.name] - z[0]) / m])   # the actuator follows the command
+        if self.door not in ("junction", "storage"):
+            return {}, np.zeros(0)
+        j = self.junction
+        if k == "hysteresis":
+            v = sig[j]
+            fc = m
+            dz = sh["sigma"] * v * (1.0 - z[0] / fc * math.tanh(v / sh["eps"]))
+            return {j: -z[0]}, np.array([dz])
+        if self.door == "storage":
+            q = sig[self.storage.name]
+            s = self.storage.sign
+            if k == "nonlinear_stiffness":     # hardening: e = k q + k3 q^3, k3 = m
+                return {j: -s * m * q ** 3}, np.zeros(0)
+            if k == "backlash":                 # the spring carries nothing inside +-m
+                kk = self.storage.stiffness
+                dead = q - np.clip(q, -m, m)
+                return {j: s * kk * (q - dead)}, np.zeros(0)
+            if k == "saturation":               # a stiff end stop / overflow beyond the range
+                lo, hi = sh["lo"], sh["hi"]
+                over = max(q - hi, 0.0) - max(lo - q, 0.0)
+                return {j: -s * m * over}, np.zeros(0)
+        x = sig[j]
+        jk = self.plant.junction(j).kind
+        if k == "constant_load":
+            return {j: sh["sign"] * m}, np.zeros(0)
+        if k == "leak":
+            return {j: -m * (x - self.plant.junction(j).ambient)}, np.zeros(0)
+        assert jk == "1"
+        eps = sh["eps"]
+        if k == "coulomb_friction":
+            return {j: -m * math.tanh(x / eps)}, np.zeros(0)
+        if k == "viscous_friction":
+            return {j: -m * x}, np.zeros(0)
+        if k == "stribeck_friction":
+            fc = m
+            fs, vs = sh["fs_over_fc"] * fc, sh["vs"]
+            return {j: -(fc + (fs - fc) * math.exp(-(x / vs) ** 2)) * math.tanh(x / eps)}, np.zeros(0)
+        if k == "pressure_dependent_friction":
+            p = sum(sig[name] for name in self.plant.junction(j).pressures) - sh["p_ref"]
+            level = m * (sh["c0"] + max(p, 0.0))
+            return {j: -level * math.tanh(x / eps)}, np.zeros(0)
+        raise ValueError(f"effect {k} cannot act at {self.door} {self.name}")
+
+    def sensed(self, y):
+        if self.door != "output":
+            return y
+        y = dict(y)
+        v = y[self.name]
+        if self.kind == "sensor_offset":
+            y[self.name] = v + self.m
+        elif self.kind == "sensor_gain":
+            y[self.name] = v * (1.0 + self.m)
+        elif self.kind == "saturation":
+            lo, hi = self.shape["lo"], self.shape["hi"]
+            mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+            y[self.name] = min(max(v, mid - self.m * half), mid + self.m * half)
+        return y
+
+
+def make_effect(kind, plant, door, name, m, scales, shape) -> TruthEffect:
+    """The effect object for `kind` at (`door`, `name`) with magnitude `m`."""
+    return TruthEffect(kind, plant, door, name, m, scales, shape)

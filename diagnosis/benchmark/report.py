@@ -1,0 +1,148 @@
+"""Summary, tables and plot of a benchmark run."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["summarise", "write_report", "markdown", "TARGETS"]
+
+#: The issue's targets: kind right, place right, held-out halved (non-null cases), false alarms (nulls).
+TARGETS = {"kind_right": 0.90, "place_right": 0.85, "holdout_halved": 0.90, "false_alarms": 0.05}
+
+
+def _share(flags):
+    flags = list(flags)
+    return float(np.mean(flags)) if flags else float("nan")
+
+
+def summarise(results: list[dict]) -> dict:
+    """Headline rates, the confusion matrix of kinds and per-kind / per-plant rates."""
+    scored = [r for r in results if "generator_error" not in r]
+    effects = [r for r in scored if r["kind"] != "none"]
+    nulls = [r for r in scored if r["kind"] == "none"]
+    imp = [r["improvement"] for r in effects]
+    halved = [bool(np.isfinite(v) and v >= 0.5) for v in imp]
+    drift = [r for r in effects if r.get("drifting_plant") or r.get("nominal_drifts")]
+    secs = [r["seconds_diagnose"] for r in scored]
+    headline = {
+        "cases": len(results), "scored": len(scored), "generator_errors": len(results) - len(scored),
+        "effect_cases": len(effects), "null_cases": len(nulls), "drifting_cases": len(drift),
+        "kind_right": _share(r["kind_ok"] for r in effects),
+        "place_right": _share(r["place_ok"] for r in effects),
+        "holdout_halved": _share(halved),
+        "false_alarms": _share(not r["kind_ok"] for r in nulls),
+        "diagnosis_errors": sum(1 for r in scored if r["answer_kind"] == "error"),
+        "seconds_per_case_median": float(np.median(secs)) if secs else float("nan"),
+        "seconds_per_case_max": float(np.max(secs)) if secs else float("nan"),
+    }
+    kinds = sorted({r["kind"] for r in scored} | {r["answer_kind"] for r in scored})
+    confusion = {k: {a: 0 for a in kinds} for k in kinds}
+    for r in scored:
+        confusion[r["kind"]][r["answer_kind"]] += 1
+
+    def group(key):
+        out = {}
+        for r in scored:
+            g = out.setdefault(r[key], {"n": 0, "kind": [], "place": [], "halved": []})
+            g["n"] += 1
+            g["kind"].append(r["kind_ok"])
+            g["place"].append(r["place_ok"])
+            if r["kind"] != "none":
+                g["halved"].append(bool(np.isfinite(r["improvement"]) and r["improvement"] >= 0.5))
+        return {k: {"n": v["n"], "kind_right": _share(v["kind"]), "place_right": _share(v["place"]),
+                    "holdout_halved": _share(v["halved"])} for k, v in sorted(out.items())}
+
+    return {"headline": headline, "confusion": confusion, "by_kind": group("kind"),
+            "by_plant": group("plant"),
+            "improvement_quantiles": {q: float(np.nanquantile(imp, q)) if imp else float("nan")
+                                      for q in (0.1, 0.25, 0.5, 0.75, 0.9)}}
+
+
+def _pct(x):
+    return "-" if not np.isfinite(x) else f"{100 * x:.0f} %"
+
+
+def markdown(summary: dict, *, seed: int | None = None) -> str:
+    """The tables as Markdown (for docs/diagnosis.md)."""
+    h = summary["headline"]
+    lines = [f"Benchmark: {h['cases']} cases (seed {seed}), {h['effect_cases']} with an effect "
+             f"({h['drifting_cases']} on a drifting nominal), {h['null_cases']} nulls; "
+             f"{h['generator_errors']} generator errors, {h['diagnosis_errors']} diagnosis errors.", "",
+             "| measure | result | target |", "|---|---|---|",
+             f"| kind right (effect cases) | {_pct(h['kind_right'])} | >= 90 % |",
+             f"| place right or equivalent (effect cases) | {_pct(h['place_right'])} | >= 85 % |",
+             f"| held-out NRMSE of the affected output at least halved | {_pct(h['holdout_halved'])} | >= 90 % |",
+             f"| false alarms on nulls | {_pct(h['false_alarms'])} | <= 5 % |",
+             f"| time per case, median / max | {h['seconds_per_case_median']:.0f} s / "
+             f"{h['seconds_per_case_max']:.0f} s | |", "",
+             "| held-out improvement quantile | " + " | ".join(f"{int(q * 100)} %" for q in
+                                                         summary["improvement_quantiles"]) + " |",
+             "|---" * (1 + len(summary["improvement_quantiles"])) + "|",
+             "| 1 - improved / nominal | " + " | ".join(_pct(v) for v in
+                                                     summary["improvement_quantiles"].values()) + " |", "",
+             "| kind | cases | kind right | place right | held-out halved |", "|---|---|---|---|---|"]
+    for k, v in summary["by_kind"].items():
+        lines.append(f"| {k} | {v['n']} | {_pct(v['kind_right'])} | {_pct(v['place_right'])} | "
+                     f"{_pct(v['holdout_halved'])} |")
+    lines += ["", "| plant | cases | kind right | place right | held-out halved |", "|---|---|---|---|---|"]
+    for k, v in summary["by_plant"].items():
+        lines.append(f"| {k} | {v['n']} | {_pct(v['kind_right'])} | {_pct(v['place_right'])} | "
+                     f"{_pct(v['holdout_halved'])} |")
+    conf = summary["confusion"]
+    kinds = list(conf)
+    lines += ["", "Confusion matrix (rows: concealed kind, columns: the answer's first kind):", "",
+              "| truth \\ answer | " + " | ".join(kinds) + " |", "|---" * (len(kinds) + 1) + "|"]
+    for k in kinds:
+        lines.append(f"| {k} | " + " | ".join(str(conf[k][a] or "") for a in kinds) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def write_report(results: list[dict], summary: dict, outdir, *, seed=None) -> None:
+    """``results.json``, ``results.md`` and ``results.png`` in `outdir`."""
+    out = Path(outdir)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "results.json").write_text(json.dumps({"seed": seed, "summary": summary,
+                                                  "cases": sorted(results, key=lambda r: r["label"])},
+                                                 indent=1, default=float))
+    (out / "results.md").write_text(markdown(summary, seed=seed))
+    plot(results, summary, out / "results.png")
+
+
+def plot(results, summary, path) -> None:
+    """Confusion matrix, distribution of held-out improvement, time per case."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    conf = summary["confusion"]
+    kinds = list(conf)
+    m = np.array([[conf[k][a] for a in kinds] for k in kinds], float)
+    fig, ax = plt.subplots(1, 3, figsize=(17, 6), gridspec_kw={"width_ratios": [2.2, 1, 1]})
+    ax[0].imshow(m, cmap="Blues")
+    ax[0].set_xticks(range(len(kinds)), kinds, rotation=70, fontsize=7)
+    ax[0].set_yticks(range(len(kinds)), kinds, fontsize=7)
+    for i in range(len(kinds)):
+        for j in range(len(kinds)):
+            if m[i, j]:
+                ax[0].text(j, i, int(m[i, j]), ha="center", va="center", fontsize=7,
+                           color="white" if m[i, j] > m.max() / 2 else "black")
+    ax[0].set_xlabel("answer (first effect)")
+    ax[0].set_ylabel("concealed kind")
+    ax[0].set_title("kinds")
+    imp = np.array([r["improvement"] for r in results if r.get("kind", "none") != "none"
+                    and "generator_error" not in r], float)
+    imp = np.clip(imp[np.isfinite(imp)], -1.0, 1.0)
+    ax[1].hist(imp, bins=np.linspace(-1, 1, 21), color="tab:green")
+    ax[1].axvline(0.5, color="k", ls="--", lw=1)
+    ax[1].set_xlabel("held-out improvement 1 - NRMSE_improved / NRMSE_nominal (clipped at -1)")
+    ax[1].set_ylabel("effect cases")
+    ax[1].set_title("affected output, held-out part")
+    secs = [r["seconds_diagnose"] for r in results if "generator_error" not in r]
+    ax[2].hist(secs, bins=20, color="tab:gray")
+    ax[2].set_xlabel("diagnosis time per case, s")
+    ax[2].set_title("time")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

@@ -1,0 +1,131 @@
+"""The generalisation benchmark's machinery: truth plants, effects, case drawing, scoring.
+
+The truth plants are hand-written state equations; here they are checked
+against the library's bond graphs (``bondgraph.simulate``), and the effects
+against closed forms.  One small seeded run diagnoses two cases end to end.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import bondgraph.library as library
+from bondgraph import simulate
+from diagnosis.benchmark import plants_textbook as tb
+from diagnosis.benchmark.draw import CaseSpec, draw_cases, realise
+from diagnosis.benchmark.effects import KIND_PLACES, make_effect, places_for
+from diagnosis.benchmark.plants import PLANTS
+from diagnosis.benchmark.report import markdown, summarise
+from diagnosis.benchmark.run import run_case
+from diagnosis.benchmark.simulate import simulate_truth
+
+TEXTBOOK = [tb.mass_spring_damper, tb.dc_motor, tb.rlc, tb.coupled_tanks, tb.geared_inertias]
+
+
+def _levels(plant, seconds, seed=3):
+    n = int(round(seconds * plant.rate)) + 1
+    t = np.arange(n) / plant.rate
+    rng = np.random.default_rng(seed)
+    u = {}
+    for spec in plant.inputs:
+        held = rng.uniform(spec.low, spec.high, size=n // 7 + 2)
+        u[spec.name] = np.repeat(held, 7)[:n]
+    return t, u
+
+
+@pytest.mark.parametrize("factory", TEXTBOOK, ids=lambda f: f.__name__)
+def test_textbook_truth_equals_library_graph(factory):
+    plant = factory()
+    t, u = _levels(plant, min(plant.duration, 3.0))
+    truth = simulate_truth(plant, t, u)
+    ref = simulate(library.build(plant.model), (0.0, float(t[-1])), inputs={k: (t, v) for k, v in u.items()},
+                   output_interval=float(t[1] - t[0]))
+    for o in plant.outputs:
+        y, r = truth[o.name], np.asarray(ref[o.name])
+        assert np.max(np.abs(y - r)) <= 1e-4 * np.std(r) + 1e-12, o.name
+
+
+def test_constant_load_on_msd_gives_the_static_deflection():
+    # F = 0, a constant 0.3 N at the mass: x settles at 0.3 / k = 0.075 m (k = 4 N/m)
+    plant = tb.mass_spring_damper()
+    t = np.arange(0, 60.0, 1 / plant.rate)
+    eff = make_effect("constant_load", plant, "junction", "v_mass", 0.3, {}, {"sign": 1.0})
+    y = simulate_truth(plant, t, {"F": np.zeros(t.size)}, eff)
+    assert y["x"][-1] == pytest.approx(0.075, rel=1e-4)
+
+
+def test_leak_on_the_lower_tank_gives_the_analytic_steady_level():
+    # Q_in = Q_out + k p2 at steady state, Q_out = a2 sqrt(2 g h2), p2 = rho g h2
+    plant = tb.coupled_tanks()
+    t = np.arange(0, 4000.0, 1 / plant.rate)
+    k = 2e-9
+    eff = make_effect("leak", plant, "junction", "P2", k, {}, {})
+    y = simulate_truth(plant, t, {"Q_in": np.full(t.size, 2e-4)}, eff)
+    h2 = y["h2"][-1]
+    assert 4e-5 * np.sqrt(2 * 9.81 * h2) + k * 1000 * 9.81 * h2 == pytest.approx(2e-4, rel=1e-3)
+
+
+def test_sensor_and_delay_effects_are_exact():
+    plant = tb.mass_spring_damper()
+    t, u = _levels(plant, 5.0)
+    base = simulate_truth(plant, t, u)
+    off = simulate_truth(plant, t, u, make_effect("sensor_offset", plant, "output", "x", 0.02, {}, {}))
+    gain = simulate_truth(plant, t, u, make_effect("sensor_gain", plant, "output", "v", 0.1, {}, {}))
+    np.testing.assert_allclose(off["x"], base["x"] + 0.02, atol=1e-15)
+    np.testing.assert_allclose(gain["v"], 1.1 * base["v"], rtol=1e-14)
+    delay = simulate_truth(plant, t, u, make_effect("transport_delay", plant, "input", "F", 0.2, {}, {}))
+    shifted = simulate_truth(plant, t, {"F": np.concatenate([np.full(10, u["F"][0]), u["F"][:-10]])})
+    np.testing.assert_allclose(delay["x"], shifted["x"], atol=1e-14)
+
+
+def test_every_kind_has_a_place_on_some_plant():
+    plants = [f() for f in PLANTS.values()]
+    missing = [k for k in KIND_PLACES if not any(places_for(p, k) for p in plants)
+               and k not in ("pressure_dependent_friction",)]
+    assert missing == []
+
+
+def test_draw_is_reproducible_and_balanced():
+    specs = draw_cases(80, 11, PLANTS)
+    assert [s.label for s in specs] == [s.label for s in draw_cases(80, 11, PLANTS)]
+    nulls = sum(s.kind == "none" for s in specs)
+    assert nulls / len(specs) >= 0.15
+    assert all(s.kind == "none" or 3.0 <= s.ratio <= 30.0 for s in specs)
+    kinds = {s.kind for s in specs}
+    assert len(kinds) >= 10
+    drifting = [s for s in specs if PLANTS[s.plant]().drifts and s.kind != "none"]
+    if any(f().drifts for f in PLANTS.values()):
+        assert len(drifting) >= 10
+
+
+def test_realised_effect_has_the_drawn_size():
+    spec = CaseSpec(0, 5, "msd", "coulomb_friction", "junction", "v_mass", target_change=0.1, ratio=10.0)
+    rec = realise(spec, tb.mass_spring_damper())
+    assert rec.change == pytest.approx(0.1, rel=0.3)
+    d = rec.truth[rec.affected] - rec.nominal[rec.affected]
+    assert np.sqrt(np.mean(d ** 2)) / rec.sigma[rec.affected] == pytest.approx(10.0, rel=1e-9)
+
+
+def test_summary_counts():
+    base = dict(seconds_diagnose=1.0, place_ok=True, answer_place="", plant="msd")
+    results = [dict(base, label="a", kind="coulomb_friction", answer_kind="coulomb_friction", kind_ok=True,
+                    improvement=0.9),
+               dict(base, label="b", kind="leak", answer_kind="none", kind_ok=False, place_ok=False,
+                    improvement=0.0),
+               dict(base, label="c", kind="none", answer_kind="none", kind_ok=True, improvement=float("nan")),
+               dict(base, label="d", kind="none", answer_kind="leak", kind_ok=False, improvement=float("nan"))]
+    s = summarise(results)
+    h = s["headline"]
+    assert (h["kind_right"], h["place_right"], h["holdout_halved"], h["false_alarms"]) == (0.5, 0.5, 0.5, 0.5)
+    assert s["confusion"]["leak"]["none"] == 1 and s["confusion"]["none"]["leak"] == 1
+    assert "| leak | 1 | 0 % |" in markdown(s, seed=0)
+
+
+def test_two_seeded_cases_end_to_end(tmp_path):
+    coulomb = CaseSpec(0, 21, "msd", "coulomb_friction", "junction", "v_mass", target_change=0.15, ratio=15.0)
+    null = CaseSpec(1, 22, "msd", "none", noise_share=0.01)
+    for spec, kind in ((coulomb, "coulomb_friction"), (null, "none")):
+        r = run_case(spec, PLANTS, tmp_path, max_effects=1)
+        assert r["answer_kind"] == kind, r
+        assert r["kind_ok"] and r["place_ok"]
+    assert r["improvement"] != r["improvement"]     # NaN on a null case

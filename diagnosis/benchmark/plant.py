@@ -139,6 +139,11 @@ class TruthPlant:
         unmodelled effect makes its simulation drift away from the recording.
     laws : dict
         Plant-specific effect hooks (``name -> callable``), documented per plant.
+    hold : callable ``(x, u, extra, h) -> dict``, optional
+        Held (discrete) variables of a fixed-step law (``method="rk4"`` only):
+        evaluated once at the start of every RK4 sub-step of length ``h`` (s)
+        and passed to ``rhs`` inside ``u`` over that sub-step (the PAM joint's
+        Kikuuwe friction).  ``None``: the plant has none.
     """
 
     name: str
@@ -159,6 +164,7 @@ class TruthPlant:
     drifts: bool = False
     laws: dict = field(default_factory=dict)
     description: str = ""
+    hold: Callable | None = None
 
     def junction(self, name: str) -> JunctionSpec:
         for j in self.junctions:

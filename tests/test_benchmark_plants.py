@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from bondgraph import library, simulate
+from diagnosis.benchmark.plants_exo import exoskeleton
 from diagnosis.benchmark.plants_pam import PAM_PARAMS, pam, pam_frictionless
 from diagnosis.benchmark.simulate import simulate_truth
 
@@ -72,3 +73,9 @@ def test_pam_frictionless_equals_library_and_does_not_drift():
     assert max(rel.values()) < 1e-3
     # restoring muscles: psi stays within the joint's range on random valve commands
     assert np.all(np.abs(truth["psi"]) < 30.0)
+
+
+def test_exoskeleton_equals_library_exoskeleton():
+    # stiff (d_g on J_sint: -5.1e4 1/s): LSODA per held sample vs the library's Radau
+    rel, _ = parity(exoskeleton(), 2.0)
+    assert max(rel.values()) < 1e-5

@@ -144,6 +144,10 @@ class TruthPlant:
         evaluated once at the start of every RK4 sub-step of length ``h`` (s)
         and passed to ``rhs`` inside ``u`` over that sub-step (the PAM joint's
         Kikuuwe friction).  ``None``: the plant has none.
+    feedthrough : bool
+        ``measure`` takes a third argument, ``extra``: an output is a junction
+        effort that an effect changes algebraically, with no storage between
+        (the load cell on the massless piston of the pneumatic cylinder).
     """
 
     name: str
@@ -165,6 +169,7 @@ class TruthPlant:
     laws: dict = field(default_factory=dict)
     description: str = ""
     hold: Callable | None = None
+    feedthrough: bool = False
 
     def junction(self, name: str) -> JunctionSpec:
         for j in self.junctions:

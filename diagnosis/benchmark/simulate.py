@@ -131,7 +131,11 @@ def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None) -> di
             break
         x, z = states[k, :nx], states[k, nx:]
         ue = effect.inputs_now({name: u[name][k] for name in names}, z)
-        y = effect.sensed(plant.measure(x, ue))
+        if plant.feedthrough:
+            ext, _ = effect.extra(plant.signals(x, ue), ue, z)
+            y = effect.sensed(plant.measure(x, ue, ext))
+        else:
+            y = effect.sensed(plant.measure(x, ue))
         for o in plant.outputs:
             out[o.name][k] = y[o.name]
     out["_finite"] = finite

@@ -11,8 +11,11 @@ import numpy as np
 import pytest
 
 from bondgraph import library, simulate
+from diagnosis.benchmark.plants import PLANTS, plant
 from diagnosis.benchmark.plants_cylinder import pneumatic_cylinder
+from diagnosis.benchmark.plants_drivetrain import carriage, drivetrain
 from diagnosis.benchmark.plants_exo import exoskeleton
+from diagnosis.benchmark.plants_hydraulic import hydraulic
 from diagnosis.benchmark.plants_pam import PAM_PARAMS, pam, pam_frictionless
 from diagnosis.benchmark.simulate import NoEffect, simulate_truth
 
@@ -106,3 +109,31 @@ def test_cylinder_seal_friction_reaches_the_load_cell():
     friction = y["F"] - 3e5 * np.pi * 0.0125 ** 2
     v = y["v_piston"]
     assert np.all(friction[v < -1e-3] > 5.0) and np.all(friction[v > 1e-3] < -5.0)
+
+
+@pytest.mark.parametrize("factory", [drivetrain, carriage, hydraulic], ids=lambda f: f.__name__)
+def test_machine_plants_equal_their_library_graphs(factory):
+    plant = factory()
+    # the same RK4 scheme on both sides: equal to rounding
+    rel, truth = parity(plant, 3.0, method="RK4", dt=1.0 / plant.rate / plant.substeps)
+    assert max(rel.values()) < 1e-9
+    # the library's adaptive solver (restarted at every held sample) over a shorter record
+    rel, _ = parity(plant, 1.0, seed=1)
+    assert max(rel.values()) < 1e-4
+
+
+def test_carriage_drifts_and_the_others_settle():
+    assert carriage().drifts and not drivetrain().drifts and not hydraulic().drifts
+
+
+def test_registry_names_match_and_mirror_library_models():
+    names = set(library.names())
+    for name in PLANTS:
+        p = plant(name)
+        assert p.name == name and p.model in names
+        graph = library.build(p.model)
+        for j in p.junctions:
+            assert j.name in graph.elements and graph.elements[j.name].kind == j.kind, (name, j.name)
+        assert {o.name for o in p.outputs} <= {str(o) for o in graph.equations().outputs}
+    with pytest.raises(KeyError, match="available"):
+        plant("nope")

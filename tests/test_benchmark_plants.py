@@ -137,3 +137,23 @@ def test_registry_names_match_and_mirror_library_models():
         assert {o.name for o in p.outputs} <= {str(o) for o in graph.equations().outputs}
     with pytest.raises(KeyError, match="available"):
         plant("nope")
+
+
+def test_pam_doors_leak_lowers_the_chamber_and_torque_turns_the_joint():
+    class Leak(NoEffect):
+        def extra(self, sig, u, z):
+            ambient = plant.laws["chamber"](np.array([0.0, 0.0, sig["P1"], sig["P2"]]))["muscle1"]["ambient"]
+            return {"muscle1": -1e-10 * (sig["muscle1"] - ambient)}, np.zeros(0)
+
+    class Torque(NoEffect):
+        def extra(self, sig, u, z):
+            return {"seesaw": 1.0}, np.zeros(0)      # N m, more than the ~0.1 N m of friction here
+
+    plant = pam()
+    t = np.arange(0.0, 0.5, 1e-3)
+    u = {"u1": np.full(t.size, 5.0), "u2": np.full(t.size, 5.0)}
+    nominal = simulate_truth(plant, t, u)
+    leak, torque = simulate_truth(plant, t, u, Leak()), simulate_truth(plant, t, u, Torque())
+    assert np.ptp(nominal["psi"]) < 1e-9                      # at rest, held by nothing but balance
+    assert leak["P1"][-1] < nominal["P1"][-1] - 1e3          # Pa
+    assert torque["psi"][-1] > nominal["psi"][-1] + 1.0      # deg

@@ -16,7 +16,7 @@ from diagnosis.benchmark.plants_cylinder import pneumatic_cylinder
 from diagnosis.benchmark.plants_drivetrain import carriage, drivetrain
 from diagnosis.benchmark.plants_exo import exoskeleton
 from diagnosis.benchmark.plants_hydraulic import hydraulic
-from diagnosis.benchmark.plants_pam import PAM_PARAMS, pam, pam_frictionless
+from diagnosis.benchmark.plants_pam import pam, pam_frictionless
 from diagnosis.benchmark.simulate import NoEffect, simulate_truth
 
 
@@ -42,7 +42,8 @@ def parity(plant, duration, *, x0=None, seed=0, floor=None, **simulate_kw):
     truth = simulate_truth(plant, t, u)
     assert truth["_finite"]
     res = simulate(library.build(plant.model), (0.0, t[-1]), inputs={k: (t, v) for k, v in u.items()},
-                   output_interval=1.0 / plant.rate, x0=x0, **simulate_kw)
+                   output_interval=1.0 / plant.rate, x0=plant.nominal_x0 if x0 is None else x0,
+                   **simulate_kw)
     assert np.allclose(res.t, t)
     rel = {}
     for o in plant.outputs:
@@ -54,15 +55,10 @@ def parity(plant, duration, *, x0=None, seed=0, floor=None, **simulate_kw):
     return rel, truth
 
 
-def _pam_x0(plant):
-    psi, dpsi, P1, P2 = plant.x0
-    return {"q_psi": psi, "p_J": PAM_PARAMS["J"] * dpsi, "P_1": P1, "P_2": P2}
-
-
 def test_pam_equals_library_pam_with_held_kikuuwe_friction():
     # the library runs its fixed-step scheme (1 ms samples, 4 RK4 sub-steps, T_f held per sub-step)
     plant = pam()
-    rel, _ = parity(plant, 1.0, x0=_pam_x0(plant))
+    rel, _ = parity(plant, 1.0)
     assert max(rel.values()) < 1e-9
 
 
@@ -70,10 +66,10 @@ def test_pam_frictionless_equals_library_and_does_not_drift():
     plant = pam_frictionless()
     assert plant.hold is None and not plant.drifts
     # same fixed-step scheme on both sides: equal to rounding
-    rel, truth = parity(plant, 1.0, x0=_pam_x0(plant), method="RK4", dt=0.25e-3)
+    rel, truth = parity(plant, 1.0, method="RK4", dt=0.25e-3)
     assert max(rel.values()) < 1e-9
     # the library's adaptive solver: RK4 at 0.25 ms is within 1e-4 of the spread (tau barely moves)
-    rel, truth = parity(plant, 1.0, x0=_pam_x0(plant), floor={"tau": 0.05})
+    rel, truth = parity(plant, 1.0, floor={"tau": 0.05})
     assert max(rel.values()) < 1e-3
     # restoring muscles: psi stays within the joint's range on random valve commands
     assert np.all(np.abs(truth["psi"]) < 30.0)
@@ -111,14 +107,15 @@ def test_cylinder_seal_friction_reaches_the_load_cell():
     assert np.all(friction[v < -1e-3] > 5.0) and np.all(friction[v > 1e-3] < -5.0)
 
 
-@pytest.mark.parametrize("factory", [drivetrain, carriage, hydraulic], ids=lambda f: f.__name__)
-def test_machine_plants_equal_their_library_graphs(factory):
-    plant = factory()
+@pytest.mark.parametrize("name", ["drivetrain", "carriage", "hydraulic", "msd", "dc-motor", "rlc", "tanks",
+                                  "geared-inertias"])
+def test_plants_equal_their_library_graphs(name):
+    plant = PLANTS[name]()
     # the same RK4 scheme on both sides: equal to rounding
-    rel, truth = parity(plant, 3.0, method="RK4", dt=1.0 / plant.rate / plant.substeps)
+    rel, truth = parity(plant, max(3.0, 30.0 / plant.rate), method="RK4", dt=1.0 / plant.rate / plant.substeps)
     assert max(rel.values()) < 1e-9
     # the library's adaptive solver (restarted at every held sample) over a shorter record
-    rel, _ = parity(plant, 1.0, seed=1)
+    rel, _ = parity(plant, max(1.0, 30.0 / plant.rate), seed=1)
     assert max(rel.values()) < 1e-4
 
 
@@ -157,3 +154,22 @@ def test_pam_doors_leak_lowers_the_chamber_and_torque_turns_the_joint():
     assert np.ptp(nominal["psi"]) < 1e-9                      # at rest, held by nothing but balance
     assert leak["P1"][-1] < nominal["P1"][-1] - 1e3          # Pa
     assert torque["psi"][-1] > nominal["psi"][-1] + 1.0      # deg
+
+
+def test_truth_plants_import_neither_bondgraph_nor_the_catalogue():
+    import ast
+    import importlib
+
+    for name in ("plant", "simulate", "plants", "plants_textbook", "plants_pam", "plants_exo",
+                 "plants_cylinder", "plants_drivetrain", "plants_hydraulic"):
+        module = importlib.import_module(f"diagnosis.benchmark.{name}")
+        tree = ast.parse(open(module.__file__).read())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                roots = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                roots = [("." * node.level) + (node.module or "")]
+            else:
+                continue
+            for root in roots:
+                assert not root.startswith(("bondgraph", "diagnosis.catalogue", "..")), (name, root)

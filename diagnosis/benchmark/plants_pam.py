@@ -109,6 +109,8 @@ class _Pam:
         """Friction torque eq. (10) (conventions: Z = h/J, T_p clamp), N m, held over a sub-step."""
         p = self.p
         psi, dpsi, P1, P2 = (float(v) for v in x)
+        if not math.isfinite(psi):
+            return math.nan
         _, _, F1, F2, tau = self.mechanics(psi, P1, P2)
         Z = h / p["J"]
         T0 = tau - p["k_s"] * psi + t_extra                  # every torque but friction
@@ -123,6 +125,8 @@ class _Pam:
     def rhs(self, x, u, extra):
         p = self.p
         psi, dpsi, P1, P2 = (float(v) for v in x)
+        if not math.isfinite(psi):          # a run an effect has driven out of range: NaN, no raise
+            return np.full(4, np.nan)
         l1, l2, _, _, tau = self.mechanics(psi, P1, P2)
         ld = p["r"] * math.cos(psi) * dpsi                   # dl2/dt = -dl1/dt
         m1 = self.mass_flow(u["u1"], P1) + extra.get("muscle1", 0.0)
@@ -170,6 +174,7 @@ def _build(name: str, model: str, friction: bool) -> TruthPlant:
     def hold(x, u, extra, h):
         return {"T_f": j.kikuuwe(x, extra.get("seesaw", 0.0), h)}
 
+    x0 = j.rest(5.0, 5.0)
     valve = dict(unit="V", low=0.5, high=9.5, quantum=0.01, hold=(0.2, 0.8), ambient=5.0)
     return TruthPlant(
         name=name, model=model,
@@ -180,8 +185,10 @@ def _build(name: str, model: str, friction: bool) -> TruthPlant:
                  OutputSpec("tau", "N m")),
         states=("psi", "dpsi", "P1", "P2"),
         # the recording starts at rest at the valves' ambient 5 V (406 kPa each, psi = +10.4 deg):
-        # the library's default (vented muscles, psi = 0) is not a rest state of the frictionless joint
-        x0=j.rest(5.0, 5.0), rhs=j.rhs, signals=signals, measure=measure,
+        # the library's default (vented muscles, psi = 0) is not a rest state of the frictionless
+        # joint (from there it swings past the muscles' range on a valve step and the run fails)
+        x0=x0, nominal_x0={"q_psi": x0[0], "p_J": p["J"] * x0[1], "P_1": x0[2], "P_2": x0[3]},
+        rhs=j.rhs, signals=signals, measure=measure,
         junctions=(JunctionSpec("seesaw", "1", "rotation", pressures=("P1", "P2")),),
         storages=(StorageSpec("k_s", "seesaw", p["k_s"], content_range=(-0.6, 0.6)),),
         rate=1000.0, duration=15.0, substeps=_SUBSTEPS, method="rk4",

@@ -16,7 +16,7 @@ Defaults: mineral oil (rho = 870 kg/m^3, mu = 0.04 Pa s, i.e. ISO VG 46 at
 40 C, beta = 1.4e9 Pa), V1 = V2 = 1 L, a 2 m pipe of 10 mm bore, R_out = 6e10
 Pa s/m^3 (10 L/min through it at 100 bar).  Then the pipe's oil column rings
 on the two volumes at 1/(2 pi sqrt(I C1 C2/(C1+C2))) = 57 Hz (damping ratio
-about 0.02) and the volumes drain through R_out with a time constant
+0.037) and the volumes drain through R_out with a time constant
 (C1 + C2) R_out = 86 ms: both within a 1 kHz recording.
 """
 from __future__ import annotations

@@ -14,7 +14,7 @@ def _eigs(name):
 
 
 def test_drivetrain_shaft_resonance_and_rigid_mode():
-    J_m, b_m, n, k_s, d_s, J_L, b_L = 2e-4, 1e-3, 0.1, 100.0, 0.1, 0.05, 0.05
+    J_m, b_m, n, k_s, J_L, b_L = 2e-4, 1e-3, 0.1, 100.0, 0.05, 0.05     # the defaults, SI
     lam = _eigs("drivetrain")
     osc = lam[np.abs(lam.imag) > 0]
     # undamped two-inertia resonance with the motor reflected through the gear

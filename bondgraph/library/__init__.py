@@ -6,20 +6,25 @@ gives one line.  Textbook graphs: ``mass-spring-damper``, ``dc-motor``,
 ``resistor-loop`` and ``resistor-loop-nl`` (algebraic loops, linear and
 nonlinear), ``chain`` (the derivation benchmark, 5 stages).  Seed plants:
 ``exoskeleton`` (seed 004, Fig. 6), ``pam``, ``pam-frictionless``,
-``pam-locked`` (seed 000).
+``pam-locked`` (seed 000).  Machines: ``pneumatic-cylinder``,
+``drivetrain``, ``carriage``, ``hydraulic``.
 """
 from __future__ import annotations
 
 from typing import Callable
 
+from .carriage import carriage
 from .chain import mass_spring_chain
 from .cylinder import pneumatic_cylinder
+from .drivetrain import drivetrain
 from .exoskeleton import exoskeleton
+from .hydraulic import hydraulic
 from .pam import pam
 from .textbook import coupled_tanks, dc_motor, geared_inertias, mass_spring_damper, resistor_loop, rlc_series
 
 __all__ = ["build", "names", "describe", "register", "exoskeleton", "pam", "mass_spring_chain", "mass_spring_damper", "dc_motor",
-           "rlc_series", "coupled_tanks", "geared_inertias", "resistor_loop"]
+           "rlc_series", "coupled_tanks", "geared_inertias", "resistor_loop", "drivetrain", "carriage",
+           "hydraulic", "pneumatic_cylinder"]
 
 _MODELS: dict[str, tuple[Callable, str]] = {}
 
@@ -43,6 +48,9 @@ register("pam-frictionless", lambda: pam("frictionless"), "the PAM joint with T_
 register("pam-locked", lambda: pam("locked"), "the PAM joint held at psi = 0, for torque tests (2 states)")
 register("chain", mass_spring_chain, "5-stage mass-spring-damper chain (the derivation benchmark)")
 register("pneumatic-cylinder", pneumatic_cylinder, "seal-friction rig: ideal cylinder F = p A, imposed rod position (1 state)")
+register("drivetrain", drivetrain, "two-mass drivetrain: motor, 10:1 gear, compliant shaft, load (3 states)")
+register("carriage", carriage, "force-driven rigid carriage, no friction or spring: integrates its input (2 states)")
+register("hydraulic", hydraulic, "pump, oil volume, pipe (inertance, laminar loss), volume, orifice to tank (3 states)")
 
 
 def names() -> list[str]:

@@ -139,6 +139,19 @@ class TruthPlant:
         unmodelled effect makes its simulation drift away from the recording.
     laws : dict
         Plant-specific effect hooks (``name -> callable``), documented per plant.
+    hold : callable ``(x, u, extra, h) -> dict``, optional
+        Held (discrete) variables of a fixed-step law (``method="rk4"`` only):
+        evaluated once at the start of every RK4 sub-step of length ``h`` (s)
+        and passed to ``rhs`` inside ``u`` over that sub-step (the PAM joint's
+        Kikuuwe friction).  ``None``: the plant has none.
+    nominal_x0 : dict, optional
+        The nominal graph's initial state (its state names -> SI values) that
+        equals :attr:`x0`, when :attr:`x0` is not the library graph's default
+        (pass it as ``x0`` to ``bondgraph.simulate``); ``None``: the default.
+    feedthrough : bool
+        ``measure`` takes a third argument, ``extra``: an output is a junction
+        effort that an effect changes algebraically, with no storage between
+        (the load cell on the massless piston of the pneumatic cylinder).
     """
 
     name: str
@@ -159,6 +172,9 @@ class TruthPlant:
     drifts: bool = False
     laws: dict = field(default_factory=dict)
     description: str = ""
+    hold: Callable | None = None
+    feedthrough: bool = False
+    nominal_x0: dict | None = None
 
     def junction(self, name: str) -> JunctionSpec:
         for j in self.junctions:

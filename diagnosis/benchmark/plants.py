@@ -1,22 +1,38 @@
-"""The benchmark's truth plants by name."""
+"""Registry of the benchmark's truth plants: ``PLANTS`` (name -> factory) and ``plant(name)``."""
 from __future__ import annotations
 
-from . import plants_textbook as _tb
+from typing import Callable
+
+from .plant import TruthPlant
+from .plants_cylinder import pneumatic_cylinder
+from .plants_drivetrain import carriage, drivetrain
+from .plants_exo import exoskeleton
+from .plants_hydraulic import hydraulic
+from .plants_pam import pam, pam_frictionless
+from .plants_textbook import coupled_tanks, dc_motor, geared_inertias, mass_spring_damper, rlc
 
 __all__ = ["PLANTS", "plant"]
 
-PLANTS = {
-    "msd": _tb.mass_spring_damper,
-    "dc-motor": _tb.dc_motor,
-    "rlc": _tb.rlc,
-    "tanks": _tb.coupled_tanks,
-    "geared-inertias": _tb.geared_inertias,
+#: Benchmark plant name -> factory returning a fresh :class:`TruthPlant`.
+PLANTS: dict[str, Callable[[], TruthPlant]] = {
+    "msd": mass_spring_damper,
+    "dc-motor": dc_motor,
+    "rlc": rlc,
+    "tanks": coupled_tanks,
+    "geared-inertias": geared_inertias,
+    "pam": pam,
+    "pam-frictionless": pam_frictionless,
+    "exoskeleton": exoskeleton,
+    "pneumatic-cylinder": pneumatic_cylinder,
+    "drivetrain": drivetrain,
+    "carriage": carriage,
+    "hydraulic": hydraulic,
 }
 
 
-def plant(name: str):
-    """A fresh truth plant `name`."""
+def plant(name: str) -> TruthPlant:
+    """A fresh truth plant by benchmark name."""
     try:
         return PLANTS[name]()
     except KeyError:
-        raise KeyError(f"no benchmark plant {name!r}; known: {', '.join(PLANTS)}") from None
+        raise KeyError(f"no benchmark plant {name!r}; available: {', '.join(PLANTS)}") from None

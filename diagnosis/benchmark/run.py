@@ -104,7 +104,9 @@ def run_case(spec: CaseSpec, plants: dict, workdir: Path, *, max_effects: int = 
     t1 = time.perf_counter()
     ins, outs = bindings(rec)
     try:
-        report = diagnose(plant.model, str(path), inputs=ins, outputs=outs, max_effects=max_effects)
+        # the recording starts where the plant rests, which a user states (diagnose's x0)
+        report = diagnose(plant.model, str(path), inputs=ins, outputs=outs, max_effects=max_effects,
+                          x0=plant.nominal_x0)
         score = score_case(rec, report)
     except Exception as exc:
         score = score_case(rec, {"missing_physics": [], "fit": {"nominal": {}, "improved": {}}})

@@ -3,7 +3,10 @@
 Inputs are zero-order-hold sample tables (the recorded commands).  ``rk4``
 integrates each sample interval with ``plant.substeps`` classic RK4 steps;
 ``lsoda`` (stiff plants) runs scipy's LSODA across the record with the input
-held per interval and at most one sample per step.  The effect may add
+held per interval and at most one sample per step.  A plant with held
+variables (``plant.hold``, a discrete law such as Kikuuwe friction) is
+integrated with ``rk4`` only: the held values are computed at the start of
+each sub-step and passed to the right-hand side in the input dict.  The effect may add
 states (a Dahl state, a valve lag), change the inputs before the plant (a
 delay, a saturation) and the outputs after it (a sensor).
 """
@@ -75,11 +78,22 @@ def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None, *, x0
     nx = len(plant.x0)
     s0 = np.concatenate([np.asarray(plant.x0 if x0 is None else x0, float), effect.z0(plant)])
 
-    def f(s, uk):
+    def f(s, uk, held=None):
         x, z = s[:nx], s[nx:]
         ue = effect.inputs_now(uk, z)
         ext, dz = effect.extra(plant.signals(x, ue), uk, z)
+        if held:
+            ue = {**ue, **held}
         return np.concatenate([plant.rhs(x, ue, ext), dz])
+
+    def held_at(s, uk, h):
+        """The plant's held variables at the start of a sub-step (None without any)."""
+        if plant.hold is None:
+            return None
+        x, z = s[:nx], s[nx:]
+        ue = effect.inputs_now(uk, z)
+        ext, _ = effect.extra(plant.signals(x, ue), uk, z)
+        return plant.hold(x, ue, ext, h)
 
     n = t.size
     states = np.full((n, s0.size), np.nan)
@@ -91,16 +105,19 @@ def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None, *, x0
             uk = {name: u[name][k] for name in names}
             h = (t[k + 1] - t[k]) / plant.substeps
             for _ in range(plant.substeps):
-                k1 = f(s, uk)
-                k2 = f(s + 0.5 * h * k1, uk)
-                k3 = f(s + 0.5 * h * k2, uk)
-                k4 = f(s + h * k3, uk)
+                held = held_at(s, uk, h)
+                k1 = f(s, uk, held)
+                k2 = f(s + 0.5 * h * k1, uk, held)
+                k3 = f(s + 0.5 * h * k2, uk, held)
+                k4 = f(s + h * k3, uk, held)
                 s = s + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
             if not np.all(np.isfinite(s)):
                 finite = False
                 break
             states[k + 1] = s
     elif plant.method == "lsoda":
+        if plant.hold is not None:
+            raise ValueError(f"plant {plant.name}: held variables need method 'rk4'")
         from scipy.integrate import solve_ivp
         s = s0.copy()
         for k in range(n - 1):
@@ -121,8 +138,13 @@ def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None, *, x0
         if not np.all(np.isfinite(states[k])):
             break
         x, z = states[k, :nx], states[k, nx:]
-        ue = effect.inputs_now({name: u[name][k] for name in names}, z)
-        y = effect.sensed(plant.measure(x, ue))
+        uk = {name: u[name][k] for name in names}
+        ue = effect.inputs_now(uk, z)
+        if plant.feedthrough:
+            ext, _ = effect.extra(plant.signals(x, ue), uk, z)
+            y = effect.sensed(plant.measure(x, ue, ext))
+        else:
+            y = effect.sensed(plant.measure(x, ue))
         for o in plant.outputs:
             out[o.name][k] = y[o.name]
         if signals:

@@ -1,0 +1,175 @@
+"""Each benchmark truth plant (hand-written numpy) against the library graph it mirrors.
+
+Random zero-order-held inputs within the plant's InputSpecs drive both
+``simulate_truth(plant, ...)`` and ``bondgraph.simulate`` of
+``library.build(plant.model)``; every output must agree to a small fraction
+of its spread.  The two codes share nothing but the equations on paper.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bondgraph import library, simulate
+from diagnosis.benchmark.plants import PLANTS, plant
+from diagnosis.benchmark.plants_cylinder import pneumatic_cylinder
+from diagnosis.benchmark.plants_drivetrain import carriage, drivetrain
+from diagnosis.benchmark.plants_exo import exoskeleton
+from diagnosis.benchmark.plants_hydraulic import hydraulic
+from diagnosis.benchmark.plants_pam import pam, pam_frictionless
+from diagnosis.benchmark.simulate import NoEffect, simulate_truth
+
+
+def random_inputs(plant, t, seed=0):
+    """Zero-order-held random levels within each InputSpec (range, quantum, hold times)."""
+    rng = np.random.default_rng(seed)
+    u = {}
+    for spec in plant.inputs:
+        values, k = np.empty(t.size), 0
+        while k < t.size:
+            n = max(1, int(rng.uniform(*spec.hold) * plant.rate))
+            values[k:k + n] = np.round(rng.uniform(spec.low, spec.high) / spec.quantum) * spec.quantum
+            k += n
+        u[spec.name] = values
+    return u
+
+
+def parity(plant, duration, *, x0=None, seed=0, floor=None, **simulate_kw):
+    """Max abs error / std of each output, truth vs bond graph (printed); `floor` per output
+    bounds the std from below where an output barely moves (N m, ...)."""
+    t = np.arange(int(round(duration * plant.rate)) + 1) / plant.rate
+    u = random_inputs(plant, t, seed)
+    truth = simulate_truth(plant, t, u)
+    assert truth["_finite"]
+    res = simulate(library.build(plant.model), (0.0, t[-1]), inputs={k: (t, v) for k, v in u.items()},
+                   output_interval=1.0 / plant.rate, x0=plant.nominal_x0 if x0 is None else x0,
+                   **simulate_kw)
+    assert np.allclose(res.t, t)
+    rel = {}
+    for o in plant.outputs:
+        err = np.max(np.abs(truth[o.name] - res[o.name]))
+        scale = max(np.std(truth[o.name]), (floor or {}).get(o.name, 0.0)) or 1.0
+        rel[o.name] = err / scale
+        print(f"{plant.name}: {o.name} max|err| {err:.3g} {o.unit}, std {np.std(truth[o.name]):.3g}, "
+              f"ratio {rel[o.name]:.2g}")
+    return rel, truth
+
+
+def test_pam_equals_library_pam_with_held_kikuuwe_friction():
+    # the library runs its fixed-step scheme (1 ms samples, 4 RK4 sub-steps, T_f held per sub-step)
+    plant = pam()
+    rel, _ = parity(plant, 1.0)
+    assert max(rel.values()) < 1e-9
+
+
+def test_pam_frictionless_equals_library_and_does_not_drift():
+    plant = pam_frictionless()
+    assert plant.hold is None and not plant.drifts
+    # same fixed-step scheme on both sides: equal to rounding
+    rel, truth = parity(plant, 1.0, method="RK4", dt=0.25e-3)
+    assert max(rel.values()) < 1e-9
+    # the library's adaptive solver: RK4 at 0.25 ms is within 1e-4 of the spread (tau barely moves)
+    rel, truth = parity(plant, 1.0, floor={"tau": 0.05})
+    assert max(rel.values()) < 1e-3
+    # restoring muscles: psi stays within the joint's range on random valve commands
+    assert np.all(np.abs(truth["psi"]) < 30.0)
+
+
+def test_exoskeleton_equals_library_exoskeleton():
+    # stiff (d_g on J_sint: -5.1e4 1/s): LSODA per held sample vs the library's Radau
+    rel, _ = parity(exoskeleton(), 2.0)
+    assert max(rel.values()) < 1e-5
+
+
+def test_pneumatic_cylinder_equals_library_cylinder():
+    plant = pneumatic_cylinder()
+    # 60 s so that the pressure (held 20-40 s) changes; the same RK4 scheme on both sides
+    rel, truth = parity(plant, 60.0, method="RK4", dt=1.0 / plant.rate / plant.substeps)
+    assert max(rel.values()) < 1e-9
+    assert np.std(truth["v_piston"]) > 0.0 and np.std(truth["F"]) > 0.0
+    # the library's adaptive solver over a shorter record
+    rel, _ = parity(plant, 20.0)
+    assert max(rel.values()) < 1e-4
+
+
+def test_cylinder_seal_friction_reaches_the_load_cell():
+    # massless piston: an effort at the junction is in the rod force at once (feedthrough)
+    class SealFriction(NoEffect):
+        def extra(self, sig, u, z):
+            return {"piston": -(3.4 + 0.65e-5 * sig["p"]) * np.tanh(sig["piston"] / 1e-3)}, np.zeros(0)
+
+    plant = pneumatic_cylinder()
+    t = np.arange(0.0, 10.0, 1.0 / plant.rate)
+    u = {"p": np.full(t.size, 3e5), "x": np.interp(t, [0, 5, 10], [0.0, 0.037, 0.0])}
+    y = simulate_truth(plant, t, u, SealFriction())
+    friction = y["F"] - 3e5 * np.pi * 0.0125 ** 2
+    v = y["v_piston"]
+    assert np.all(friction[v < -1e-3] > 5.0) and np.all(friction[v > 1e-3] < -5.0)
+
+
+@pytest.mark.parametrize("name", ["drivetrain", "carriage", "hydraulic", "msd", "dc-motor", "rlc", "tanks",
+                                  "geared-inertias"])
+def test_plants_equal_their_library_graphs(name):
+    plant = PLANTS[name]()
+    # the same RK4 scheme on both sides: equal to rounding
+    rel, truth = parity(plant, max(3.0, 30.0 / plant.rate), method="RK4", dt=1.0 / plant.rate / plant.substeps)
+    assert max(rel.values()) < 1e-9
+    # the library's adaptive solver (restarted at every held sample) over a shorter record
+    rel, _ = parity(plant, max(1.0, 30.0 / plant.rate), seed=1)
+    assert max(rel.values()) < 1e-4
+
+
+def test_carriage_drifts_and_the_others_settle():
+    assert carriage().drifts and not drivetrain().drifts and not hydraulic().drifts
+
+
+def test_registry_names_match_and_mirror_library_models():
+    names = set(library.names())
+    for name in PLANTS:
+        p = plant(name)
+        assert p.name == name and p.model in names
+        graph = library.build(p.model)
+        for j in p.junctions:
+            assert j.name in graph.elements and graph.elements[j.name].kind == j.kind, (name, j.name)
+        assert {o.name for o in p.outputs} <= {str(o) for o in graph.equations().outputs}
+    with pytest.raises(KeyError, match="available"):
+        plant("nope")
+
+
+def test_pam_doors_leak_lowers_the_chamber_and_torque_turns_the_joint():
+    class Leak(NoEffect):
+        def extra(self, sig, u, z):
+            ambient = plant.laws["chamber"](np.array([0.0, 0.0, sig["P1"], sig["P2"]]))["muscle1"]["ambient"]
+            return {"muscle1": -1e-10 * (sig["muscle1"] - ambient)}, np.zeros(0)
+
+    class Torque(NoEffect):
+        def extra(self, sig, u, z):
+            return {"seesaw": 1.0}, np.zeros(0)      # N m, more than the ~0.1 N m of friction here
+
+    plant = pam()
+    t = np.arange(0.0, 0.5, 1e-3)
+    u = {"u1": np.full(t.size, 5.0), "u2": np.full(t.size, 5.0)}
+    nominal = simulate_truth(plant, t, u)
+    leak, torque = simulate_truth(plant, t, u, Leak()), simulate_truth(plant, t, u, Torque())
+    assert np.ptp(nominal["psi"]) < 1e-9                      # at rest, held by nothing but balance
+    assert leak["P1"][-1] < nominal["P1"][-1] - 1e3          # Pa
+    assert torque["psi"][-1] > nominal["psi"][-1] + 1.0      # deg
+
+
+def test_truth_plants_import_neither_bondgraph_nor_the_catalogue():
+    import ast
+    import importlib
+
+    for name in ("plant", "simulate", "plants", "plants_textbook", "plants_pam", "plants_exo",
+                 "plants_cylinder", "plants_drivetrain", "plants_hydraulic"):
+        module = importlib.import_module(f"diagnosis.benchmark.{name}")
+        tree = ast.parse(open(module.__file__).read())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                roots = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                roots = [("." * node.level) + (node.module or "")]
+            else:
+                continue
+            for root in roots:
+                assert not root.startswith(("bondgraph", "diagnosis.catalogue", "..")), (name, root)

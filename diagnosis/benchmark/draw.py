@@ -64,20 +64,27 @@ def draw_cases(n: int, seed: int, plants: dict) -> list[CaseSpec]:
     rng = np.random.default_rng(seed)
     built = {name: f() for name, f in plants.items()}
     drifting = [p for p, pl in built.items() if pl.drifts]
-    specs = []
+    specs, queue = [], []
     for i in range(n):
         case_seed = int(rng.integers(2 ** 31))
         exc = str(rng.choice(EXCITATIONS))
         if i % NULL_EVERY == 3:
-            plant = str(rng.choice(sorted(built)))
+            used = {p: sum(s.plant == p for s in specs) for p in built}
+            plant = str(rng.choice([p for p in sorted(built) if used[p] == min(used.values())]))
             specs.append(CaseSpec(i, case_seed, plant, "none", excitation=exc,
                                   noise_share=float(math.exp(rng.uniform(math.log(0.003), math.log(0.03))))))
             continue
         pool = drifting if (i % DRIFT_EVERY == 0 and drifting) else sorted(built)
         options = [(p, k) for p in pool for k in KINDS if places_for(built[p], k)]
-        kinds = sorted({k for _, k in options})
-        kind = str(rng.choice(kinds))
-        plant = str(rng.choice(sorted({p for p, k in options if k == kind})))
+        kinds = {k for _, k in options}
+        if not any(k in kinds for k in queue):      # kinds in shuffled rounds: balanced counts
+            queue += [str(k) for k in rng.permutation(sorted({k for p in built for k in KINDS
+                                                               if places_for(built[p], k)}))]
+        kind = next(k for k in queue if k in kinds)
+        queue.remove(kind)
+        able = sorted({p for p, k in options if k == kind})
+        used = {p: sum(s.plant == p for s in specs) for p in able}   # the least used plant first
+        plant = str(rng.choice([p for p in able if used[p] == min(used.values())]))
         door, name = places_for(built[plant], kind)[int(rng.integers(len(places_for(built[plant], kind))))]
         specs.append(CaseSpec(i, case_seed, plant, kind, door, name,
                               target_change=float(math.exp(rng.uniform(math.log(0.03), math.log(0.3)))),
@@ -92,6 +99,9 @@ def excitation(plant: TruthPlant, t: np.ndarray, rng, kind: str) -> dict:
     for spec in plant.inputs:
         if spec.high <= spec.low:
             u[spec.name] = np.full(t.size, spec.low)
+            continue
+        if spec.profile is not None:
+            u[spec.name] = np.round(spec.profile(t, rng) / spec.quantum) * spec.quantum
             continue
         if kind == "prbs":
             a, b = np.sort(rng.uniform(spec.low, spec.high, 2))

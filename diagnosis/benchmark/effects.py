@@ -63,7 +63,7 @@ def places_for(plant: TruthPlant, kind: str) -> list[tuple[str, str]]:
         elif door == "storage_linear":
             out += [("storage", s.name) for s in plant.storages if s.stiffness is not None]
         elif door == "storage_linear1":
-            out += [("storage", s.name) for s in plant.storages if s.stiffness is not None
+            out += [("storage", s.name) for s in plant.storages if s.stiffness   # a play needs a spring
                     and plant.junction(s.junction).kind == "1"]
         elif door == "storage_range":
             out += [("storage", s.name) for s in plant.storages if s.content_range is not None]

@@ -39,6 +39,8 @@ class InputSpec:
     ``hold`` is the (shortest, longest) time a random level is held, s: long
     enough for the plant to respond, short enough to excite its dynamics.
     ``ambient`` is the value the input rests at (pam valves: 5 V closed).
+    ``profile(t, rng)``, when given, draws the command instead of random held
+    levels (an imposed motion that must be smooth, such as a rod's strokes).
     """
 
     name: str
@@ -48,6 +50,7 @@ class InputSpec:
     quantum: float
     hold: tuple[float, float]
     ambient: float = 0.0
+    profile: Callable | None = None
 
 
 @dataclass(frozen=True)

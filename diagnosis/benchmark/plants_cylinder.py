@@ -15,11 +15,9 @@ pressure-dependent seal friction).  The piston is massless, so an effort
 rig's thesis defines friction).  Hence ``feedthrough=True``.
 
 Excitation: the real rig strokes ~37 mm at ~6-11 mm/s with the pressure
-held per file (1, 3, 5, 7 bar).  Random held positions (the InputSpec) are
-step moves: the follower turns each into a 20 ms exponential stroke (peak
-speed ~ step / 20 ms), far faster than the rig's.  For realistic slow
-strokes pass :func:`triangle_strokes` as ``x`` instead (the plant is
-indifferent to the profile: it is a sample table held per sample).
+held per file (1, 3, 5, 7 bar).  The position input is therefore drawn as
+:func:`triangle_strokes` at a random 5-12 mm/s (its ``profile``), not as
+random held levels, which the follower would turn into 20 ms step strokes.
 """
 from __future__ import annotations
 
@@ -62,7 +60,8 @@ def pneumatic_cylinder() -> TruthPlant:
     return TruthPlant(
         name="pneumatic-cylinder", model="pneumatic-cylinder",
         inputs=(InputSpec("p", "Pa", 1.0e5, 7.0e5, 1.0e3, (20.0, 40.0)),
-                InputSpec("x", "m", 0.0, 0.037, 1.0e-5, (2.0, 6.0))),
+                InputSpec("x", "m", 0.0, 0.037, 1.0e-5, (2.0, 6.0),
+                          profile=lambda t, rng: triangle_strokes(t, speed=float(rng.uniform(0.005, 0.012))))),
         outputs=(OutputSpec("F", "N"), OutputSpec("v_piston", "m/s")),
         states=("x_s",), x0=np.zeros(1), rhs=rhs,
         signals=lambda x, u: {"piston": velocity(x, u), "p": u["p"]},

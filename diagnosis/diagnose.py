@@ -12,8 +12,9 @@
    (:func:`diagnosis.graph_location.locate_on_graph`);
 4. candidates of the catalogue at the ``top`` places
    (:func:`diagnosis.catalogue.candidates`), each fitted on the training part
-   (its last :data:`MAX_FIT_SAMPLES` samples for long recordings, started from
-   the nominal state there) (:func:`diagnosis.fit.fit_candidate`), and a refit of the ``uncertain``
+   (its first :data:`MAX_FIT_SAMPLES` samples for long recordings, started from
+   the same initial state as every whole-recording simulation, never from a
+   nominal state that may have drifted) (:func:`diagnosis.fit.fit_candidate`), and a refit of the ``uncertain``
    nominal parameters alone when any are given; the choice by held-out error
    and parsimony (:func:`diagnosis.fit.choose`), ``none`` when nothing
    explains a significant share;
@@ -42,8 +43,8 @@ __all__ = ["diagnose", "MIN_PLACE_SHARE", "MAX_FIT_SAMPLES"]
 
 #: places whose correction explains less than this share of the residual get no candidates
 MIN_PLACE_SHARE = 0.02
-#: candidates are fitted on at most this many training samples (the end of the training
-#: part, started from the nominal simulation's state there): a fit runs ~100 simulations
+#: candidates are fitted on at most this many training samples (the start of the training
+#: part, from the recording's initial state): a fit runs ~100 simulations
 MAX_FIT_SAMPLES = 15000
 
 
@@ -125,14 +126,20 @@ def _with_values(graph, values: dict):
 
 
 def _fit_window(train, run, x0):
-    """The training samples the fits use: all, or the last :data:`MAX_FIT_SAMPLES`
-    started from the nominal simulation's state at their first time."""
+    """The training samples the fits use: all, or the first :data:`MAX_FIT_SAMPLES`.
+
+    Both start from `x0` (the recording's initial state, as every whole-recording
+    simulation does).  A window later in the record would have to start from the
+    nominal simulation's state there, which has drifted away from the plant's
+    wherever the nominal model integrates what it leaves out (a force-driven
+    mass without its friction): the candidate would be fitted from a wrong state.
+    `run` (the nominal run) is not used; it is kept for the callers' symmetry.
+    """
     n = train.t.size
     if n <= MAX_FIT_SAMPLES:
         return train, x0
-    k = n - MAX_FIT_SAMPLES
-    part = train.window(float(train.t[k]), float(train.t[-1]))
-    return part, dict(zip(run.state_names, (float(v) for v in run.states[k])))
+    part = train.window(float(train.t[0]), float(train.t[MAX_FIT_SAMPLES - 1]))
+    return part, x0
 
 
 def _holdout_nrmse(sim, params, x0, experiment, mask):
@@ -243,7 +250,9 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         improved_graph = _with_values(base, {k: v for k, v in chosen.values.items() if k not in cand_names})
         improved, y_imp = _holdout_nrmse(OutputSimulator(improved_graph, exp), None, x0, exp, mask)
     rounds = [{"chosen": chosen, "fits": fits, "reference": dict(nominal), "improved": dict(improved),
-               "seconds": _time.perf_counter() - say.start}]
+               "seconds": _time.perf_counter() - say.start,
+               "window": [float(fit_part.t[0]), float(fit_part.t[-1])],
+               "start": "the given initial state" if x0 is not None else "the model's initial state"}]
 
     if chosen is not None and chosen.candidate is not None:
         floor = noise_floor(held, res.noise)

@@ -77,6 +77,8 @@ def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, r
         physics = [{"kind": "none", "attached_to": "", "parameters": refit, "explanation": why}]
         location = {"junction": "", "bond": "", "windows": windows, "regime": ""}
     fit = {"holdout": [float(held.t[0]), float(held.t[-1])], "nominal": nominal, "improved": improved}
+    if rounds and "window" in rounds[0]:
+        fit.update(window=rounds[0]["window"], start=rounds[0]["start"])
     text = _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen, physics,
                  finding, rounds)
     plot = PlotData(exp.t, dict(exp.outputs), dict(res.run.outputs), dict(y_imp), units,
@@ -107,6 +109,10 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
     if scores:
         best = ", ".join(f"{s.place} {100 * s.explained:.0f} %" for s in scores[:3])
         lines.append(f"Share of the residual a correction explains, by place: {best}.")
+    if fits and rounds and "window" in rounds[0]:
+        a, b = rounds[0]["window"]
+        lines.append(f"Candidates were fitted on {a:.4g}-{b:.4g} s of the training part, simulated from "
+                     f"{rounds[0]['start']}.")
     m = physics[0]
     if m["kind"] == "none":
         lines.append(f"Missing physics: none - {m['explanation']} "

@@ -5,14 +5,17 @@ Schema of :meth:`DiagnosisReport.to_json` (issue 6, section 2e)::
     {"location": {"junction": str, "bond": str, "windows": [[t0, t1], ...], "regime": str},
      "missing_physics": [{"kind": str, "attached_to": str, "parameters": {name: value},
                           "explanation": str}],
-     "fit": {"holdout": [t0, t1], "nominal": {output: nrmse}, "improved": {output: nrmse}},
+     "fit": {"holdout": [t0, t1], "nominal": {output: nrmse}, "improved": {output: nrmse},
+             "window": [t0, t1], "start": str},
      "improved_model": path}
 
 ``missing_physics`` is ``[{"kind": "none", ...}]`` when nothing is missing;
 ``junction`` names the place the physics is attached to (a junction's
 element name, or ``"input NAME"`` / ``"output NAME"`` for actuator and sensor
 effects; ``""`` for none); ``bond`` is ``""`` when there is none;
-``improved_model`` is ``null`` until :meth:`DiagnosisReport.save`.
+``improved_model`` is ``null`` until :meth:`DiagnosisReport.save`;
+``fit.window`` is the part of the training samples the candidates were fitted on
+and ``fit.start`` the state their simulations started from.
 Times in s, NRMSE dimensionless.
 """
 from __future__ import annotations
@@ -130,7 +133,9 @@ class DiagnosisReport:
                                  "explanation": m["explanation"]} for m in self.missing_physics],
             "fit": {"holdout": [_finite(v) for v in self.fit["holdout"]],
                     "nominal": {k: _finite(v) for k, v in self.fit["nominal"].items()},
-                    "improved": {k: _finite(v) for k, v in self.fit["improved"].items()}},
+                    "improved": {k: _finite(v) for k, v in self.fit["improved"].items()},
+                    **({"window": [_finite(v) for v in self.fit["window"]], "start": str(self.fit["start"])}
+                       if "window" in self.fit else {})},
             "improved_model": self.improved_model,
         }
 

@@ -98,7 +98,8 @@ def test_report_saves_schema_plots_and_an_improved_graph(coulomb, tmp_path):
     assert set(data) == {"location", "missing_physics", "fit", "improved_model"}
     assert set(data["location"]) == {"junction", "bond", "windows", "regime"}
     assert set(data["missing_physics"][0]) == {"kind", "attached_to", "parameters", "explanation"}
-    assert set(data["fit"]) == {"holdout", "nominal", "improved"}
+    assert set(data["fit"]) == {"holdout", "nominal", "improved", "window", "start"}
+    assert data["fit"]["window"][0] == 0.0 and data["fit"]["start"] == "the model's initial state"
     assert data["improved_model"] == paths["model"]
     for key in ("residual_time", "residual_regime", "holdout_fit"):
         assert open(paths[key], "rb").read(8) == b"\x89PNG\r\n\x1a\n"
@@ -129,7 +130,7 @@ def test_fitted_nominal_values_are_written_into_the_graph():
     assert graph.parameters()["b"].value == 0.4          # the nominal graph is not modified
 
 
-def test_long_training_parts_are_fitted_on_their_end(monkeypatch):
+def test_long_training_parts_are_fitted_on_their_start(monkeypatch):
     import diagnosis.diagnose as pipeline
     from bondgraph import library
     from diagnosis.recording import Experiment
@@ -140,11 +141,13 @@ def test_long_training_parts_are_fitted_on_their_end(monkeypatch):
     assert pipeline._fit_window(exp, run, None)[0] is exp            # short: all of it
     monkeypatch.setattr(pipeline, "MAX_FIT_SAMPLES", 50)
     part, x0 = pipeline._fit_window(exp, run, None)
-    assert part.t.size == 50 and part.t[0] == t[151]
-    assert x0 == {"p_m": run.states[151, 0], "q_k": run.states[151, 1]}
-    # started there, the nominal model continues the nominal run
-    again = OutputSimulator(library.build("mass-spring-damper"), part)(x0=x0)["x"]
-    np.testing.assert_allclose(again, run.outputs["x"][151:], atol=1e-12)
+    assert part.t.size == 50 and part.t[0] == t[0] and part.t[-1] == t[49]
+    assert x0 is None                                   # the recording's own initial state
+    start = {"p_m": 0.1, "q_k": 0.2}
+    assert pipeline._fit_window(exp, run, start)[1] is start
+    # from there the model repeats the whole run's first samples: no drifted state is used
+    again = OutputSimulator(library.build("mass-spring-damper"), part)(x0=None)["x"]
+    np.testing.assert_allclose(again, run.outputs["x"][:50], atol=1e-12)
 
 
 def test_nominal_recording_answers_none(null):

@@ -30,10 +30,12 @@ from bondgraph.errors import BondcosimError
 from .catalogue_common import ParamSpec
 from .errors import DiagnosisError
 
-__all__ = ["CandidateFit", "fit_candidate", "choose", "noise_floor", "PARAMETER_PRICE", "MIN_SHARE"]
+__all__ = ["CandidateFit", "fit_candidate", "choose", "noise_floor", "PARAMETER_PRICE", "MIN_SHARE", "TIE"]
 
 #: relative reduction of the held-out excess error each extra parameter must buy
 PARAMETER_PRICE = 0.10
+#: relative score difference within which two fits count as tied (see :func:`choose`)
+TIE = 0.02
 #: share of the nominal held-out excess error the winner must explain
 MIN_SHARE = 0.30
 #: nominal excess NRMSE^2 below which an output counts as explained (noise-free data)
@@ -339,8 +341,12 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
        fitted parameters and :math:`\\rho` = :data:`PARAMETER_PRICE` = 0.10: each
        extra parameter must buy a 10 % smaller excess error (the small
        :math:`10^{-4} E_0` term makes fits that are perfect to rounding tie,
-       so the simpler one wins).  Ties: fewer parameters, then the smaller raw
-       held-out error (two fits both within the noise floor), then catalogue order.
+       so the simpler one wins).  Fits whose score is within :data:`TIE` (2 %) of
+       the best are tied: the held-out part cannot tell them apart (a constant
+       load and a sensor offset look alike once a transient is over).  Among
+       tied fits: fewer parameters, then the smaller training error (where the
+       start of the record may tell them apart), then the smaller raw held-out
+       error, then catalogue order.
     3. The winner must explain at least :data:`MIN_SHARE` (30 %) of :math:`E_0`:
        :math:`1 - E / E_0 \\ge 0.3`; otherwise None: the tool does not invent
        physics.
@@ -382,12 +388,16 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
     if not usable:
         return None
 
-    def key(f):
-        score = (_excess(f.holdout_nrmse, floor, names) + 1e-4 * e0) * (1 + PARAMETER_PRICE) ** f.n_params
-        order = KINDS.index(f.candidate.kind) if f.candidate is not None else -1
-        raw = sum(f.holdout_nrmse[o] ** 2 for o in names)
-        return (round(score / e0, 9), f.n_params, raw, order)
+    def score(f):
+        return (_excess(f.holdout_nrmse, floor, names) + 1e-4 * e0) * (1 + PARAMETER_PRICE) ** f.n_params
 
-    best = min(usable, key=key)
+    def key(f):
+        order = KINDS.index(f.candidate.kind) if f.candidate is not None else -1
+        train = sum(v ** 2 for v in f.train_nrmse.values()) if f.train_nrmse else np.inf
+        raw = sum(f.holdout_nrmse[o] ** 2 for o in names)
+        return (f.n_params, train if np.isfinite(train) else np.inf, raw, order)
+
+    lowest = min(score(f) for f in usable)
+    best = min((f for f in usable if score(f) <= lowest * (1 + TIE)), key=key)
     share = 1.0 - _excess(best.holdout_nrmse, floor, significant) / e0
     return best if share >= MIN_SHARE else None

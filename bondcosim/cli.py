@@ -107,6 +107,8 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--top", type=int, default=3, help="graph places whose candidates are fitted (default 3)")
     p.add_argument("--max-effects", type=int, default=2, metavar="N",
                    help="most missing effects to find, one per round (default 2)")
+    p.add_argument("--noise", action="append", default=[], metavar="NAME=SIGMA[:UNIT]",
+                   help="known noise standard deviation of a measured output (default: estimated)")
     p.add_argument("--report", default=None, metavar="DIR",
                    help="write diagnosis.json, diagnosis.txt, plots and improved_model.json in DIR")
     p.add_argument("--json", action="store_true", help="print the result as JSON (issue 6 schema)")
@@ -257,7 +259,7 @@ def _cmd_diagnose(args) -> int:
     from .models import load_model
     report = diagnose(load_model(args.model), args.recording, inputs=args.input, outputs=args.output,
                       time=args.time, holdout=args.holdout, uncertain=args.uncertain, top=args.top,
-                      progress=True, max_effects=args.max_effects)
+                      progress=True, max_effects=args.max_effects, noise=args.noise)
     if args.report:
         paths = report.save(args.report)
         print(f"wrote {', '.join(paths.values())}", file=sys.stderr)

@@ -148,8 +148,37 @@ def _holdout_nrmse(sim, params, x0, experiment, mask):
     return {o: nrmse(experiment.outputs[o][mask], y[o][mask]) for o in experiment.outputs}, y
 
 
+def _noise_overrides(noise, exp) -> dict:
+    """`noise` (dict output -> sigma, or ``"NAME=SIGMA[:UNIT]"`` strings) in the outputs' model units."""
+    from .units import convert
+    if not noise:
+        return {}
+    items = noise.items() if isinstance(noise, dict) else (
+        (text.split("=", 1) if isinstance(text, str) and "=" in text else (text, None)) for text in noise)
+    out = {}
+    for name, value in items:
+        if name not in exp.outputs:
+            raise DiagnosisError(f"noise: {name!r} is not a measured output; measured: {', '.join(exp.outputs)}")
+        unit = exp.units.get(name, "")
+        if isinstance(value, str) and ":" in value:
+            value, unit_given = value.split(":", 1)
+            try:
+                value = float(convert(float(value), unit_given.strip(), unit))
+            except ValueError as exc:
+                raise DiagnosisError(f"noise of {name}: {exc}") from exc
+        try:
+            sigma = float(value)
+        except (TypeError, ValueError):
+            raise DiagnosisError(f"noise of {name}: {value!r} is not a number (NAME=SIGMA[:UNIT])") from None
+        if not np.isfinite(sigma) or sigma <= 0:
+            raise DiagnosisError(f"noise of {name}: the standard deviation must be positive and finite; "
+                                 f"found {sigma!r}")
+        out[name] = sigma
+    return out
+
+
 def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0.3, uncertain=(),
-             top: int = 3, progress: bool = False, x0=None, max_effects: int = 2):
+             top: int = 3, progress: bool = False, x0=None, max_effects: int = 2, noise=None):
     """Locate, name and model what a model leaves out of a recording.
 
     Parameters
@@ -177,6 +206,10 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         Most missing effects reported: after the first, each further round looks for
         one more on the improved graph, kept only if it improves the held-out error
         beyond the noise floor and the parsimony price (1: the single-effect answer).
+    noise : dict str -> float or iterable of str, optional
+        Known measurement-noise standard deviations of some outputs, in the output's
+        model unit (or ``"NAME=SIGMA[:UNIT]"``); the others are estimated from the
+        recording and the nominal residual (:func:`diagnosis.residuals.noise_sigma`).
 
     Returns
     -------
@@ -211,6 +244,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     say("nominal simulation", f"{exp.t.size} samples, {exp.span[1] - exp.span[0]:.4g} s")
     sim = OutputSimulator(graph, exp)
     res = residuals(graph, exp, simulator=sim, x0=x0)
+    res.noise.update(_noise_overrides(noise, exp))
     nominal = {o: nrmse(exp.outputs[o][mask], res.simulated[o][mask]) for o in exp.outputs}
     windows = _merge([w for o in exp.outputs
                       for w in significant_windows(exp.t, res.residual[o], res.noise[o])])
@@ -238,7 +272,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         say("fitting", f"nominal parameters {', '.join(uncertain)} alone")
         fits.append(fit_candidate(graph, None, fit_part, held, uncertain=uncertain, x0=fit_x0))
     say("choosing")
-    chosen = choose(nominal, fits, noise=noise_floor(held, res.noise)) if fits else None
+    floor = noise_floor(held, res.noise)
+    chosen = choose(nominal, fits, noise=floor) if fits else None
 
     say("improved model")
     if chosen is None:
@@ -251,11 +286,10 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         improved, y_imp = _holdout_nrmse(OutputSimulator(improved_graph, exp), None, x0, exp, mask)
     rounds = [{"chosen": chosen, "fits": fits, "reference": dict(nominal), "improved": dict(improved),
                "seconds": _time.perf_counter() - say.start,
-               "window": [float(fit_part.t[0]), float(fit_part.t[-1])],
+               "window": [float(fit_part.t[0]), float(fit_part.t[-1])], "floor": floor,
                "start": "the given initial state" if x0 is not None else "the model's initial state"}]
 
     if chosen is not None and chosen.candidate is not None:
-        floor = noise_floor(held, res.noise)
         while len(rounds) < int(max_effects):
             start = _time.perf_counter()
             found = _further_round(improved_graph, exp, train, held, mask, x0, improved, floor,

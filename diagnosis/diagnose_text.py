@@ -70,8 +70,8 @@ def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, r
                     "windows": windows, "regime": finding.description if finding else ""}
     else:
         refit = {k: float(v) for k, v in chosen.values.items()} if chosen is not None else {}
-        why = ("no candidate explains a significant share of the mismatch beyond the measurement noise"
-               if fits else "no place on the graph explains a significant share of the residual")
+        why = (_why_none(nominal, fits, rounds) if fits
+               else "no place on the graph explains a significant share of the residual")
         if refit:
             why = "no missing physics; the uncertain nominal parameters were refitted"
         physics = [{"kind": "none", "attached_to": "", "parameters": refit, "explanation": why}]
@@ -89,6 +89,26 @@ def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, r
     for i, r in enumerate(report.rounds, 1):
         report.timings[f"round {i}"] = r["seconds"]
     return report
+
+
+def _why_none(nominal, fits, rounds) -> str:
+    """Which rule of :func:`diagnosis.fit.choose` answered none, with the numbers."""
+    from .fit import MIN_SHARE, _excess
+    floor = (rounds[0].get("floor") if rounds else None) or {}
+    names = list(nominal)
+    significant = [o for o in names if nominal[o] ** 2 - floor.get(o, 0.0) ** 2
+                   > max(0.1 * floor.get(o, 0.0) ** 2, 1e-6)]
+    if not significant:
+        return "the nominal model's held-out error stays within the measurement noise"
+    usable = [f for f in fits if f.success and f.holdout_nrmse
+              and all(np.isfinite(f.holdout_nrmse.get(o, np.nan)) for o in names)]
+    if not usable:
+        return f"none of the {len(fits)} candidate fits succeeded"
+    e0 = _excess(nominal, floor, significant)
+    best = min(usable, key=lambda f: _excess(f.holdout_nrmse, floor, significant))
+    share = 1.0 - _excess(best.holdout_nrmse, floor, significant) / e0
+    return (f"the best candidate ({best.candidate or 'nominal refit'}) explains {100 * share:.0f} % of the "
+            f"held-out error beyond the noise, under the {100 * MIN_SHARE:.0f} % required")
 
 
 def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen, physics, finding,

@@ -342,8 +342,11 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
        extra parameter must buy a 10 % smaller excess error (the small
        :math:`10^{-4} E_0` term makes fits that are perfect to rounding tie,
        so the simpler one wins).  Fits whose score is within :data:`TIE` (2 %) of
-       the best are tied: the held-out part cannot tell them apart (a constant
-       load and a sensor offset look alike once a transient is over).  Among
+       the best, or whose held-out NRMSE (priced the same way) is within 2 % of
+       the best's (near the noise floor the excess magnifies differences the
+       held-out part cannot resolve), are tied: the held-out part cannot tell
+       them apart (a constant load and a sensor offset look alike once a
+       transient is over).  Among
        tied fits: fewer parameters, then the smaller training error (where the
        start of the record may tell them apart), then the smaller raw held-out
        error, then catalogue order.
@@ -397,7 +400,12 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
         raw = sum(f.holdout_nrmse[o] ** 2 for o in names)
         return (f.n_params, train if np.isfinite(train) else np.inf, raw, order)
 
-    lowest = min(score(f) for f in usable)
-    best = min((f for f in usable if score(f) <= lowest * (1 + TIE)), key=key)
+    def raw_score(f):
+        return sum(f.holdout_nrmse[o] ** 2 for o in names) * (1 + PARAMETER_PRICE) ** f.n_params
+
+    leader = min(usable, key=score)
+    tied = [f for f in usable if score(f) <= score(leader) * (1 + TIE)
+            or raw_score(f) <= raw_score(leader) * (1 + TIE) ** 2]
+    best = min(tied, key=key)
     share = 1.0 - _excess(best.holdout_nrmse, floor, significant) / e0
     return best if share >= MIN_SHARE else None

@@ -21,7 +21,8 @@ Which kinds at which place (:func:`candidates`):
   ``nonlinear_stiffness`` for each C on it;
 * 0- and 1-junction: ``constant_load`` (:mod:`diagnosis.catalogue_loads`);
 * input: ``valve_lag``, ``transport_delay``, ``saturation``;
-* output: ``sensor_offset``, ``sensor_gain`` (:mod:`diagnosis.catalogue_signals`).
+* output: ``saturation`` (the sensor's range), ``sensor_offset``, ``sensor_gain``
+  (:mod:`diagnosis.catalogue_signals`).
 """
 from __future__ import annotations
 
@@ -52,7 +53,7 @@ KINDS = ("coulomb_friction", "viscous_friction", "stribeck_friction", "pressure_
 _FAMILIES = {**{k: (build_friction, explain_friction) for k in FRICTION_KINDS},
              **{k: (build_load, explain_load) for k in LOAD_KINDS},
              **{k: (build_storage, explain_storage) for k in STORAGE_KINDS},
-             **{k: (build_signal, explain_signal) for k in INPUT_KINDS + OUTPUT_KINDS}}
+             **{k: (build_signal, explain_signal) for k in INPUT_KINDS + OUTPUT_KINDS}}   # saturation: both
 assert set(_FAMILIES) == set(KINDS)
 
 
@@ -132,7 +133,8 @@ class Candidate:
         Other kinds are returned unchanged.
         """
         values = dict(values)
-        if self.kind == "saturation" and experiment is not None and self.place.name in experiment.inputs:
+        if (self.kind == "saturation" and self.place.kind == "input" and experiment is not None
+                and self.place.name in experiment.inputs):
             u = np.asarray(experiment.inputs[self.place.name], dtype=float)
             low, high = self.params
             if not np.any(u < values[low.name]):
@@ -211,8 +213,8 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None) -
     >>> from bondgraph import library
     >>> msd = library.build("mass-spring-damper")
     >>> [c.kind for c in candidates(msd, Place("output", "x"))]
-    ['sensor_offset', 'sensor_gain']
-    >>> offset = candidates(msd, Place("output", "x"))[0]
+    ['saturation', 'sensor_offset', 'sensor_gain']
+    >>> offset = candidates(msd, Place("output", "x"))[1]
     >>> offset.build(msd, {"offset_x": 0.01}).equations().h[0]
     offset_x + q_k
     >>> offset.explain({"offset_x": 0.01})

@@ -21,7 +21,8 @@ see an effective input instead (:func:`~diagnosis.catalogue_common.route_input`)
 * ``saturation``: :math:`\\min(\\max(u, u_{min}), u_{max})`.
 
 Sensor kinds transform the model output ``y`` before it is compared:
-``sensor_offset``: :math:`y + \\delta`; ``sensor_gain``: :math:`g\\, y`.
+``sensor_offset``: :math:`y + \\delta`; ``sensor_gain``: :math:`g\\, y`;
+``saturation`` (the sensor's range): :math:`\\min(\\max(y, y_{min}), y_{max})`.
 """
 from __future__ import annotations
 
@@ -34,7 +35,7 @@ from .catalogue_common import ParamSpec, fresh_name, route_input
 __all__ = ["INPUT_KINDS", "OUTPUT_KINDS", "make_input", "make_output", "build_signal", "explain_signal"]
 
 INPUT_KINDS = ("valve_lag", "transport_delay", "saturation")
-OUTPUT_KINDS = ("sensor_offset", "sensor_gain")
+OUTPUT_KINDS = ("saturation", "sensor_offset", "sensor_gain")
 
 
 def make_input(graph, place, span: float, dt: float, recorded, taken) -> list[dict]:
@@ -108,7 +109,17 @@ def make_output(graph, place, measured, taken) -> list[dict]:
     y = place.name
     unit = graph.outputs[y].unit
     width = float(np.ptp(measured)) if measured is not None and np.ptp(measured) > 0 else 1.0
+    values = np.asarray(measured, dtype=float) if measured is not None else np.array([-1.0, 1.0])
+    lo, hi = float(np.min(values)), float(np.max(values))
+    y_min, y_max = fresh_name(taken, f"y_min_{y}"), fresh_name(taken, f"y_max_{y}")
+    # a clipped sensor reads its limit on many samples: start each side at the recorded extreme
+    # (inactive) and at a little inside it, one side at a time
+    starts = [{y_min: lo - 1e-3 * width, y_max: hi - f * width} for f in (0.0, 0.05)]
+    starts += [{y_min: lo + f * width, y_max: hi + 1e-3 * width} for f in (0.0, 0.05)]
     return [
+        dict(kind="saturation", starts=starts, params=[
+            ParamSpec(y_min, lo - 1e-3 * width, lo - width, hi, unit, f"lower end of the {y} sensor's range"),
+            ParamSpec(y_max, hi + 1e-3 * width, lo, hi + width, unit, f"upper end of the {y} sensor's range")]),
         dict(kind="sensor_offset", params=[ParamSpec(fresh_name(taken, f"offset_{y}"), 0.0, -2 * width, 2 * width,
                                                      unit, f"offset of the {y} sensor")]),
         dict(kind="sensor_gain", params=[ParamSpec(fresh_name(taken, f"gain_{y}"), 1.0, 0.2, 5.0, "1",
@@ -120,10 +131,15 @@ def build_signal(data: dict, graph, cand, values: dict) -> None:
     """Transform the input or output of `cand` in the graph dict `data`."""
     name = cand.place.name
     p = [spec.name for spec in cand.params]
-    if cand.kind in OUTPUT_KINDS:
+    if cand.place.kind == "output":
         entry = next(o for o in data["outputs"] if o["name"] == name)
         expr = entry["expression"]
-        entry["expression"] = f"({expr}) + {p[0]}" if cand.kind == "sensor_offset" else f"{p[0]}*({expr})"
+        if cand.kind == "sensor_offset":
+            entry["expression"] = f"({expr}) + {p[0]}"
+        elif cand.kind == "sensor_gain":
+            entry["expression"] = f"{p[0]}*({expr})"
+        else:
+            entry["expression"] = f"Min(Max({expr}, {p[0]}), {p[1]})"
         return
     unit = next(d.unit for d in graph.inputs() if d.name == name)
     if cand.kind == "saturation":
@@ -151,6 +167,9 @@ def explain_signal(cand, values: dict, show) -> str:
     if cand.kind == "transport_delay":
         return (f"the input {name} acts {show(p[0])} late: a transport delay on input {name} "
                 "(Pade [2/3] states in the model)")
+    if cand.kind == "saturation" and cand.place.kind == "output":
+        return (f"the {name} sensor reads nothing beyond {show(p[0])} .. {show(p[1])}: "
+                f"the range of the {name} sensor (saturation of output {name})")
     if cand.kind == "saturation":
         return (f"the input {name} has no effect beyond {show(p[0])} .. {show(p[1])}: "
                 f"saturation of input {name}")

@@ -89,7 +89,7 @@ def test_places_offer_the_kinds_that_make_sense():
                                                     "hysteresis", "backlash", "nonlinear_stiffness",
                                                     "constant_load"]
     assert at(msd, Place("input", "F")) == ["valve_lag", "transport_delay", "saturation"]
-    assert at(msd, Place("output", "x")) == ["sensor_offset", "sensor_gain"]
+    assert at(msd, Place("output", "x")) == ["saturation", "sensor_offset", "sensor_gain"]
     cyl = hydraulic_cylinder()
     assert "pressure_dependent_friction" in at(cyl, Place("junction", "rod"))
     assert at(cyl, Place("junction", "chamber")) == ["leak", "nonlinear_stiffness", "constant_load"]  # no heat transfer
@@ -272,3 +272,11 @@ def test_built_candidate_exports_to_a_valid_fmu(tmp_path, kind, place):
     result = simulate_fmu(str(path), stop_time=2.0, output_interval=0.01, output=["x"])
     ours = simulate(built, (0.0, 2.0), output_interval=0.01)
     assert result["x"][-1] == pytest.approx(ours["x"][-1], abs=1e-4)
+
+
+def test_sensor_range_clips_the_output():
+    msd = library.build("mass-spring-damper")
+    cand = _one(msd, Place("output", "x"), "saturation")
+    built = cand.build(msd, {"y_min_x": -0.1, "y_max_x": 0.25})
+    assert sp.simplify(_outputs(built)["x"] - sp.Min(sp.Max(S("q_k"), S("y_min_x")), S("y_max_x"))) == 0
+    assert "the range of the x sensor" in cand.explain({"y_min_x": -0.1, "y_max_x": 0.25})

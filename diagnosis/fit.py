@@ -30,7 +30,8 @@ from bondgraph.errors import BondcosimError
 from .catalogue_common import ParamSpec
 from .errors import DiagnosisError
 
-__all__ = ["CandidateFit", "fit_candidate", "choose", "noise_floor", "PARAMETER_PRICE", "MIN_SHARE", "TIE"]
+__all__ = ["CandidateFit", "fit_candidate", "choose", "noise_floor", "PARAMETER_PRICE", "MIN_SHARE", "MIN_GAIN",
+           "TIE"]
 
 #: relative reduction of the held-out excess error each extra parameter must buy
 PARAMETER_PRICE = 0.10
@@ -38,6 +39,10 @@ PARAMETER_PRICE = 0.10
 TIE = 0.02
 #: share of the nominal held-out excess error the winner must explain
 MIN_SHARE = 0.30
+#: and the relative reduction of its held-out NRMSE (root of the sum of squares over the
+#: outputs that need explaining) it must reach: near the noise floor the excess is small
+#: and noisy, and a few per cent of NRMSE is within what the held-out part can resolve
+MIN_GAIN = 0.05
 #: nominal excess NRMSE^2 below which an output counts as explained (noise-free data)
 _EXPLAINED = 1e-6
 _FD_STEP = 1e-3  # forward-difference step on the scaled parameters
@@ -350,7 +355,11 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
        tied fits: fewer parameters, then the smaller training error (where the
        start of the record may tell them apart), then the smaller raw held-out
        error, then catalogue order.
-    3. The winner must explain at least :data:`MIN_SHARE` (30 %) of :math:`E_0`:
+    3. The winner must explain at least :data:`MIN_SHARE` (30 %) of :math:`E_0`
+       (for a nominal whose held-out error is infinite, a diverging one, :math:`E_0`
+       is the excess error of predicting each output's mean, NRMSE 1), and lower
+       the held-out NRMSE of those outputs (root sum of squares) by at least
+       :data:`MIN_GAIN` (5 %):
        :math:`1 - E / E_0 \\ge 0.3`; otherwise None: the tool does not invent
        physics.
 
@@ -386,6 +395,8 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
     if not significant:
         return None
     e0 = _excess(nominal_holdout, floor, significant)
+    if not np.isfinite(e0):     # a diverging nominal: the reference is predicting each output's mean
+        e0 = _excess({o: 1.0 for o in names}, floor, significant)
     usable = [f for f in fits if f.success and f.holdout_nrmse
               and all(np.isfinite(f.holdout_nrmse.get(o, np.nan)) for o in names)]
     if not usable:
@@ -394,11 +405,12 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
     def score(f):
         return (_excess(f.holdout_nrmse, floor, names) + 1e-4 * e0) * (1 + PARAMETER_PRICE) ** f.n_params
 
-    def key(f):
-        order = KINDS.index(f.candidate.kind) if f.candidate is not None else -1
-        train = sum(v ** 2 for v in f.train_nrmse.values()) if f.train_nrmse else np.inf
-        raw = sum(f.holdout_nrmse[o] ** 2 for o in names)
-        return (f.n_params, train if np.isfinite(train) else np.inf, raw, order)
+    def order(f):
+        return KINDS.index(f.candidate.kind) if f.candidate is not None else -1
+
+    def train(f):
+        value = sum(v ** 2 for v in f.train_nrmse.values()) if f.train_nrmse else np.inf
+        return value if np.isfinite(value) else np.inf
 
     def raw_score(f):
         return sum(f.holdout_nrmse[o] ** 2 for o in names) * (1 + PARAMETER_PRICE) ** f.n_params
@@ -406,6 +418,13 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
     leader = min(usable, key=score)
     tied = [f for f in usable if score(f) <= score(leader) * (1 + TIE)
             or raw_score(f) <= raw_score(leader) * (1 + TIE) ** 2]
-    best = min(tied, key=key)
+    fewest = min(f.n_params for f in tied)
+    tied = [f for f in tied if f.n_params == fewest]
+    lowest = min(train(f) for f in tied)
+    tied = [f for f in tied if train(f) <= lowest * (1 + TIE) ** 2] or tied
+    best = min(tied, key=order)
     share = 1.0 - _excess(best.holdout_nrmse, floor, significant) / e0
-    return best if share >= MIN_SHARE else None
+    before = sum(nominal_holdout[o] ** 2 for o in significant)
+    after = sum(best.holdout_nrmse[o] ** 2 for o in significant)
+    gain = 1.0 - np.sqrt(after / before) if np.isfinite(before) and before > 0 else 1.0
+    return best if share >= MIN_SHARE and gain >= MIN_GAIN else None

@@ -142,6 +142,61 @@ def _fit_window(train, run, x0):
     return part, x0
 
 
+def _start_inconsistent(res, diverged, n_train) -> bool:
+    """Whether the model's default initial state contradicts the recording's start.
+
+    So it is when the nominal simulation diverges, or when its error over the first
+    samples (the window :mod:`diagnosis.initial_state` fits on) is more than twice
+    the error over the rest of the training part on some output: a transient of
+    the model's own, which decays.  An error that persists or grows (an offset, a
+    missing friction) is left to the candidates: fitting the start to it would
+    absorb the effect into the state.
+    """
+    from .initial_state import window_length
+    if diverged:
+        return True
+    w = window_length(n_train)
+    if n_train < 2 * w:
+        return False
+    for r in res.residual.values():
+        head = float(np.sqrt(np.mean(r[:w] ** 2)))
+        rest = float(np.sqrt(np.mean(r[w:n_train] ** 2)))
+        if head > 2.0 * rest:
+            return True
+    return False
+
+
+def _nominal_residuals(sim, graph, exp, x0, residuals, SimulationError):
+    """The nominal residuals from `x0`, and ``""`` or the message of its divergence."""
+    try:
+        return residuals(graph, exp, simulator=sim, x0=x0), ""
+    except SimulationError as exc:        # evidence of missing physics, not an error
+        return _diverged_residuals(sim, exp, x0), str(exc)
+
+
+def _diverged_residuals(sim, experiment, x0):
+    """Residuals of a nominal model whose simulation left the finite numbers: NaN simulated
+    outputs and states (nothing of the run is used), noise from the measurements alone."""
+    from .residuals import Residuals, SimRun, noise_sigma
+    n = experiment.t.size
+    m = sim.model
+    nan = {o: np.full(n, np.nan) for o in sim.output_names}
+    measured = {o: np.asarray(experiment.outputs[o], dtype=float) for o in sim.output_names}
+    run = SimRun(experiment.t, np.full((n, len(m.state_names)), np.nan), sim.U, nan, m.state_names,
+                 m.input_names, 1)
+    return Residuals(experiment.t, measured, nan, dict(nan), {o: noise_sigma(y) for o, y in measured.items()},
+                     {o: float("inf") for o in measured}, run)
+
+
+def _every_place(graph, experiment):
+    """Every junction, recorded input and measured output of `graph`: the places tried when no
+    graph location is possible (a diverging nominal has no run to linearise along)."""
+    from .place import Place
+    junctions = [Place("junction", n) for n, e in graph.elements.items() if e.kind in ("0", "1")]
+    return (junctions + [Place("input", n) for n in experiment.inputs]
+            + [Place("output", n) for n in experiment.outputs])
+
+
 def _holdout_nrmse(sim, params, x0, experiment, mask):
     from .residuals import nrmse
     y = sim(params, x0)
@@ -225,9 +280,11 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     from .catalogue import candidates
     from .fit import choose, fit_candidate, noise_floor
     from .graph_location import locate_on_graph
+    from .initial_state import estimate_initial_state
     from .locate import locate_regime, regime_variables, significant_windows
     from .recording import bind
     from .residuals import OutputSimulator, nrmse, residuals
+    from bondgraph.errors import SimulationError
 
     if int(top) < 1:
         raise DiagnosisError(f"top must be a positive number of places; found {top!r}")
@@ -243,26 +300,41 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
 
     say("nominal simulation", f"{exp.t.size} samples, {exp.span[1] - exp.span[0]:.4g} s")
     sim = OutputSimulator(graph, exp)
-    res = residuals(graph, exp, simulator=sim, x0=x0)
+    res, diverged = _nominal_residuals(sim, graph, exp, x0, residuals, SimulationError)
     res.noise.update(_noise_overrides(noise, exp))
-    nominal = {o: nrmse(exp.outputs[o][mask], res.simulated[o][mask]) for o in exp.outputs}
-    windows = _merge([w for o in exp.outputs
-                      for w in significant_windows(exp.t, res.residual[o], res.noise[o])])
-
-    say("regime variables")
-    rv_full = regime_variables(graph, exp, res.run)
     n_train = train.t.size
-    rv = {k: (v[:n_train], d) for k, (v, d) in rv_full.items()}
+    start = "the given initial state" if x0 is not None else "the model's initial state"
+    if x0 is None and _start_inconsistent(res, diverged, n_train):
+        say("initial state", "fitted to the first samples")
+        scales = ({nm: float(np.std(res.run.states[:, i])) for i, nm in enumerate(res.run.state_names)}
+                  if not diverged else None)
+        est = estimate_initial_state(sim, train, res.noise, scales=scales)
+        start = est.description
+        if est.samples:
+            x0 = est.values
+            res, diverged = _nominal_residuals(sim, graph, exp, x0, residuals, SimulationError)
+            res.noise.update(_noise_overrides(noise, exp))
+    if diverged:
+        say("nominal diverges", diverged)
+        nominal = {o: float("inf") for o in exp.outputs}
+        windows, rv, scores = [], {}, []
+        place_list = _every_place(graph, exp)
+    else:
+        nominal = {o: nrmse(exp.outputs[o][mask], res.simulated[o][mask]) for o in exp.outputs}
+        windows = _merge([w for o in exp.outputs
+                          for w in significant_windows(exp.t, res.residual[o], res.noise[o])])
+        say("regime variables")
+        rv_full = regime_variables(graph, exp, res.run)
+        rv = {k: (v[:n_train], d) for k, (v, d) in rv_full.items()}
+        say("graph location", "training part")
+        try:
+            scores = locate_on_graph(graph, train, progress=progress, x0=x0)
+        except (np.linalg.LinAlgError, FloatingPointError) as exc:   # numerics, not the user's input
+            raise DiagnosisError(f"graph location of {graph.name!r} failed on {rec.source}: "
+                                 f"{type(exc).__name__}: {exc}") from exc
+        place_list = [s.place for s in scores[:int(top)] if s.explained >= MIN_PLACE_SHARE]
 
-    say("graph location", "training part")
-    try:
-        scores = locate_on_graph(graph, train, progress=progress)
-    except (np.linalg.LinAlgError, FloatingPointError) as exc:   # numerics, not the user's input
-        raise DiagnosisError(f"graph location of {graph.name!r} failed on {rec.source}: "
-                             f"{type(exc).__name__}: {exc}") from exc
-    places = [s for s in scores[:int(top)] if s.explained >= MIN_PLACE_SHARE]
-
-    cands = [c for s in places for c in candidates(graph, s.place, regime_variables=rv, experiment=train)]
+    cands = [c for p in place_list for c in candidates(graph, p, regime_variables=rv, experiment=train)]
     fit_part, fit_x0 = _fit_window(train, res.run, x0)
     fits = []
     for i, cand in enumerate(cands, 1):
@@ -285,9 +357,9 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         improved_graph = _with_values(base, {k: v for k, v in chosen.values.items() if k not in cand_names})
         improved, y_imp = _holdout_nrmse(OutputSimulator(improved_graph, exp), None, x0, exp, mask)
     rounds = [{"chosen": chosen, "fits": fits, "reference": dict(nominal), "improved": dict(improved),
-               "seconds": _time.perf_counter() - say.start,
+               "seconds": _time.perf_counter() - say.start, "diverged": diverged,
                "window": [float(fit_part.t[0]), float(fit_part.t[-1])], "floor": floor,
-               "start": "the given initial state" if x0 is not None else "the model's initial state"}]
+               "start": start}]
 
     if chosen is not None and chosen.candidate is not None:
         while len(rounds) < int(max_effects):
@@ -336,7 +408,7 @@ def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, 
     rv = {k: (v[:train.t.size], d) for k, (v, d) in regime_variables(graph, exp, res.run).items()}
     say(f"{label}: graph location", "training part")
     try:
-        scores = locate_on_graph(graph, train)
+        scores = locate_on_graph(graph, train, x0=x0)
     except (np.linalg.LinAlgError, FloatingPointError) as exc:   # numerics: no further effect
         return {"chosen": None, "fits": [], "reference": dict(reference), "improved": dict(reference),
                 "scores": [], "note": f"graph location failed: {type(exc).__name__}: {exc}"}

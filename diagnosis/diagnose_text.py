@@ -93,7 +93,7 @@ def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, r
 
 def _why_none(nominal, fits, rounds) -> str:
     """Which rule of :func:`diagnosis.fit.choose` answered none, with the numbers."""
-    from .fit import MIN_SHARE, _excess
+    from .fit import MIN_GAIN, MIN_SHARE, _excess
     floor = (rounds[0].get("floor") if rounds else None) or {}
     names = list(nominal)
     significant = [o for o in names if nominal[o] ** 2 - floor.get(o, 0.0) ** 2
@@ -105,10 +105,15 @@ def _why_none(nominal, fits, rounds) -> str:
     if not usable:
         return f"none of the {len(fits)} candidate fits succeeded"
     e0 = _excess(nominal, floor, significant)
+    if not np.isfinite(e0):
+        e0 = _excess({o: 1.0 for o in names}, floor, significant)
     best = min(usable, key=lambda f: _excess(f.holdout_nrmse, floor, significant))
     share = 1.0 - _excess(best.holdout_nrmse, floor, significant) / e0
+    before = sum(min(nominal[o], 1e300) ** 2 for o in significant)
+    gain = 1.0 - np.sqrt(sum(best.holdout_nrmse[o] ** 2 for o in significant) / before)
     return (f"the best candidate ({best.candidate or 'nominal refit'}) explains {100 * share:.0f} % of the "
-            f"held-out error beyond the noise, under the {100 * MIN_SHARE:.0f} % required")
+            f"held-out error beyond the noise and lowers its NRMSE by {100 * gain:.0f} % (at least "
+            f"{100 * MIN_SHARE:.0f} % and {100 * MIN_GAIN:.0f} % are required)")
 
 
 def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen, physics, finding,
@@ -120,7 +125,12 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
     for o in exp.outputs:
         lines.append(f"Output {o}: nominal held-out NRMSE {nominal[o]:.3g} (noise about "
                      f"{res.noise[o]:.3g} {u.get(o, '')}).")
-    if windows:
+    diverged = rounds[0].get("diverged") if rounds else ""
+    if diverged:
+        lines.append(f"The nominal model diverges on this recording ({diverged}). That is evidence of missing "
+                     f"physics, not an error: with no run to locate along, the candidates of every place "
+                     f"were fitted, and the nominal held-out error counts as unbounded.")
+    elif windows:
         shown = ", ".join(f"{a:.3g}-{b:.3g} s" for a, b in windows[:6])
         more = f" and {len(windows) - 6} more" if len(windows) > 6 else ""
         lines.append(f"The residual exceeds the noise in {len(windows)} window(s): {shown}{more}.")

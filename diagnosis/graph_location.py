@@ -152,7 +152,7 @@ def candidate_places(model, *, experiment=None) -> list[Place]:
     return places
 
 
-def locate_on_graph(model, experiment, *, places=None, progress=False) -> list[PlaceScore]:
+def locate_on_graph(model, experiment, *, places=None, progress=False, x0=None) -> list[PlaceScore]:
     """Rank places of a model by the share of the recorded residual a correction there explains.
 
     Parameters
@@ -165,6 +165,8 @@ def locate_on_graph(model, experiment, *, places=None, progress=False) -> list[P
         Default :func:`candidate_places` of the model for this experiment.
     progress : bool
         Print one line per step to stderr.
+    x0 : dict str -> float, optional
+        State at the experiment's first sample (default: the model's initial state).
 
     Returns
     -------
@@ -198,8 +200,8 @@ def locate_on_graph(model, experiment, *, places=None, progress=False) -> list[P
                       {d: junction_unit(model, j) for j, d in d_inputs.items()})
     say(f"locate: nominal run of {getattr(model, 'name', 'model')} with {len(junctions)} junction source(s)")
     sim = OutputSimulator(graph, exp, outputs=outputs)
-    run = sim.run()
-    ctx = _Context(sim, run, experiment, outputs)
+    run = sim.run(None, x0)
+    ctx = _Context(sim, run, experiment, outputs, x0)
     channels = list(d_inputs.values()) + [p.name for p in places if p.kind == "input"]
     lin = None
     if channels:
@@ -239,16 +241,16 @@ class _Say:
 class _Context:
     """Nominal residuals, weights and the stored rows shared by every place."""
 
-    def __init__(self, sim, run, experiment, outputs):
+    def __init__(self, sim, run, experiment, outputs, x0=None):
         from .residuals import noise_sigma
 
-        self.sim, self.run, self.t, self.outputs = sim, run, run.t, outputs
+        self.sim, self.run, self.t, self.outputs, self.x0 = sim, run, run.t, outputs, x0
         self.measured = {o: np.asarray(experiment.outputs[o], dtype=float) for o in outputs}
         self.residual = {o: self.measured[o] - run.outputs[o] for o in outputs}
         self.weight = {}
         for o in outputs:
             y = self.measured[o]
-            sigma = max(noise_sigma(y), 1e-3 * float(np.std(y)), 1e-12 * max(1.0, float(np.max(np.abs(y)))))
+            sigma = max(noise_sigma(y, self.residual[o]), 1e-3 * float(np.std(y)), 1e-12 * max(1.0, float(np.max(np.abs(y)))))
             self.weight[o] = 1.0 / sigma ** 2
         self.e0 = self.energy(run.outputs)
         n = self.t.size
@@ -273,7 +275,7 @@ class _Context:
         saved = self.sim.U[:, j].copy()
         self.sim.U[:, j] = values
         try:
-            return self.sim.run().outputs
+            return self.sim.run(None, self.x0).outputs
         except (BondcosimError, FloatingPointError, np.linalg.LinAlgError):
             return None
         finally:

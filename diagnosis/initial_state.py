@@ -1,0 +1,135 @@
+"""The state a recording starts in, estimated from its first samples.
+
+A recording rarely starts where the model's default initial state says (a
+rig at rest with its valves half open, a tank already filled, an axis that
+has been moving): simulated from the default, even the right model is wrong
+for the whole settling time and, if it integrates, for ever after.  So the
+initial state is fitted first, on a short window at the start of the
+recording, by least squares of the outputs' error weighted by their noise,
+with a weak pull towards the default state (unobservable states stay at the
+default):
+
+.. math::
+
+    \\min_{x_0} \\sum_o \\sum_{k<W} \\Big(\\frac{y_{o,k} - \\hat y_{o,k}(x_0)}{\\sigma_o}\\Big)^2
+    + \\lambda^2 \\sum_i \\Big(\\frac{x_{0,i} - \\bar x_{0,i}}{s_i}\\Big)^2
+
+with :math:`s_i` the state's scale (its default's magnitude, or its spread in
+the nominal run), :math:`\\lambda` = :data:`PULL` per sample.  The pipeline
+(:func:`diagnosis.diagnose.diagnose`) calls it only where the default start
+contradicts the data (a decaying transient of the model's own, or a
+divergence), so that a persistent effect is not absorbed into the state.  The estimate is
+kept only when it lowers the window's error by :data:`MIN_GAIN`; a model that
+leaves the finite numbers from its default start is tried on shorter windows.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from bondgraph.errors import BondcosimError
+
+__all__ = ["InitialState", "estimate_initial_state", "window_length", "PULL", "MIN_GAIN"]
+
+#: weight of the pull towards the default state, relative to one sample of one output at its noise
+PULL = 1e-2
+#: the estimate must lower the window's weighted squared error by this share to be kept
+MIN_GAIN = 0.2
+
+
+@dataclass(frozen=True)
+class InitialState:
+    """An estimated initial state.
+
+    Attributes
+    ----------
+    values : dict str -> float
+        State name -> value (SI) at the recording's first sample.
+    samples : int
+        Length of the window it was fitted on (0: not estimated, the default is kept).
+    gain : float
+        Share of the window's weighted squared output error the estimate removes.
+    description : str
+        How the state was obtained, for the report.
+    """
+
+    values: dict
+    samples: int
+    gain: float
+    description: str
+
+
+def window_length(n: int) -> int:
+    """Samples of the start window for a training part of `n` samples (5 %, 20-2000)."""
+    return int(max(20, min(2000, n // 20)))
+
+
+def estimate_initial_state(sim, experiment, noise: dict, *, scales=None) -> InitialState:
+    """Fit the initial state of `sim`'s model to the first samples of `experiment`.
+
+    Parameters
+    ----------
+    sim : OutputSimulator
+        The compiled nominal model (any experiment; it is re-gridded with ``sim.on``).
+    experiment : Experiment
+        The recording (training part); its first samples are used.
+    noise : dict str -> float
+        Noise standard deviation of each measured output (model units).
+    scales : dict str -> float, optional
+        Typical magnitude of each state (default: its default value's magnitude, else 1).
+
+    Returns
+    -------
+    InitialState
+    """
+    x_def = sim.initial_state(None)
+    names = list(sim.model.state_names)
+    if not names:
+        return InitialState({}, 0, 0.0, "the model's initial state (it has no states)")
+    s = np.array([abs(v) if v != 0 else 1.0 for v in x_def], float)
+    if scales:
+        s = np.array([max(float(scales.get(nm, 0.0)), si) for nm, si in zip(names, s)])
+    outputs = list(experiment.outputs)
+    n = window_length(experiment.t.size)
+    while n >= 20:
+        part = experiment.window(float(experiment.t[0]), float(experiment.t[min(n, experiment.t.size) - 1]))
+        w_sim = sim.on(part)
+        y = {o: np.asarray(part.outputs[o], float) for o in outputs}
+        sig = {o: max(float(noise.get(o, 0.0)), 1e-9 * (float(np.std(y[o])) or 1.0)) for o in outputs}
+        size = part.t.size
+
+        def residual(theta, _w=w_sim, _y=y, _sig=sig, _size=size):
+            x = x_def + theta * s
+            try:
+                out = _w.run(None, x).outputs
+            except BondcosimError:
+                return np.full(_size * len(outputs) + len(names), 1e6)
+            r = [(_y[o] - out[o]) / _sig[o] for o in outputs]
+            return np.concatenate(r + [PULL * np.sqrt(_size) * theta])
+
+        r0 = residual(np.zeros(len(names)))
+        if np.all(r0[:-len(names)] < 1e6):
+            break
+        n //= 2                                   # the default start diverges in the window
+    else:
+        return InitialState(dict(zip(names, map(float, x_def))), 0, 0.0,
+                        "the model's initial state (the model diverges from it at once)")
+    cost0 = float(np.sum(r0 ** 2))
+    try:
+        fit = least_squares(residual, np.zeros(len(names)), method="trf", x_scale=1.0, max_nfev=20 * len(names) + 20,
+                            xtol=1e-6, ftol=1e-6)
+    except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+        fit = None
+    if fit is None or not np.all(np.isfinite(fit.x)):
+        return InitialState(dict(zip(names, map(float, x_def))), 0, 0.0, "the model's initial state")
+    gain = 1.0 - 2.0 * float(fit.cost) / cost0 if cost0 > 0 else 0.0
+    if gain < MIN_GAIN:
+        return InitialState(dict(zip(names, map(float, x_def))), 0, gain,
+                            f"the model's initial state (fitting it on the first {size} samples gained "
+                            f"{100 * max(gain, 0):.0f} %)")
+    x = x_def + fit.x * s
+    return InitialState(dict(zip(names, map(float, x))), size, gain,
+                        f"a state estimated from the first {size} samples "
+                        f"({100 * gain:.0f} % less error there than from the model's initial state)")

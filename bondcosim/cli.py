@@ -46,6 +46,9 @@ def _parser() -> argparse.ArgumentParser:
                      help="print states, inputs, outputs, parameters, f, h and A-D (linearised at the "
                           "model's default operating point) as JSON")
     fmt.add_argument("--latex", action="store_true", help="print a LaTeX aligned block")
+    p.add_argument("--flat", action="store_true",
+                   help="print every right-hand side fully substituted (default: the ordered causal "
+                        "assignments, named intermediates such as valve1.alpha, then the state equations)")
 
     p = sub.add_parser("draw", help="draw MODEL with power half-arrows and causal strokes")
     p.add_argument("model")
@@ -140,15 +143,16 @@ def _cmd_equations(args) -> int:
     from .models import load_model
     eqs = load_model(args.model).equations()
     if args.latex:
-        print(eqs.latex())
+        print(eqs.latex(flat=args.flat))
     elif args.json:
         data = eqs.to_dict()
         lin = eqs.linearize()
-        result = {key: data[key] for key in ("states", "inputs", "outputs", "parameters", "f", "h")}
+        result = {key: data[key] for key in ("states", "inputs", "outputs", "parameters", "f", "h",
+                                             "assignments", "f_short", "h_short")}
         result.update({k: getattr(lin, k).tolist() for k in ("A", "B", "C", "D")})
         print(json.dumps(result, indent=2))
     else:
-        print(eqs.pretty())
+        print(eqs.pretty(flat=args.flat))
     return 0
 
 

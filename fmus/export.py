@@ -80,7 +80,9 @@ def fmu_equations(eqs):
     return dataclasses.replace(
         eqs, inputs=tuple(s for s in eqs.inputs if s not in sub),
         f=rep(eqs.f), h=rep(eqs.h), residuals=rep(eqs.residuals),
-        held_update=rep(eqs.held_update), input_functions={})
+        held_update=rep(eqs.held_update), input_functions={},
+        assignments=tuple((a, sp.sympify(e).xreplace(sub)) for a, e in eqs.assignments),
+        f_short=rep(eqs.f_short), h_short=rep(eqs.h_short), held_update_short=rep(eqs.held_update_short))
 
 
 def default_solver_step(eqs) -> float:

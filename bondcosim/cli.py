@@ -46,6 +46,9 @@ def _parser() -> argparse.ArgumentParser:
                      help="print states, inputs, outputs, parameters, f, h and A-D (linearised at the "
                           "model's default operating point) as JSON")
     fmt.add_argument("--latex", action="store_true", help="print a LaTeX aligned block")
+    p.add_argument("--at", action="append", default=[], metavar="NAME=VALUE",
+                   help="with --json: linearise at this state/input value (SI; repeatable) instead of "
+                        "the model's default operating point")
     p.add_argument("--flat", action="store_true",
                    help="print every right-hand side fully substituted (default: the ordered causal "
                         "assignments, named intermediates such as valve1.alpha, then the state equations)")
@@ -141,15 +144,21 @@ def _cmd_list(args) -> int:
 
 def _cmd_equations(args) -> int:
     from .models import load_model
+    if args.at and not args.json:
+        raise ParameterError("--at sets the linearisation point, which only --json prints", name="--at")
+    at = _numbers(args.at, "--at")
     eqs = load_model(args.model).equations()
     if args.latex:
         print(eqs.latex(flat=args.flat))
     elif args.json:
         data = eqs.to_dict()
-        lin = eqs.linearize()
+        lin = eqs.linearize(at or None)
         result = {key: data[key] for key in ("states", "inputs", "outputs", "parameters", "f", "h",
                                              "assignments", "f_short", "h_short")}
         result.update({k: getattr(lin, k).tolist() for k in ("A", "B", "C", "D")})
+        result["linearisation"] = {
+            "operating_point": dict(lin.operating_point), "equilibrium": lin.is_equilibrium,
+            "derivatives": dict(lin.derivatives), "kinks": list(lin.kinks)}
         print(json.dumps(result, indent=2))
     else:
         print(eqs.pretty(flat=args.flat))
@@ -163,13 +172,13 @@ def _cmd_draw(args) -> int:
     return 0
 
 
-def _numbers(items) -> dict[str, float]:
+def _numbers(items, what: str = "--param") -> dict[str, float]:
     params = {}
-    for name, text in _pairs(items, "--param").items():
+    for name, text in _pairs(items, what).items():
         try:
             params[name] = float(text)
         except ValueError:
-            raise ParameterError(f"--param {name}={text!r}: not a number", name=name) from None
+            raise ParameterError(f"{what} {name}={text!r}: not a number", name=name) from None
     return params
 
 

@@ -80,6 +80,7 @@ import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
 from .codegen_c_templates import BATCH_HEAD, newton_source, rk4_source
+from .derivatives import NotDifferentiable, diff_almost_everywhere
 from .errors import CompilationError
 
 __all__ = ["generate_source", "jacobian_entries", "prepare_expression", "symbol_names",
@@ -245,40 +246,12 @@ def _batch_function(name: str, row: str, n_out: int, dims: dict) -> list[str]:
     ]
 
 
-_SWITCHES = (sp.sign, sp.Heaviside, sp.floor, sp.ceiling)
-
-
 def _diff_almost_everywhere(expr, var):
-    """:math:`\\partial expr / \\partial var` where every switch is locally constant.
-
-    ``sign``, ``Heaviside``, ``floor`` and ``ceiling`` are frozen as constants
-    and ``Abs(g)`` is differentiated as ``sign(g) g``: the derivative that holds
-    everywhere except on the switching surfaces, which is what a Newton or
-    implicit-solver step needs.  (Plain ``sympy.diff`` leaves ``Derivative(sign(g))``
-    unevaluated when it cannot prove ``g`` finite, and yields ``DiracDelta`` otherwise.)
-    """
-    frozen: dict = {}
-
-    def freeze(node):
-        if isinstance(node, sp.Abs):
-            g = node.args[0]
-            return g * frozen.setdefault(sp.sign(g), sp.Dummy("s"))
-        return frozen.setdefault(node, sp.Dummy("s"))
-
-    work = (expr.replace(lambda a: isinstance(a, (*_SWITCHES, sp.Abs)), freeze)
-            if expr.has(*_SWITCHES, sp.Abs) else expr)
-    de = sp.diff(work, var)
-    back = {d: k for k, d in frozen.items()}
-    for _ in range(len(back) + 1):   # keys may hold other frozen switches (nesting)
-        if not (de.free_symbols & back.keys()):
-            break
-        de = de.xreplace(back)
-    if de.has(sp.DiracDelta):
-        de = de.replace(lambda a: isinstance(a, sp.DiracDelta), lambda a: sp.S.Zero)
-    if de.has(sp.Derivative):
-        raise CompilationError(f"cannot differentiate {expr} with respect to {var}: sympy "
-                               f"leaves {de.atoms(sp.Derivative).pop()} unevaluated")
-    return de
+    """:func:`bondgraph.derivatives.diff_almost_everywhere`, failures as CompilationError."""
+    try:
+        return diff_almost_everywhere(expr, var)
+    except NotDifferentiable as exc:
+        raise CompilationError(str(exc)) from None
 
 
 def jacobian_entries(exprs, wrt) -> list:

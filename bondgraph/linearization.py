@@ -11,10 +11,45 @@
     \\delta y = C\\,\\delta x + D\\,\\delta u,
 
 where :math:`\\dot x_0 = f(t, x_0, u_0, z_0, d_0, p)` is zero at an
-equilibrium.  The Jacobians are taken symbolically (``sympy.Matrix.jacobian``,
-no ``simplify``) and evaluated numerically at the point, so no finite
-difference step is involved.  Held (discrete) variables ``d`` are constants
-of the linearisation, and time ``t`` is frozen at the given value.
+equilibrium.  Held (discrete) variables ``d`` are constants of the
+linearisation, and time ``t`` is frozen at the given value.
+
+How each column is obtained (``LinearModel.derivatives`` says which, per
+state and input):
+
+* **symbolic** (default, ``method="auto"``): Jacobians are taken symbolically,
+  switches (``sign``, ``Abs``, ``Heaviside``) frozen as locally constant
+  (:func:`bondgraph.derivatives.diff_almost_everywhere`, no ``simplify``),
+  and evaluated numerically at the point.  This is the derivative wherever
+  the law is differentiable.
+* **one-sided numerical**, for the variables on which a switch sits exactly
+  on its switching surface at the point (``sign(P_1 - P_out)`` with
+  :math:`P_1 = P_{out}`, a clipped valve voltage at 0 V; listed in
+  ``LinearModel.kinks``), or whose symbolic derivative is not finite there
+  (:math:`\\sqrt{|h_1 - h_2|}` at equal levels): the right-sided
+  second-order difference
+
+  .. math::
+
+      \\frac{\\partial F}{\\partial v_j} \\approx
+      \\frac{-3 F(v) + 4 F(v + \\epsilon_j e_j) - F(v + 2 \\epsilon_j e_j)}{2 \\epsilon_j},
+      \\qquad \\epsilon_j = 6\\cdot 10^{-6} \\max(1, |v_j|)
+
+  of :math:`F = (f, h)` (algebraic unknowns re-solved at each point), i.e.
+  the derivative for a small *increase* of the variable (a valve opening, a
+  muscle above atmospheric pressure).  :math:`6\\cdot 10^{-6} \\approx
+  \\epsilon_{mach}^{1/3}` balances the :math:`O(\\epsilon^2)` truncation
+  against rounding.
+  A column whose estimate does not converge (the estimates with steps
+  :math:`\\epsilon_j` and :math:`4\\epsilon_j` differ by more than 0.1 %) has an
+  unbounded one-sided derivative -- the orifice law's
+  :math:`\\sqrt{P - P_{out}}` at zero pressure difference -- and gets the
+  secant :math:`(F(v + \\Delta_j e_j) - F(v))/\\Delta_j` over
+  :math:`\\Delta_j = 10^{-3} \\max(1, |v_j|)` instead, said so in
+  ``derivatives``.  A law that *jumps* at the point (``sign(v)`` at
+  :math:`v = 0`) has no derivative at all: :class:`DerivationError`.
+* ``method="numerical"``: every column that way; ``method="symbolic"``:
+  never (a non-finite derivative is an error).
 
 Algebraic unknowns ``z`` defined implicitly by :math:`0 = r(t, x, u, z, d, p)`
 are first solved numerically at the point; their sensitivities follow from
@@ -45,6 +80,7 @@ from typing import Mapping
 import numpy as np
 import sympy as sp
 
+from .derivatives import Kink, NotDifferentiable, diff_almost_everywhere, kinks
 from .errors import DerivationError, ParameterError, SimulationError
 from .linear_model import EQUILIBRIUM_ATOL, LinearModel
 from .system import StateEquations
@@ -54,11 +90,6 @@ __all__ = ["linearize", "LinearModel"]
 
 # Symbolic Jacobians, compiled once per StateEquations
 # ---------------------------------------------------------------------------
-def _dirac_at_point(arg, *order):
-    # d/dx sign(x) = 2 DiracDelta(x): zero away from the kink, undefined on it.
-    return sp.Piecewise((sp.nan, sp.Eq(arg, 0)), (0, True))
-
-
 class _Jacobians:
     """Lambdified f, h, r and their Jacobians w.r.t. x, u, z of one StateEquations."""
 
@@ -87,13 +118,18 @@ class _Jacobians:
         for (kind, names, _), M in zip(groups, (F, H, R)):
             for wrt, syms, wrt_names in (("x", X, eqs.state_names), ("u", U, eqs.input_names),
                                          ("z", Z, tuple(z.name for z in eqs.algebraic))):
-                J = M.jacobian(syms) if len(M) and syms else sp.zeros(len(M), len(syms))
-                J = J.replace(sp.DiracDelta, _dirac_at_point)
-                for (a, b), entry in np.ndenumerate(np.array(J, dtype=object).reshape(J.shape)):
-                    if entry.has(sp.Derivative, sp.Subs):
-                        raise DerivationError(
-                            f"{eqs.name}: {kind}[{names[a]}] has no symbolic derivative with respect "
-                            f"to {wrt_names[b]} ({entry}); rewrite it with differentiable functions")
+                J = sp.zeros(len(M), len(syms))
+                for a in range(len(M)):
+                    present = M[a].free_symbols
+                    for b, s in enumerate(syms):
+                        if s not in present:
+                            continue
+                        try:   # the derivative off the switching surfaces (see kinks below)
+                            J[a, b] = diff_almost_everywhere(M[a], s)
+                        except NotDifferentiable:
+                            raise DerivationError(
+                                f"{eqs.name}: {kind}[{names[a]}] has no symbolic derivative with respect "
+                                f"to {wrt_names[b]}; rewrite it with differentiable functions") from None
                 jac[kind + "_" + wrt] = J
         self.all = _compile(self.args, {"f": F, "h": H, "r": R, **jac})
         self.residual = _compile(self.args, {"r": R, "r_z": jac["r_z"]})
@@ -229,7 +265,7 @@ def _solve_algebraic(eqs: StateEquations, jac: _Jacobians, vector: np.ndarray, s
 # ---------------------------------------------------------------------------
 def linearize(eqs: StateEquations, operating_point: Mapping[str, float] | None = None, *,
               params: Mapping[str, float] | None = None, t: float = 0.0,
-              equilibrium_atol: float = EQUILIBRIUM_ATOL) -> LinearModel:
+              equilibrium_atol: float = EQUILIBRIUM_ATOL, method: str = "auto") -> LinearModel:
     """Linearise state equations at an operating point (see the module docstring for the equations).
 
     Parameters
@@ -248,6 +284,10 @@ def linearize(eqs: StateEquations, operating_point: Mapping[str, float] | None =
         Time at which a time-varying model is frozen (default 0).
     equilibrium_atol : float, optional
         Tolerance on :math:`\\lVert f \\rVert_2` for :attr:`LinearModel.is_equilibrium`.
+    method : {"auto", "symbolic", "numerical"}
+        How the columns of A-D are obtained (module docstring): ``"auto"``
+        symbolic where the model is differentiable at the point, one-sided
+        numerical for the variables where it is not.
 
     Returns
     -------
@@ -286,6 +326,9 @@ def linearize(eqs: StateEquations, operating_point: Mapping[str, float] | None =
         raise ParameterError(f"linearize expects StateEquations, got {type(eqs).__name__}", name="eqs")
     if _number(t) is None:
         raise ParameterError(f"t must be a finite time in s, got {t!r}", name="t")
+    if method not in METHODS:
+        raise ParameterError(f"method must be one of {', '.join(map(repr, METHODS))}; found {method!r}",
+                             name="method")
     values, param_values = _resolve(eqs, operating_point, params, float(t))
     jac = _jacobians(eqs)
 
@@ -299,11 +342,18 @@ def linearize(eqs: StateEquations, operating_point: Mapping[str, float] | None =
         _solve_algebraic(eqs, jac, vector, z_slice)
         values.update(zip((z.name for z in eqs.algebraic), vector[z_slice]))
     m = jac.all(vector)
-    _check_finite(eqs, m)
+    columns = [*eqs.state_names, *eqs.input_names]
+    found = _kinks(eqs, vector) if method == "auto" else []
+    numeric = set(columns) if method == "numerical" else {s.name for k in found for s in k.symbols} & set(columns)
+    if method == "auto":
+        numeric |= _not_finite_columns(eqs, m) & set(columns)
+        if nz and numeric:
+            numeric = set(columns)   # a one-sided step re-solves z, so do every column alike
+    _check_finite(eqs, m, skip=numeric if method != "symbolic" else set(), values_only=method == "numerical")
     m = {k: v.real for k, v in m.items()}
 
     A, B, C, D = m["f_x"], m["f_u"], m["h_x"], m["h_u"]
-    if nz:
+    if nz and len(numeric) < len(columns):
         # Implicit-function theorem [2]: dz/d[x u] = -r_z^{-1} [r_x r_u], by a solve.
         r_z = m["r_z"]
         if np.linalg.cond(r_z) > 1.0 / np.finfo(float).eps:
@@ -315,6 +365,20 @@ def linearize(eqs: StateEquations, operating_point: Mapping[str, float] | None =
         dz_dx, dz_du = dz[:, :nx], dz[:, nx:]
         A, B = A + m["f_z"] @ dz_dx, B + m["f_z"] @ dz_du
         C, D = C + m["h_z"] @ dz_dx, D + m["h_z"] @ dz_du
+    derivatives = {}
+    for j, name in enumerate(columns):
+        if name not in numeric:
+            derivatives[name] = "symbolic"
+            continue
+        col, how = _one_sided(eqs, jac, vector, 1 + j, z_slice)
+        if not nz:   # rows that do not contain the variable have an exact zero (no difference noise)
+            symbol = (*eqs.states, *eqs.inputs)[j]
+            col = np.where([symbol in e.free_symbols for e in (*eqs.f, *eqs.h)], col, 0.0)
+        if j < nx:
+            A, C = _set_column(A, j, col[:nx]), _set_column(C, j, col[nx:])
+        else:
+            B, D = _set_column(B, j - nx, col[:nx]), _set_column(D, j - nx, col[nx:])
+        derivatives[name] = how
 
     xdot = m["f"].reshape(-1)
     everything = (*eqs.state_names, *eqs.input_names, *eqs.outputs, *eqs.held_names,
@@ -325,18 +389,116 @@ def linearize(eqs: StateEquations, operating_point: Mapping[str, float] | None =
         units={n: eqs.units.get(n, "") for n in everything},
         operating_point=values, t=float(t), params=param_values,
         xdot=xdot, y=m["h"].reshape(-1),
-        equilibrium_residual=float(np.linalg.norm(xdot)), equilibrium_atol=float(equilibrium_atol))
+        equilibrium_residual=float(np.linalg.norm(xdot)), equilibrium_atol=float(equilibrium_atol),
+        derivatives=derivatives, kinks=tuple(str(k) for k in found))
 
 
-def _check_finite(eqs: StateEquations, m: dict) -> None:
-    """Every value and derivative at the point must be a finite real number."""
+#: Accepted values of ``linearize(method=...)``.
+METHODS = ("auto", "symbolic", "numerical")
+#: Relative step of the one-sided differences (about the cube root of the machine epsilon).
+ONE_SIDED_STEP = 6e-6
+#: Relative step of the secant used where the one-sided derivative is unbounded.
+SECANT_STEP = 1e-3
+
+
+def _set_column(M, j, col):
+    M = np.array(M, dtype=float, copy=True)
+    M[:, j] = col
+    return M
+
+
+def _kinks(eqs: StateEquations, vector) -> list:
+    """Switches of f, h, r on their switching surface at the point (see bondgraph.derivatives).
+
+    Searched in the ordered assignments and the short forms (so a kink reads
+    ``Abs(valve1.net)``, not a page of substituted text); each kink's
+    variables are traced back through the assignments to states and inputs."""
+    symbols = (eqs.t, *eqs.states, *eqs.inputs, *eqs.algebraic, *eqs.held, *eqs.params)
+    point = {s: float(v) for s, v in zip(symbols, vector)}
+    closure = {}
+    for a, body in eqs.assignments:
+        try:
+            point[a] = complex(body.xreplace(point))
+        except (TypeError, ValueError):
+            point[a] = complex("nan")
+        closure[a] = set().union(*[closure.get(s, {s}) for s in body.free_symbols]) if body.free_symbols else set()
+    found = kinks([*(b for _, b in eqs.assignments), *eqs.f_short, *eqs.h_short, *eqs.residuals], point)
+    return [Kink(k.switch, frozenset().union(*[closure.get(s, {s}) for s in k.symbols])) for k in found]
+
+
+def _not_finite_columns(eqs: StateEquations, m: dict) -> set:
+    """State/input names whose symbolic column has a non-finite or complex entry."""
+    out = set()
+    for key, names in (("f_x", eqs.state_names), ("h_x", eqs.state_names),
+                       ("f_u", eqs.input_names), ("h_u", eqs.input_names)):
+        bad = ~np.isfinite(m[key]) | (np.abs(np.imag(m[key])) > 1e-12 * np.maximum(1.0, np.abs(np.real(m[key]))))
+        out |= {names[j] for j in np.nonzero(bad.any(axis=0))[0]} if m[key].size else set()
+    return out
+
+
+def _values(eqs, jac, vector, z_slice) -> np.ndarray:
+    """(f, h) at `vector`, the algebraic unknowns re-solved from the vector's guess."""
+    if z_slice.stop > z_slice.start:
+        _solve_algebraic(eqs, jac, vector, z_slice)
+    m = jac.all(vector)
+    return np.concatenate([m["f"].reshape(-1), m["h"].reshape(-1)])
+
+
+def _one_sided(eqs, jac, vector, index, z_slice):
+    """Right-sided derivative of (f, h) in vector[index] (module docstring): returns the column, and
+    how it was obtained."""
+    v0 = float(vector[index])
+    eps = ONE_SIDED_STEP * max(1.0, abs(v0))
+
+    def at(step):
+        v = vector.copy()
+        v[index] += step
+        return _values(eqs, jac, v, z_slice)
+
+    F = {k: at(k * eps) for k in (0, 1, 2, 4, 8)}
+    name = ([*eqs.state_names, *eqs.input_names])[index - 1]
+    rows = [*(f"f[{n}]" for n in eqs.state_names), *(f"h[{n}]" for n in eqs.outputs)]
+    if not all(np.all(np.isfinite(x)) for x in F.values()):
+        raise DerivationError(f"{eqs.name}: (f, h) is not finite just above {name} = {v0:.6g}, so no "
+                              "one-sided derivative exists there")
+    F = {k: x.real for k, x in F.items()}
+    # A jump (sign(v) at v = 0) is no kink: the first step changes F by far more than the second.
+    d1, d2 = F[1] - F[0], F[2] - F[1]
+    jumps = np.abs(d1) > 100.0 * np.abs(d2) + 1e-9 * np.maximum(1.0, np.abs(F[0]))
+    if np.any(jumps):
+        a = int(np.argmax(jumps))
+        raise DerivationError(
+            f"{eqs.name}: d {rows[a]} / d {name} does not exist at the operating point: {rows[a]} jumps by "
+            f"{d1[a]:.6g} there (a discontinuous law such as sign); linearise at a nearby point")
+    col = (-3.0 * F[0] + 4.0 * F[1] - F[2]) / (2.0 * eps)
+    coarse = (-3.0 * F[0] + 4.0 * F[4] - F[8]) / (8.0 * eps)
+    floor = 1e-8 * np.maximum(1.0, np.abs(F[0])) / eps
+    if np.all(np.abs(col - coarse) <= 1e-3 * np.maximum(np.abs(col), np.abs(coarse)) + floor):
+        return col, f"one-sided numerical (right, step {eps:.3g})"
+    # The estimates grow as the step shrinks: an unbounded one-sided derivative (an orifice's
+    # sqrt(P - P_out) at zero pressure difference).  Give the secant over a stated finite step.
+    delta = SECANT_STEP * max(1.0, abs(v0))
+    secant = (at(delta).real - F[0]) / delta
+    unbounded = [rows[a] for a in np.nonzero(np.abs(col - coarse) > 1e-3 * np.maximum(np.abs(col), np.abs(coarse))
+                                             + floor)[0]]
+    return secant, (f"one-sided numerical (secant over {delta:.3g}: the one-sided derivative of "
+                    f"{', '.join(unbounded)} is unbounded)")
+
+
+def _check_finite(eqs: StateEquations, m: dict, *, skip=frozenset(), values_only: bool = False) -> None:
+    """Every value and derivative at the point must be a finite real number
+    (except derivatives by the variables in `skip`, or all when `values_only`)."""
     row_names = {"f": eqs.state_names, "h": eqs.outputs, "r": tuple(z.name for z in eqs.algebraic)}
     col_names = {"x": eqs.state_names, "u": eqs.input_names, "z": tuple(z.name for z in eqs.algebraic)}
     bad = []
     for key, value in m.items():
         kind, _, wrt = key.partition("_")
+        if wrt and values_only:
+            continue
         for (a, b), v in np.ndenumerate(value):
             if np.isfinite(v) and abs(v.imag) <= 1e-12 * max(1.0, abs(v.real)):
+                continue
+            if wrt and col_names[wrt][b] in skip:
                 continue
             what = f"{kind}[{row_names[kind][a]}]"
             if wrt:

@@ -28,7 +28,7 @@ def test_equations_json_has_the_documented_keys_and_matrices(capsys):
     assert main(["equations", "mass-spring-damper", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert set(data) == {"states", "inputs", "outputs", "parameters", "f", "h", "assignments", "f_short",
-                         "h_short", "A", "B", "C", "D"}
+                         "h_short", "A", "B", "C", "D", "linearisation"}
     m, b, k = 1.0, 0.4, 4.0   # library defaults
     assert data["states"] == ["p_m", "q_k"] and data["parameters"] == {"m": m, "b": b, "k": k}
     assert np.allclose(data["A"], [[-b / m, -k], [1 / m, 0.0]])

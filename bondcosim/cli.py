@@ -18,7 +18,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
+import re
 import sys
 
 from bondgraph.errors import BondcosimError, ExpressionError, ParameterError
@@ -28,14 +30,21 @@ from . import __version__
 __all__ = ["main"]
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line (``bondcosim simulate: error: ...``), exit status 2."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="bondcosim", description="Bond-graph modelling, FMU export and co-simulation.",
         epilog=__doc__.split("Examples\n--------\n", 1)[1]
         + f"\nbondcosim {__version__}, Python {platform.python_version()} on {platform.platform()}",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"bondcosim {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_Parser)
 
     sub.add_parser("list", help="name the built-in models, one line each")
 
@@ -290,16 +299,50 @@ _COMMANDS = {"list": _cmd_list, "equations": _cmd_equations, "draw": _cmd_draw,
              "demo": _cmd_demo}
 
 
-def main(argv=None) -> int:
-    """Run the console script; returns the exit status (0 on success, 1 on a reported error)."""
-    args = _parser().parse_args(argv)
+def _one_line(exc: BaseException) -> str:
+    """The message of `exc` on one line (a multi-line message, e.g. every causal conflict, joined by '; ')."""
+    text = str(exc) or type(exc).__name__
+    return "; ".join(re.sub(r"^\s*-\s+", "", part).strip() for part in text.splitlines() if part.strip())
+
+
+def _quiet_stdout() -> None:
+    """After the reader of our stdout went away (``bondcosim ... | head``): send what is
+    still buffered to /dev/null, so neither this process nor Python's exit reports it."""
     try:
-        return _COMMANDS[args.command](args)
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):   # no real file descriptor (captured in tests)
+        pass
+
+
+def main(argv=None) -> int:
+    """Run the console script; returns the exit status.
+
+    0 on success; 1 on a reported error (one line on stderr naming the culprit, never a
+    traceback); 2 on a usage error (argparse); 130 when interrupted; 141 (128 + SIGPIPE,
+    as the shell's own tools) when the reader of stdout closed it early, quietly.
+    """
+    args = _parser().parse_args(argv)
+    where = f"bondcosim {args.command}"
+    try:
+        status = _COMMANDS[args.command](args)
+        sys.stdout.flush()   # a closed pipe shows here, not at interpreter exit
+        return status
+    except BrokenPipeError:
+        _quiet_stdout()
+        return 141
     except BondcosimError as exc:
-        print(f"bondcosim {args.command}: error: {exc}", file=sys.stderr)
+        print(f"{where}: error: {_one_line(exc)}", file=sys.stderr)
         return 1
-    except OSError as exc:
-        print(f"bondcosim {args.command}: error: {exc}", file=sys.stderr)
+    except OSError as exc:   # a file we were asked to read or write
+        print(f"{where}: error: {_one_line(exc)}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"{where}: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # noqa: BLE001 -- the last line of defence: one line, never a traceback
+        print(f"{where}: internal error: {type(exc).__name__}: {_one_line(exc)} "
+              "(please report it with the command line)", file=sys.stderr)
         return 1
 
 

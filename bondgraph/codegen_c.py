@@ -81,7 +81,7 @@ from sympy.printing.c import C99CodePrinter
 
 from .codegen_c_templates import BATCH_HEAD, newton_source, rk4_source
 from .derivatives import NotDifferentiable, diff_almost_everywhere
-from .errors import CompilationError
+from .errors import ArgumentError, CompilationError
 
 __all__ = ["generate_source", "jacobian_entries", "prepare_expression", "symbol_names",
            "SPLIT_STATEMENTS", "PARTS", "GENERATOR_VERSION"]
@@ -301,7 +301,7 @@ def generate_source(eqs, *, part: str = "main") -> str:
         If `part` is not one of the above.
     """
     if part not in PARTS:
-        raise ValueError(f"part must be one of {', '.join(PARTS)}; found {part!r}")
+        raise ArgumentError(f"part must be one of {', '.join(PARTS)}; found {part!r}")
     printer = _Printer(symbol_names(eqs))
     dims = {"NX": len(eqs.states), "NU": len(eqs.inputs), "NP": len(eqs.params),
             "NZ": len(eqs.algebraic), "ND": len(eqs.held), "NY": len(eqs.h)}

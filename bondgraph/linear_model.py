@@ -14,7 +14,7 @@ from typing import Mapping
 
 import numpy as np
 
-from .errors import ParameterError
+from .errors import ArgumentError, ParameterError
 
 __all__ = ["LinearModel", "EQUILIBRIUM_ATOL"]
 
@@ -28,7 +28,7 @@ def _frozen_array(value, shape, what: str) -> np.ndarray:
     arr = np.array(value, dtype=float)
     if arr.shape != shape:
         if arr.size or math.prod(shape):  # JSON turns an empty (0, m) matrix into []
-            raise ValueError(f"{what}: expected shape {shape} but found {arr.shape}")
+            raise ArgumentError(f"{what}: expected shape {shape} but found {arr.shape}")
         arr = arr.reshape(shape)
     arr.flags.writeable = False
     return arr

@@ -57,7 +57,8 @@ import time as _time
 import numpy as np
 import sympy as sp
 
-from .errors import ExpressionError, SimulationError, UnknownNameError
+from .errors import ArgumentError, ExpressionError, SimulationError, UnknownNameError
+from .memory import check_result_size
 from .evaluate import compile_model
 from .results import SimulationResult
 from .symbols import as_expression
@@ -131,26 +132,32 @@ def simulate(system, t_span, *, inputs=None, x0=None, params=None, method="auto"
         or an input callable that fails at ``t0``.
     ParameterError
         An unknown parameter name or a non-finite parameter value.
-    ValueError
-        A wrong shape, span, step or method.
+    ArgumentError
+        A wrong shape, span, step or method (a ``ValueError``).
+    OutputTooLargeError
+        The samples asked for would not fit in memory (a ``MemoryError``),
+        raised before any work.
     SimulationError
         Solver failure, non-finite state (named), or an unsolvable algebraic loop.
     """
     eqs = system if isinstance(system, StateEquations) else system.equations()
-    model = compile_model(eqs, backend=backend)
     t0, t1 = _span(t_span)
+    for label, value in (("dt", dt), ("output_interval", output_interval)):
+        if value is not None and not (isinstance(value, numbers.Real) and math.isfinite(value) and value > 0):
+            raise ArgumentError(f"{label}: expected a positive number of seconds; found {value!r}", name=label)
+    if output_interval is not None:   # refuse a result that cannot fit before compiling anything
+        n_signals = 1 + len(eqs.states) + len(eqs.inputs) + len(eqs.outputs) + len(eqs.held)
+        check_result_size(t1 - t0, output_interval, n_signals, what=f"simulation of {eqs.name!r}")
+    model = compile_model(eqs, backend=backend)
     plan = _InputPlan(eqs, inputs, t0)
     x_init = _initial_state(model, x0)
     p = model.param_vector(params)
     d0 = model.default_held.reshape(1, -1)
     fixed = (not eqs.is_smooth) or method == "RK4"
     if not eqs.is_smooth and method not in ("auto", "RK4"):
-        raise ValueError(f"model {eqs.name!r} is not smooth (held variables or fixed_step="
+        raise ArgumentError(f"model {eqs.name!r} is not smooth (held variables or fixed_step="
                          f"{eqs.fixed_step}); it is integrated with fixed-step 'RK4', so method "
                          f"must be 'auto' or 'RK4'; found {method!r}")
-    for label, value in (("dt", dt), ("output_interval", output_interval)):
-        if value is not None and not (math.isfinite(value) and value > 0):
-            raise ValueError(f"{label}: expected a positive number of seconds; found {value!r}")
     bar = _Progress(progress, t0, t1, eqs.name)
     try:
         if fixed:
@@ -176,9 +183,9 @@ def _span(t_span):
     try:
         t0, t1 = (float(v) for v in t_span)
     except (TypeError, ValueError):
-        raise ValueError(f"t_span: expected (t0, t1) in seconds; found {t_span!r}") from None
+        raise ArgumentError(f"t_span: expected (t0, t1) in seconds; found {t_span!r}") from None
     if not (math.isfinite(t0) and math.isfinite(t1) and t1 > t0):
-        raise ValueError(f"t_span: expected finite t0 < t1; found ({t0}, {t1})")
+        raise ArgumentError(f"t_span: expected finite t0 < t1; found ({t0}, {t1})")
     return t0, t1
 
 
@@ -205,11 +212,11 @@ def _initial_state(model, x0):
     else:
         x = np.array(x0, dtype=float)
         if x.shape != (len(names),):
-            raise ValueError(f"x0: expected shape ({len(names)},) (states {', '.join(names)}); "
+            raise ArgumentError(f"x0: expected shape ({len(names)},) (states {', '.join(names)}); "
                              f"found {x.shape}")
     bad = [n for n, v in zip(names, x) if not math.isfinite(v)]
     if bad:
-        raise ValueError(f"x0: non-finite initial value of state(s) {', '.join(bad)}")
+        raise ArgumentError(f"x0: non-finite initial value of state(s) {', '.join(bad)}")
     return x
 
 
@@ -291,12 +298,12 @@ class _InputPlan:
 def _table(name, spec):
     times, values = (np.asarray(v, dtype=float) for v in spec)
     if times.ndim != 1 or times.shape != values.shape or times.size == 0:
-        raise ValueError(f"input {name!r}: a table must be (times, values), two 1-D arrays of "
+        raise ArgumentError(f"input {name!r}: a table must be (times, values), two 1-D arrays of "
                          f"equal length; found shapes {times.shape} and {values.shape}")
     if not (np.isfinite(times).all() and np.isfinite(values).all()):
-        raise ValueError(f"input {name!r}: table contains non-finite numbers")
+        raise ArgumentError(f"input {name!r}: table contains non-finite numbers")
     if np.any(np.diff(times) <= 0):
-        raise ValueError(f"input {name!r}: table times must be strictly increasing")
+        raise ArgumentError(f"input {name!r}: table times must be strictly increasing")
     return times, values
 
 
@@ -347,7 +354,7 @@ def _integrate_smooth(model, plan, x0, p, d, times, method, dt, rtol, atol, bar,
     if method == "auto":
         method, info["stiffness"] = _choose_method(model, plan, x0, p, d, t0, t1 - t0)
     elif isinstance(method, str) and method not in IVP_METHODS:
-        raise ValueError(f"method: expected 'auto', 'RK4' or one of {', '.join(IVP_METHODS)}; "
+        raise ArgumentError(f"method: expected 'auto', 'RK4' or one of {', '.join(IVP_METHODS)}; "
                          f"found {method!r}")
     info["method"] = method if isinstance(method, str) else getattr(method, "__name__", str(method))
     hold = [t0]

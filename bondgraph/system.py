@@ -31,6 +31,7 @@ from types import MappingProxyType
 from typing import Mapping
 
 import sympy as sp
+from .errors import ArgumentError
 
 __all__ = ["StateEquations", "CausalityReport"]
 
@@ -164,19 +165,19 @@ class StateEquations:
         for name, flat in (("f_short", "f"), ("h_short", "h"), ("held_update_short", "held_update")):
             value = tuple(getattr(self, name)) or getattr(self, flat)
             if len(value) != len(getattr(self, flat)):
-                raise ValueError(f"{len(value)} {name} expressions for {len(getattr(self, flat))} {flat}")
+                raise ArgumentError(f"{len(value)} {name} expressions for {len(getattr(self, flat))} {flat}")
             object.__setattr__(self, name, value)
         for name in ("param_values", "initial_state", "input_defaults", "held_initial",
                      "units", "descriptions", "owners", "input_functions"):
             object.__setattr__(self, name, _frozen(getattr(self, name)))
         if len(self.f) != len(self.states):
-            raise ValueError(f"{len(self.f)} right-hand sides for {len(self.states)} states")
+            raise ArgumentError(f"{len(self.f)} right-hand sides for {len(self.states)} states")
         if len(self.h) != len(self.outputs):
-            raise ValueError(f"{len(self.h)} output expressions for {len(self.outputs)} outputs")
+            raise ArgumentError(f"{len(self.h)} output expressions for {len(self.outputs)} outputs")
         if len(self.residuals) != len(self.algebraic):
-            raise ValueError(f"{len(self.residuals)} residuals for {len(self.algebraic)} algebraic unknowns")
+            raise ArgumentError(f"{len(self.residuals)} residuals for {len(self.algebraic)} algebraic unknowns")
         if len(self.held_update) != len(self.held):
-            raise ValueError(f"{len(self.held_update)} updates for {len(self.held)} held variables")
+            raise ArgumentError(f"{len(self.held_update)} updates for {len(self.held)} held variables")
 
     # -- names -------------------------------------------------------------
     @property

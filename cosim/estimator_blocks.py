@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bondgraph.errors import CosimError, UnknownNameError
+from cosim.errors import CosimError, UnknownNameError
 from estimators import UnscentedKalmanFilter
 
 from .component import Port, PythonBlock

@@ -32,7 +32,7 @@ import time as _time
 
 import numpy as np
 
-from bondgraph.errors import BondcosimError, CosimError, SimulationError
+from cosim.errors import BondcosimError, CosimError, SimulationError
 from bondgraph.results import SimulationResult
 
 from .component import Component, PythonBlock

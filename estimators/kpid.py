@@ -59,7 +59,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bondgraph.errors import EstimatorError
+from estimators.errors import EstimatorError
 
 from ._linalg import zoh
 

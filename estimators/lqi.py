@@ -39,7 +39,7 @@ from typing import Literal, Sequence
 
 import numpy as np
 
-from bondgraph.errors import EstimatorError
+from estimators.errors import EstimatorError
 
 from ._linalg import as_matrix, as_vector
 from .lqr import _solve, _weights

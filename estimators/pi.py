@@ -55,7 +55,7 @@ from typing import Literal
 
 import numpy as np
 
-from bondgraph.errors import EstimatorError
+from estimators.errors import EstimatorError
 
 __all__ = ["DiscretePI", "PAPER_GAINS"]
 

@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bondgraph.errors import EstimatorError
+from estimators.errors import EstimatorError
 
 __all__ = ["SigmaPoints", "JulierSigmaPoints", "MerweScaledSigmaPoints"]
 

@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bondgraph.errors import EstimatorError
+from estimators.errors import EstimatorError
 
 from .ukf_checks import check_covariance, check_vector, raise_problems, validate_setup
 from .ukf_engine import NumpyEngine

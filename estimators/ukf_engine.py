@@ -42,7 +42,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg import cho_solve
 
-from bondgraph.errors import EstimatorError
+from estimators.errors import EstimatorError
 
 from .sigma_points import spread
 

@@ -6,6 +6,7 @@ import time as _time
 from dataclasses import dataclass
 
 import numpy as np
+from estimators.errors import UnknownStateError
 
 __all__ = ["UKFResult"]
 
@@ -36,7 +37,7 @@ class UKFResult:
         try:
             return self.x[:, self.state_names.index(name)]
         except ValueError:
-            raise KeyError(f"no state {name!r}; states are {', '.join(self.state_names)}") from None
+            raise UnknownStateError(f"no state {name!r}; states are {', '.join(self.state_names)}") from None
 
     @property
     def std(self) -> np.ndarray:

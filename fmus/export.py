@@ -34,7 +34,7 @@ import numpy as np
 import sympy as sp
 
 from bondgraph.codegen_c import generate_source
-from bondgraph.errors import FMUError
+from fmus.errors import FMUError, FMUModelTypeError
 
 from .build import compile_fmu_binary
 from .c_header import model_header
@@ -110,7 +110,7 @@ def _equations_of(model):
         return model.equations()
     if hasattr(model, "states") and hasattr(model, "f"):
         return model
-    raise TypeError(f"export needs a BondGraph or StateEquations, got {type(model).__name__}")
+    raise FMUModelTypeError(f"export needs a BondGraph or StateEquations, got {type(model).__name__}")
 
 
 def export(model, path, *, fmi_version: int = 2, solver_step: float | None = None,

@@ -14,7 +14,7 @@ import tempfile
 import zipfile
 from pathlib import Path
 
-from bondgraph.errors import FMUError, UnknownNameError
+from fmus.errors import FMUError, UnknownNameError
 
 __all__ = ["read_fmu", "extract_fmu", "remove_extracted", "find_variable", "variable_unit"]
 

@@ -63,6 +63,7 @@ from typing import Literal, Mapping
 from ..elements import C, EquationElement, I, MSf, MTF, One
 from ..graph import BondGraph
 from ..params import Param, values_with_overrides
+from ..errors import ArgumentError
 
 __all__ = ["pam", "PARAMETERS", "KAPPA_KNOTS", "FRICTION_STEP", "DP_CLAMP", "parameter_values",
            "kappa_law", "orifice_flux_law", "valve_law", "valve_locals", "VALVE_FLOW"]
@@ -303,7 +304,7 @@ def pam(variant: Variant = "full", *, params: Mapping[str, float] | None = None)
     ('P_1', 'P_2')
     """
     if variant not in _GRAPH_NAMES:
-        raise ValueError(f"pam: variant must be one of {', '.join(map(repr, _GRAPH_NAMES))}; "
+        raise ArgumentError(f"pam: variant must be one of {', '.join(map(repr, _GRAPH_NAMES))}; "
                          f"found {variant!r}")
     values = parameter_values(params)
     g = BondGraph(_GRAPH_NAMES[variant], description=f"antagonistic PAM joint, seed 000 ({variant})")

@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from bondgraph.blockdiagram.exoskeleton import state_space
-from bondgraph.errors import CosimError
+from cosim.errors import CosimError
 
 from ..blocks import Constant, Step
 from ..component import Port, PythonBlock

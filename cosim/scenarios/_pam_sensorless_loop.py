@@ -28,7 +28,7 @@ import numpy as np
 
 import bondgraph.library as library
 from bondgraph.blockdiagram import pam as pam_bd
-from bondgraph.errors import CosimError
+from cosim.errors import CosimError
 from bondgraph.evaluate import compile_model
 from estimators import DiscretePI, JulierSigmaPoints
 

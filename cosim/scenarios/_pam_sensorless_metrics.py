@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bondgraph.errors import CosimError
+from cosim.errors import CosimError
 
 __all__ = ["steady_state_mask", "steady_state_performance", "plot_loop"]
 

@@ -161,7 +161,16 @@ class OutputTooLargeError(BondcosimError, MemoryError):
         super().__init__(message)
 
 
-__all__ += ["ArgumentError", "ArgumentTypeError", "MissingFileError", "OutputTooLargeError"]
+class OptionalDependencyError(BondcosimError, ImportError):
+    """A feature needs a package that is not installed (``package``: its name)."""
+
+    def __init__(self, message: str, package: str = ""):
+        self.package = package
+        super().__init__(message, name=package or None)
+
+
+__all__ += ["ArgumentError", "ArgumentTypeError", "MissingFileError", "OutputTooLargeError",
+            "OptionalDependencyError"]
 
 
 class CausalityError(BondcosimError, ValueError):

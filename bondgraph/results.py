@@ -211,6 +211,16 @@ class SimulationResult:
         return cls(table[:, 0], signals, units={n: units[n] for n in names[1:]})
 
     # -- plot --------------------------------------------------------------------
+    def to_pandas(self):
+        """A ``pandas.DataFrame`` (index ``t``, s) with units in ``attrs`` (see :func:`bondgraph.results_export.to_pandas`)."""
+        from .results_export import to_pandas
+        return to_pandas(self)
+
+    def to_xarray(self):
+        """An ``xarray.Dataset`` with a ``units`` attribute per variable (see :func:`bondgraph.results_export.to_xarray`)."""
+        from .results_export import to_xarray
+        return to_xarray(self)
+
     def plot(self, names=None, *, ax=None):
         """Plot signals against time, one subplot per unit.
 

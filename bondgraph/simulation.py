@@ -51,14 +51,13 @@ from __future__ import annotations
 
 import math
 import numbers
-import sys
-import time as _time
 
 import numpy as np
 import sympy as sp
 
 from .errors import ArgumentError, ExpressionError, SimulationError, UnknownNameError
 from .memory import check_result_size
+from .progress import Progress
 from .evaluate import compile_model
 from .results import SimulationResult
 from .symbols import as_expression
@@ -158,7 +157,8 @@ def simulate(system, t_span, *, inputs=None, x0=None, params=None, method="auto"
         raise ArgumentError(f"model {eqs.name!r} is not smooth (held variables or fixed_step="
                          f"{eqs.fixed_step}); it is integrated with fixed-step 'RK4', so method "
                          f"must be 'auto' or 'RK4'; found {method!r}")
-    bar = _Progress(progress, t0, t1, eqs.name)
+    bar = Progress(t1 - t0, fmt=f"simulate {eqs.name}: {{percentage:5.1f}} %  {{desc}}", enabled=progress,
+                   start=t0, value_fmt="t = {:.6g} s")
     try:
         if fixed:
             h_max = min([v for v in (dt, eqs.fixed_step) if v] or [output_interval or (t1 - t0) / _DEFAULT_POINTS])
@@ -361,7 +361,7 @@ def _integrate_smooth(model, plan, x0, p, d, times, method, dt, rtol, atol, bar,
     counts = {"nfev": 0, "njev": 0}
 
     def rhs(t, x):
-        bar.update(t)
+        bar.update_to(t)
         _check_finite(model, x, t)
         x2 = np.ascontiguousarray(x, dtype=float).reshape(1, -1)
         dx = model._call("f", np.array([t]), x2, plan.vector(t, hold[0]), p, d)[0]
@@ -409,7 +409,7 @@ def _integrate_fixed(model, plan, x0, d0, p, times, h_max, bar):
     nfev, h = 0, h_max
     for k in range(times.size - 1):
         ta, tb = times[k], times[k + 1]
-        bar.update(ta)
+        bar.update_to(ta)
         u = plan.vector(ta)   # zero-order hold over the output interval
         m = max(1, math.ceil((tb - ta) / h_max - 1e-9))
         h = (tb - ta) / m
@@ -455,31 +455,3 @@ def _assemble(model, plan, times, X, D, p, info):
             signals[key], units[key], kinds[key] = values[:, j], eqs.units.get(name, ""), kind
     info = {"model": eqs.name, **info}
     return SimulationResult(times, signals, units=units, kinds=kinds, info=info)
-
-
-class _Progress:
-    """One self-overwriting line on stderr, at most every 0.2 s."""
-
-    def __init__(self, enabled, t0, t1, name):
-        self.enabled, self.t0, self.span, self.name = enabled, t0, t1 - t0, name
-        self._last = 0.0
-        if enabled:
-            self._write(t0)
-
-    def _write(self, t):
-        pct = 100.0 * min(1.0, max(0.0, (t - self.t0) / self.span))
-        sys.stderr.write(f"\rsimulate {self.name}: {pct:5.1f} %  t = {t:.6g} s")
-        sys.stderr.flush()
-
-    def update(self, t):
-        if self.enabled:
-            now = _time.monotonic()
-            if now - self._last >= 0.2:
-                self._last = now
-                self._write(t)
-
-    def close(self):
-        if self.enabled:
-            self._write(self.t0 + self.span)
-            sys.stderr.write("\n")
-            sys.stderr.flush()

@@ -17,7 +17,7 @@ graph's state names.
 
 References
 ----------
-.. [1] Exoskeleton bond graph / Kalman observer paper, ``shared/seeds/004_e7537f0e64a650f8.txt``.
+.. [1] Exoskeleton bond graph / Kalman observer paper, seed 004 (``docs/references.md``).
 """
 from __future__ import annotations
 

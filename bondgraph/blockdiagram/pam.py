@@ -27,9 +27,9 @@ References
 ----------
 .. [1] T. Shin, T. Ibayashi, K. Kogiso, "Detailed dynamic model of antagonistic
    PAM system and its experimental validation: sensor-less angle and torque
-   control with UKF", ``shared/seeds/000_e88691151ec17d16.txt``.
+   control with UKF", seed 000 (``docs/references.md``).
 .. [2] "Antagonistic PAM joint (seed 000): the project's reference conventions",
-   ``shared/pam-conventions.md``.
+   ``docs/pam-conventions.md``.
 """
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The pneumatic-cylinder seal-friction rig as an ideal (frictionless) bond graph.
 
-The rig (``shared/data/pneumatic_cylinder_friction/SOURCE.md``, Zillen's
+The rig (``tests/data/pneumatic_cylinder_friction/SOURCE.md``, Zillen's
 3D-printed cylinder, Ø25 mm bore): the chamber is held at a constant gauge
 pressure ``p`` while a linear drive moves the piston rod back and forth and a
 load cell measures the rod force ``F``.  The ideal actuator gives

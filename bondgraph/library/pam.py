@@ -5,7 +5,7 @@ the two ends of a seesaw.  The pneumatic side is a pseudo-bond graph
 (effort: absolute pressure, Pa; flow: mass flow, kg/s, positive INTO the
 muscle); the mechanical side is a rotational bond graph (torque, N m /
 angular velocity, rad/s).  Every reading of the paper that it leaves open
-follows ``shared/pam-conventions.md``, the project's reference conventions.
+follows ``docs/pam-conventions.md``, the project's reference conventions.
 
 Structure (full variant)::
 
@@ -52,7 +52,7 @@ The conventions' fixed-step scheme (1 ms samples, 4 classic RK4 sub-steps of
 References
 ----------
 .. [1] T. Shin, T. Ibayashi, K. Kogiso, "Detailed dynamic model of antagonistic
-   PAM system and its experimental validation", ``shared/seeds/000_e88691151ec17d16.txt``:
+   PAM system and its experimental validation", seed 000 (``docs/references.md``):
    eqs. (2)-(11), Table II.
 """
 from __future__ import annotations

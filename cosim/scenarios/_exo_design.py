@@ -39,7 +39,7 @@ sample variances or for the continuous intensities ``a^2 dt / 3``.
 References
 ----------
 .. [1] Exoskeleton bond graph / Kalman observer paper,
-   ``shared/seeds/004_e7537f0e64a650f8.txt``, Sections 3-5, eqs. (3)-(17).
+   seed 004 (``docs/references.md``), Sections 3-5, eqs. (3)-(17).
 """
 from __future__ import annotations
 

@@ -17,7 +17,7 @@ standard textbook definitions, stated here and in ``docs/reproduction_kpid.md``:
 References
 ----------
 .. [1] Yang H. et al., Control Theory & Applications (2017);
-   ``shared/seeds/002_cb2dc7ef6c6d2e82.txt``.
+   seed 002 (``docs/references.md``).
 """
 from __future__ import annotations
 

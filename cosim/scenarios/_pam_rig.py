@@ -34,8 +34,8 @@ References
 ----------
 .. [1] T. Shin, T. Ibayashi, K. Kogiso, "Detailed dynamic model of antagonistic
    PAM system and its experimental validation: sensor-less angle and torque
-   control with UKF", ``shared/seeds/000_e88691151ec17d16.txt``.
-.. [2] ``shared/pam-conventions.md``; :func:`bondgraph.library.pam.pam`.
+   control with UKF", seed 000 (``docs/references.md``).
+.. [2] ``docs/pam-conventions.md``; :func:`bondgraph.library.pam.pam`.
 """
 from __future__ import annotations
 

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-__all__ = ["Readable", "readable_form", "KEEP_OPS"]
+__all__ = ["Readable", "readable_form", "substitute", "KEEP_OPS"]
 
 #: Operations above which a bond variable used once still gets its own line.
 KEEP_OPS = 8
@@ -159,5 +159,3 @@ def substitute(assignments, expr: sp.Expr) -> sp.Expr:
             expr = expr.xreplace({symbol: body})
     return expr
 
-
-__all__ += ["substitute"]

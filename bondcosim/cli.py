@@ -77,6 +77,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--output-interval", type=float, default=None, help="sample interval of the results, s")
     p.add_argument("-o", "--output", required=True, help="results CSV file")
     p.add_argument("--plot", default=None, help="also save a plot (.png/.svg/.pdf)")
+    p.add_argument("--stream", action="store_true",
+                   help="write the CSV segment by segment as the simulation runs (bounded memory, for runs "
+                        "too long to hold; needs --output-interval, not --plot)")
 
     p = sub.add_parser("compare", help="a seed plant's bond graph against its block-diagram model")
     p.add_argument("model", choices=["exoskeleton", "pam"])
@@ -202,6 +205,16 @@ def _cmd_simulate(args) -> int:
             inputs[name] = float(text)
         except ValueError:
             inputs[name] = text
+    if args.stream:
+        from bondgraph.simulation_stream import simulate_to_csv
+        if args.output_interval is None or args.plot:
+            raise ParameterError("--stream needs --output-interval and cannot --plot (the result is never "
+                                 "all in memory)", name="--stream")
+        done = simulate_to_csv(graph, (args.start_time, args.stop_time), args.output, inputs=inputs,
+                               params=params or None, output_interval=args.output_interval,
+                               progress=sys.stderr.isatty())
+        print(f"wrote {args.output} ({done['samples']} samples, {done['segments']} segments)")
+        return 0
     result = simulate(graph, (args.start_time, args.stop_time), inputs=inputs, params=params or None,
                       output_interval=args.output_interval, progress=sys.stderr.isatty())
     result.to_csv(args.output)

@@ -77,7 +77,7 @@ _MAX_DEFAULT_POINTS = 10000  # cap for non-smooth models
 
 def simulate(system, t_span, *, inputs=None, x0=None, params=None, method="auto", dt=None,
              output_interval=None, backend="auto", rtol=1e-8, atol=1e-10,
-             progress=False, max_nfev: int = 500_000) -> SimulationResult:
+             progress=False, max_nfev: int = 500_000, held0=None) -> SimulationResult:
     """Simulate a model over a time span.
 
     Parameters
@@ -109,6 +109,9 @@ def simulate(system, t_span, *, inputs=None, x0=None, params=None, method="auto"
         Tolerances of the ``solve_ivp`` methods (states in SI units).
     progress : bool
         Print a progress line to stderr.
+    held0 : array_like, shape (n_held,), or dict str -> float, optional
+        Initial held (discrete) values, e.g. to continue a run where an
+        earlier one stopped; default ``held_initial``.
     max_nfev : int
         Budget of right-hand-side evaluations of the ``solve_ivp`` methods
         (about 10 s of work): a solver grinding towards a singularity (a
@@ -151,7 +154,7 @@ def simulate(system, t_span, *, inputs=None, x0=None, params=None, method="auto"
     plan = _InputPlan(eqs, inputs, t0)
     x_init = _initial_state(model, x0)
     p = model.param_vector(params)
-    d0 = model.default_held.reshape(1, -1)
+    d0 = _initial_held(model, held0).reshape(1, -1)
     fixed = (not eqs.is_smooth) or method == "RK4"
     if not eqs.is_smooth and method not in ("auto", "RK4"):
         raise ArgumentError(f"model {eqs.name!r} is not smooth (held variables or fixed_step="
@@ -218,6 +221,26 @@ def _initial_state(model, x0):
     if bad:
         raise ArgumentError(f"x0: non-finite initial value of state(s) {', '.join(bad)}")
     return x
+
+
+def _initial_held(model, held0):
+    names = model.held_names
+    d = model.default_held.copy()
+    if held0 is None:
+        return d
+    if isinstance(held0, dict):
+        for name, value in held0.items():
+            if name not in names:
+                raise UnknownNameError("held variable", name, names, model.equations.name)
+            d[names.index(name)] = float(value)
+    else:
+        d = np.array(held0, dtype=float)
+        if d.shape != (len(names),):
+            raise ArgumentError(f"held0: expected shape ({len(names)},) (held variables "
+                                f"{', '.join(names) or '(none)'}); found {d.shape}", name="held0")
+    if not np.all(np.isfinite(d)):
+        raise ArgumentError("held0: non-finite initial held value(s)", name="held0")
+    return d
 
 
 class _InputPlan:

@@ -18,7 +18,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
+import re
 import sys
 
 from bondgraph.errors import BondcosimError, ExpressionError, ParameterError
@@ -28,14 +30,21 @@ from . import __version__
 __all__ = ["main"]
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line (``bondcosim simulate: error: ...``), exit status 2."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="bondcosim", description="Bond-graph modelling, FMU export and co-simulation.",
         epilog=__doc__.split("Examples\n--------\n", 1)[1]
         + f"\nbondcosim {__version__}, Python {platform.python_version()} on {platform.platform()}",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"bondcosim {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_Parser)
 
     sub.add_parser("list", help="name the built-in models, one line each")
 
@@ -46,6 +55,12 @@ def _parser() -> argparse.ArgumentParser:
                      help="print states, inputs, outputs, parameters, f, h and A-D (linearised at the "
                           "model's default operating point) as JSON")
     fmt.add_argument("--latex", action="store_true", help="print a LaTeX aligned block")
+    p.add_argument("--at", action="append", default=[], metavar="NAME=VALUE",
+                   help="with --json: linearise at this state/input value (SI; repeatable) instead of "
+                        "the model's default operating point")
+    p.add_argument("--flat", action="store_true",
+                   help="print every right-hand side fully substituted (default: the ordered causal "
+                        "assignments, named intermediates such as valve1.alpha, then the state equations)")
 
     p = sub.add_parser("draw", help="draw MODEL with power half-arrows and causal strokes")
     p.add_argument("model")
@@ -62,6 +77,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--output-interval", type=float, default=None, help="sample interval of the results, s")
     p.add_argument("-o", "--output", required=True, help="results CSV file")
     p.add_argument("--plot", default=None, help="also save a plot (.png/.svg/.pdf)")
+    p.add_argument("--stream", action="store_true",
+                   help="write the CSV segment by segment as the simulation runs (bounded memory, for runs "
+                        "too long to hold; needs --output-interval, not --plot)")
 
     p = sub.add_parser("compare", help="a seed plant's bond graph against its block-diagram model")
     p.add_argument("model", choices=["exoskeleton", "pam"])
@@ -140,17 +158,24 @@ def _cmd_list(args) -> int:
 
 def _cmd_equations(args) -> int:
     from .models import load_model
+    if args.at and not args.json:
+        raise ParameterError("--at sets the linearisation point, which only --json prints", name="--at")
+    at = _numbers(args.at, "--at")
     eqs = load_model(args.model).equations()
     if args.latex:
-        print(eqs.latex())
+        print(eqs.latex(flat=args.flat))
     elif args.json:
         data = eqs.to_dict()
-        lin = eqs.linearize()
-        result = {key: data[key] for key in ("states", "inputs", "outputs", "parameters", "f", "h")}
+        lin = eqs.linearize(at or None)
+        result = {key: data[key] for key in ("states", "inputs", "outputs", "parameters", "f", "h",
+                                             "assignments", "f_short", "h_short")}
         result.update({k: getattr(lin, k).tolist() for k in ("A", "B", "C", "D")})
+        result["linearisation"] = {
+            "operating_point": dict(lin.operating_point), "equilibrium": lin.is_equilibrium,
+            "derivatives": dict(lin.derivatives), "kinks": list(lin.kinks)}
         print(json.dumps(result, indent=2))
     else:
-        print(eqs.pretty())
+        print(eqs.pretty(flat=args.flat))
     return 0
 
 
@@ -161,13 +186,13 @@ def _cmd_draw(args) -> int:
     return 0
 
 
-def _numbers(items) -> dict[str, float]:
+def _numbers(items, what: str = "--param") -> dict[str, float]:
     params = {}
-    for name, text in _pairs(items, "--param").items():
+    for name, text in _pairs(items, what).items():
         try:
             params[name] = float(text)
         except ValueError:
-            raise ParameterError(f"--param {name}={text!r}: not a number", name=name) from None
+            raise ParameterError(f"{what} {name}={text!r}: not a number", name=name) from None
     return params
 
 
@@ -182,6 +207,16 @@ def _cmd_simulate(args) -> int:
             inputs[name] = float(text)
         except ValueError:
             inputs[name] = text
+    if args.stream:
+        from bondgraph.simulation_stream import simulate_to_csv
+        if args.output_interval is None or args.plot:
+            raise ParameterError("--stream needs --output-interval and cannot --plot (the result is never "
+                                 "all in memory)", name="--stream")
+        done = simulate_to_csv(graph, (args.start_time, args.stop_time), args.output, inputs=inputs,
+                               params=params or None, output_interval=args.output_interval,
+                               progress=sys.stderr.isatty())
+        print(f"wrote {args.output} ({done['samples']} samples, {done['segments']} segments)")
+        return 0
     result = simulate(graph, (args.start_time, args.stop_time), inputs=inputs, params=params or None,
                       output_interval=args.output_interval, progress=sys.stderr.isatty())
     result.to_csv(args.output)
@@ -279,16 +314,50 @@ _COMMANDS = {"list": _cmd_list, "equations": _cmd_equations, "draw": _cmd_draw,
              "demo": _cmd_demo}
 
 
-def main(argv=None) -> int:
-    """Run the console script; returns the exit status (0 on success, 1 on a reported error)."""
-    args = _parser().parse_args(argv)
+def _one_line(exc: BaseException) -> str:
+    """The message of `exc` on one line (a multi-line message, e.g. every causal conflict, joined by '; ')."""
+    text = str(exc) or type(exc).__name__
+    return "; ".join(re.sub(r"^\s*-\s+", "", part).strip() for part in text.splitlines() if part.strip())
+
+
+def _quiet_stdout() -> None:
+    """After the reader of our stdout went away (``bondcosim ... | head``): send what is
+    still buffered to /dev/null, so neither this process nor Python's exit reports it."""
     try:
-        return _COMMANDS[args.command](args)
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):   # no real file descriptor (captured in tests)
+        pass
+
+
+def main(argv=None) -> int:
+    """Run the console script; returns the exit status.
+
+    0 on success; 1 on a reported error (one line on stderr naming the culprit, never a
+    traceback); 2 on a usage error (argparse); 130 when interrupted; 141 (128 + SIGPIPE,
+    as the shell's own tools) when the reader of stdout closed it early, quietly.
+    """
+    args = _parser().parse_args(argv)
+    where = f"bondcosim {args.command}"
+    try:
+        status = _COMMANDS[args.command](args)
+        sys.stdout.flush()   # a closed pipe shows here, not at interpreter exit
+        return status
+    except BrokenPipeError:
+        _quiet_stdout()
+        return 141
     except BondcosimError as exc:
-        print(f"bondcosim {args.command}: error: {exc}", file=sys.stderr)
+        print(f"{where}: error: {_one_line(exc)}", file=sys.stderr)
         return 1
-    except OSError as exc:
-        print(f"bondcosim {args.command}: error: {exc}", file=sys.stderr)
+    except OSError as exc:   # a file we were asked to read or write
+        print(f"{where}: error: {_one_line(exc)}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"{where}: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # noqa: BLE001 -- the last line of defence: one line, never a traceback
+        print(f"{where}: internal error: {type(exc).__name__}: {_one_line(exc)} "
+              "(please report it with the command line)", file=sys.stderr)
         return 1
 
 

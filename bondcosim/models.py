@@ -4,7 +4,7 @@ from __future__ import annotations
 import importlib.util
 from pathlib import Path
 
-from bondgraph.errors import GraphError
+from bondgraph.errors import GraphError, MissingFileError
 from bondgraph.graph import BondGraph
 
 __all__ = ["load_model"]
@@ -25,12 +25,12 @@ def load_model(spec: str) -> BondGraph:
     path = Path(spec)
     if path.suffix == ".json":
         if not path.is_file():
-            raise GraphError(f"model file {spec!r} does not exist")
+            raise MissingFileError(f"model file {spec!r} does not exist", path=spec)
         from bondgraph.io_json import load
         return load(path)
     if path.suffix == ".py":
         if not path.is_file():
-            raise GraphError(f"model file {spec!r} does not exist")
+            raise MissingFileError(f"model file {spec!r} does not exist", path=spec)
         module_spec = importlib.util.spec_from_file_location(f"bondcosim_user_model_{path.stem}", path)
         module = importlib.util.module_from_spec(module_spec)
         try:

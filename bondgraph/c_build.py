@@ -113,8 +113,9 @@ def _equations_key(eqs, part: str, compiler: str) -> str:
     for field in ("t", "step"):
         parts.append(sp.srepr(getattr(eqs, field)))
     for field in ("states", "inputs", "params", "algebraic", "held",
-                  "f", "h", "residuals", "held_update"):
+                  "f", "h", "residuals", "held_update", "f_short", "h_short", "held_update_short"):
         parts.append("|".join(sp.srepr(e) for e in getattr(eqs, field)))
+    parts.append("|".join(f"{sp.srepr(s)}={sp.srepr(e)}" for s, e in eqs.assignments))
     return hashlib.sha256("\0".join(parts).encode()).hexdigest()
 
 

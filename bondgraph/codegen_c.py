@@ -64,8 +64,10 @@ the number of rows stopped by a Newton failure (their ``status``).
 
 Code shape
 ----------
-Expressions go through :func:`sympy.cse`; temporaries are ``const double``
-locals.  A block with more than :data:`SPLIT_STATEMENTS` statements is split
+``f``, ``h`` and ``held_update`` are generated from the model's ordered causal
+assignments (:attr:`~bondgraph.system.StateEquations.assignments`), each a
+``const double`` local computed once; every block then goes through
+:func:`sympy.cse`, whose temporaries are ``const double`` locals too.  A block with more than :data:`SPLIT_STATEMENTS` statements is split
 into several ``noinline`` functions sharing a scratch array (compile time of
 one huge function grows super-linearly).  The compiler flags (:data:`CFLAGS`)
 are explained in :mod:`bondgraph.c_build`.
@@ -78,7 +80,8 @@ import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
 from .codegen_c_templates import BATCH_HEAD, newton_source, rk4_source
-from .errors import CompilationError
+from .derivatives import NotDifferentiable, diff_almost_everywhere
+from .errors import ArgumentError, CompilationError
 
 __all__ = ["generate_source", "jacobian_entries", "prepare_expression", "symbol_names",
            "SPLIT_STATEMENTS", "PARTS", "GENERATOR_VERSION"]
@@ -94,7 +97,7 @@ PARTS = {
 _ROW_ARGS = ("double t, const double *x, const double *u, const double *z, "
              "const double *d, const double *p, double step")
 _ROW_CALL = "t, x, u, z, d, p, step"
-GENERATOR_VERSION = "bondcosim-codegen-c 1"
+GENERATOR_VERSION = "bondcosim-codegen-c 2"
 
 
 class _Printer(C99CodePrinter):
@@ -148,9 +151,38 @@ def symbol_names(eqs) -> dict:
 
 # -- blocks of assignments ---------------------------------------------------
 
-def _emit_block(fname: str, targets: list, printer: _Printer, n_out: int) -> list[str]:
+def _statements(targets: list, prelude) -> tuple[list, list]:
+    """cse over `targets` (and the `prelude` assignments they need): returns
+    ``(statements, reduced)``, the temporaries and assignments as ``(symbol,
+    expr)`` in an evaluation order, and each target over them."""
+    from graphlib import TopologicalSorter
+
+    bodies = dict(prelude)
+    needed, stack = [], [s for _, e in targets for s in sp.sympify(e).free_symbols if s in bodies]
+    while stack:
+        s = stack.pop()
+        if s not in needed:
+            needed.append(s)
+            stack += [d for d in bodies[s].free_symbols if d in bodies]
+    pre = [(s, e) for s, e in prelude if s in needed]
+    exprs = [prepare_expression(e) for _, e in pre] + [prepare_expression(e) for _, e in targets]
+    used = set().union(*(e.free_symbols for e in exprs))
+    temps = sp.numbered_symbols("w", exclude=used)
+    replacements, reduced = sp.cse(exprs, symbols=temps, order="none")
+    if not pre:
+        return list(replacements), reduced
+    statements = dict(replacements)
+    statements.update(zip((s for s, _ in pre), reduced[:len(pre)]))
+    graph = {s: [d for d in e.free_symbols if d in statements] for s, e in statements.items()}
+    order = TopologicalSorter(graph).static_order()
+    return [(s, statements[s]) for s in order], reduced[len(pre):]
+
+
+def _emit_block(fname: str, targets: list, printer: _Printer, n_out: int, prelude=()) -> list[str]:
     """C lines of a row function ``fname`` writing ``out[k] = expr`` for
-    ``targets = [(k, expr), ...]``; other entries of ``out[:n_out]`` are 0."""
+    ``targets = [(k, expr), ...]``; other entries of ``out[:n_out]`` are 0.
+    `prelude` is ordered ``(symbol, expr)`` assignments the targets may use
+    (the model's causal assignments), each computed once as a local."""
     lines: list[str] = []
     zero = f"  memset(out, 0, sizeof(double) * {n_out});" if n_out > len(targets) else None
     if not targets:
@@ -159,20 +191,18 @@ def _emit_block(fname: str, targets: list, printer: _Printer, n_out: int) -> lis
             lines.append(f"  memset(out, 0, sizeof(double) * {n_out});")
         lines.append("}")
         return lines
-    exprs = [prepare_expression(e) for _, e in targets]
-    used = set().union(*(e.free_symbols for e in exprs))
-    temps = sp.numbered_symbols("w", exclude=used)
-    replacements, reduced = sp.cse(exprs, symbols=temps, order="none")
+    replacements, reduced = _statements(targets, prelude)
     statements = len(replacements) + len(reduced)
+    prelude_names = {s: f"a{i}" for i, (s, _) in enumerate(prelude)}
     if statements <= SPLIT_STATEMENTS:
         # One function, const double locals.
         for sym, _ in replacements:
-            printer._names[sym] = sym.name
+            printer._names[sym] = prelude_names.get(sym, sym.name)
         lines.append(f"static void {fname}({_ROW_ARGS}, double *out) {{")
         if zero:
             lines.append(zero)
         for sym, e in replacements:
-            lines.append(f"  const double {sym.name} = {printer.doprint(e)};")
+            lines.append(f"  const double {printer._names[sym]} = {printer.doprint(e)};")
         for (k, _), e in zip(targets, reduced):
             lines.append(f"  out[{k}] = {printer.doprint(e)};")
         lines.append("}")
@@ -216,40 +246,12 @@ def _batch_function(name: str, row: str, n_out: int, dims: dict) -> list[str]:
     ]
 
 
-_SWITCHES = (sp.sign, sp.Heaviside, sp.floor, sp.ceiling)
-
-
 def _diff_almost_everywhere(expr, var):
-    """:math:`\\partial expr / \\partial var` where every switch is locally constant.
-
-    ``sign``, ``Heaviside``, ``floor`` and ``ceiling`` are frozen as constants
-    and ``Abs(g)`` is differentiated as ``sign(g) g``: the derivative that holds
-    everywhere except on the switching surfaces, which is what a Newton or
-    implicit-solver step needs.  (Plain ``sympy.diff`` leaves ``Derivative(sign(g))``
-    unevaluated when it cannot prove ``g`` finite, and yields ``DiracDelta`` otherwise.)
-    """
-    frozen: dict = {}
-
-    def freeze(node):
-        if isinstance(node, sp.Abs):
-            g = node.args[0]
-            return g * frozen.setdefault(sp.sign(g), sp.Dummy("s"))
-        return frozen.setdefault(node, sp.Dummy("s"))
-
-    work = (expr.replace(lambda a: isinstance(a, (*_SWITCHES, sp.Abs)), freeze)
-            if expr.has(*_SWITCHES, sp.Abs) else expr)
-    de = sp.diff(work, var)
-    back = {d: k for k, d in frozen.items()}
-    for _ in range(len(back) + 1):   # keys may hold other frozen switches (nesting)
-        if not (de.free_symbols & back.keys()):
-            break
-        de = de.xreplace(back)
-    if de.has(sp.DiracDelta):
-        de = de.replace(lambda a: isinstance(a, sp.DiracDelta), lambda a: sp.S.Zero)
-    if de.has(sp.Derivative):
-        raise CompilationError(f"cannot differentiate {expr} with respect to {var}: sympy "
-                               f"leaves {de.atoms(sp.Derivative).pop()} unevaluated")
-    return de
+    """:func:`bondgraph.derivatives.diff_almost_everywhere`, failures as CompilationError."""
+    try:
+        return diff_almost_everywhere(expr, var)
+    except NotDifferentiable as exc:
+        raise CompilationError(str(exc)) from None
 
 
 def jacobian_entries(exprs, wrt) -> list:
@@ -299,15 +301,17 @@ def generate_source(eqs, *, part: str = "main") -> str:
         If `part` is not one of the above.
     """
     if part not in PARTS:
-        raise ValueError(f"part must be one of {', '.join(PARTS)}; found {part!r}")
+        raise ArgumentError(f"part must be one of {', '.join(PARTS)}; found {part!r}")
     printer = _Printer(symbol_names(eqs))
     dims = {"NX": len(eqs.states), "NU": len(eqs.inputs), "NP": len(eqs.params),
             "NZ": len(eqs.algebraic), "ND": len(eqs.held), "NY": len(eqs.h)}
     nx, nz = dims["NX"], dims["NZ"]
+    # f, h and held_update over the causal assignments: each intermediate (a valve's
+    # table, a muscle's force) is computed once instead of once per use
     blocks = {
-        "f": lambda: (list(enumerate(eqs.f)), nx),
-        "h": lambda: (list(enumerate(eqs.h)), dims["NY"]),
-        "held_update": lambda: (list(enumerate(eqs.held_update)), dims["ND"]),
+        "f": lambda: (list(enumerate(eqs.f_short)), nx),
+        "h": lambda: (list(enumerate(eqs.h_short)), dims["NY"]),
+        "held_update": lambda: (list(enumerate(eqs.held_update_short)), dims["ND"]),
         "residuals": lambda: (list(enumerate(eqs.residuals)), nz),
         "jac_rz": lambda: (jacobian_entries(eqs.residuals, eqs.algebraic), nz * nz),
         "jac_fx": lambda: (jacobian_entries(eqs.f, eqs.states), nx * nx),
@@ -323,7 +327,8 @@ def generate_source(eqs, *, part: str = "main") -> str:
     ]
     for name in PARTS[part]:
         targets, n_out = blocks[name]()
-        lines += _emit_block(f"{name}_row", targets, printer, n_out)
+        prelude = eqs.assignments if name in ("f", "h", "held_update") else ()
+        lines += _emit_block(f"{name}_row", targets, printer, n_out, prelude)
         lines += _batch_function(name, f"{name}_row", n_out, dims)
         lines.append("")
     if part == "main":

@@ -46,7 +46,7 @@ from pathlib import Path
 
 from .draw_layout import (_FONT, _Free, _box, _label, _label_spots, _port_spots, _positions,
                           _subscript_spots)
-from .errors import BondcosimError, CausalityError
+from .errors import ArgumentError, BondcosimError, CausalityError
 
 __all__ = ["draw", "draw_geometry", "DrawingGeometry", "ElementGeometry", "BondGeometry", "LAYOUTS"]
 
@@ -212,7 +212,7 @@ def draw(graph, path=None, *, layout="auto", causality=True, ax=None, title=None
     ['stroke:bond1', 'stroke:bond2', 'stroke:bond3', 'stroke:bond4']
     """
     if path is not None and Path(path).suffix.lower() not in _SUFFIXES:
-        raise ValueError(f"cannot save a drawing as {Path(path).name!r}: the file name must end in "
+        raise ArgumentError(f"cannot save a drawing as {Path(path).name!r}: the file name must end in "
                          f"{', '.join(_SUFFIXES)}")
     geometry = draw_geometry(graph, layout=layout, causality=causality)
     title = graph.name if title is None else title
@@ -251,7 +251,7 @@ def draw_geometry(graph, *, layout="auto", causality=True) -> DrawingGeometry:
      ('bond3', 'v_mass', 'b', 'tail'), ('bond4', 'v_mass', 'k', 'tail')]
     """
     if layout not in LAYOUTS:
-        raise ValueError(f"unknown layout {layout!r}; expected one of {', '.join(LAYOUTS)}")
+        raise ArgumentError(f"unknown layout {layout!r}; expected one of {', '.join(LAYOUTS)}")
     assignment, notes, conflicted = _causality(graph, causality)
     derivative = tuple(assignment.derivative) if assignment else ()
     arbitrary = tuple(assignment.arbitrary) if assignment else ()

@@ -27,6 +27,7 @@ import networkx as nx
 import sympy as sp
 from sympy.solvers.solveset import NonlinearError
 
+from .assignments import readable_form
 from .causality import assign_causality
 from .elements.base import PortVars
 from .errors import DerivationError
@@ -45,6 +46,7 @@ def derive(graph: BondGraph) -> StateEquations:
     assignment = assign_causality(graph)
 
     defs: dict[sp.Symbol, sp.Expr] = {}
+    local_symbols: set = set()
     state_decls, derivative_decls, held_decls = [], [], []
     for element in graph.elements.values():
         ports = _port_vars(graph, element, assignment, names)
@@ -53,6 +55,9 @@ def derive(graph: BondGraph) -> StateEquations:
             if var in defs:  # pragma: no cover - SCAP guarantees one setter per variable
                 raise DerivationError(f"{var} is set twice (second time by {element.name})", element=element.name)
             defs[var] = expr
+        for var, expr in contribution.locals:
+            defs[var] = expr
+            local_symbols.add(var)
         state_decls += contribution.states
         derivative_decls += contribution.derivative
         held_decls += contribution.held
@@ -73,8 +78,12 @@ def derive(graph: BondGraph) -> StateEquations:
         rates, stored, solution = _eliminate_dependent(dependent, resolver, x, rates, names, graph)
         resolver.apply(solution)
 
-    outputs, h, out_units, out_desc = _outputs(graph, names, resolver, stored, state_decls)
+    outputs, h, out_units, out_desc, h_raw = _outputs(graph, names, resolver, stored, state_decls)
     held_update = [resolver.substitute(d.update) for d in held_decls]
+    final = {v: resolver.resolved[v] for loop in resolver.loops for v in loop}
+    final.update({d.output: resolver.resolved[d.output] for d in dependent.values()})
+    readable = readable_form(defs, resolver.order, local_symbols, final, names,
+                             [s.rate for s in state_decls], h_raw, [d.update for d in held_decls])
 
     inputs = graph.inputs()
     params = graph.parameters()
@@ -124,7 +133,8 @@ def derive(graph: BondGraph) -> StateEquations:
         input_defaults={i.name: op.get(i.name, i.default) for i in inputs},
         held_initial={d.symbol.name: op.get(d.symbol.name, d.initial) for d in held_decls},
         units=units, descriptions=descriptions, owners=owners, input_functions=input_functions,
-        report=report,
+        report=report, assignments=readable.assignments, f_short=readable.f, h_short=readable.h,
+        held_update_short=readable.held_update,
     )
 
 
@@ -150,6 +160,7 @@ class _Resolver:
         self.residuals: list[sp.Expr] = []
         self.loops: list[list[sp.Symbol]] = []
         self.loop_linear: list[bool] = []
+        self.order: list[sp.Symbol] = []   # every variable, dependencies first
         self.deps = {v: [s for s in e.free_symbols if s in defs] for v, e in defs.items()}
 
     def _resolve_one(self, var, table):
@@ -168,6 +179,7 @@ class _Resolver:
                 (var,) = members
                 if var not in self.deps[var]:
                     self.resolved[var] = self._resolve_one(var, self.resolved)
+                    self.order.append(var)
                     continue
             self._solve_loop(graph.subgraph(members).copy())
 
@@ -180,6 +192,7 @@ class _Resolver:
             tears.append(var)
             loop.remove_node(var)
         order = list(nx.topological_sort(loop))
+        self.order += tears + order
         table = dict(self.resolved)
         table.update({t: t for t in tears})
         for var in order:
@@ -286,13 +299,14 @@ def _bonds_of(variables) -> tuple[str, ...]:
 def _outputs(graph, names, resolver, stored, state_decls):
     if not graph.outputs:
         outs = [s.symbol.name for s in state_decls]
-        return outs, [s.symbol for s in state_decls], {}, {}
+        return outs, [s.symbol for s in state_decls], {}, {}, [s.symbol for s in state_decls]
     table = dict(names)
-    outs, h, units, desc = [], [], {}, {}
+    outs, h, units, desc, raw = [], [], {}, {}, []
     dependent_states = {names[k]: v for k, v in stored.items()}
     for out in graph.outputs.values():
         expr = as_expression(out.expression, table, owner=f"output {out.name!r}")
-        expr = resolver.substitute(expr.xreplace(dependent_states))
+        raw.append(expr.xreplace(dependent_states))
+        expr = resolver.substitute(raw[-1])
         outs.append(out.name)
         h.append(expr)
         unit = out.unit
@@ -301,7 +315,7 @@ def _outputs(graph, names, resolver, stored, state_decls):
             unit = match[0].unit if match else ""
         units[out.name] = unit
         desc[out.name] = out.description
-    return outs, h, units, desc
+    return outs, h, units, desc, raw
 
 
 def _check_free_symbols(graph, rates, h, residuals, allowed, state_decls, outputs):

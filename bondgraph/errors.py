@@ -112,6 +112,67 @@ class ParameterError(BondcosimError, ValueError):
         super().__init__(message)
 
 
+class ArgumentError(BondcosimError, ValueError):
+    """A function argument with a wrong value or shape.
+
+    Attributes
+    ----------
+    name : str
+        The offending argument (``"t_span"``, ``"x0"``, ``"output_interval"``...), "" if unknown.
+    """
+
+    def __init__(self, message: str, name: str = ""):
+        self.name = str(name)
+        super().__init__(message)
+
+
+class ArgumentTypeError(BondcosimError, TypeError):
+    """A function argument of the wrong type (``name``: the argument)."""
+
+    def __init__(self, message: str, name: str = ""):
+        self.name = str(name)
+        super().__init__(message)
+
+
+class MissingFileError(BondcosimError, FileNotFoundError):
+    """A file the caller named does not exist (``path``: the file)."""
+
+    def __init__(self, message: str, path: str = ""):
+        self.path = str(path)
+        super().__init__(message)
+
+
+class OutputTooLargeError(BondcosimError, MemoryError):
+    """A result that would not fit in memory, refused before any work.
+
+    Attributes
+    ----------
+    n_samples, n_signals : int
+        Size of the result asked for.
+    n_bytes : int
+        Memory it needs.
+    available : int
+        Memory available for it, bytes.
+    """
+
+    def __init__(self, message: str, *, n_samples: int, n_signals: int, n_bytes: int, available: int):
+        self.n_samples, self.n_signals = int(n_samples), int(n_signals)
+        self.n_bytes, self.available = int(n_bytes), int(available)
+        super().__init__(message)
+
+
+class OptionalDependencyError(BondcosimError, ImportError):
+    """A feature needs a package that is not installed (``package``: its name)."""
+
+    def __init__(self, message: str, package: str = ""):
+        self.package = package
+        super().__init__(message, name=package or None)
+
+
+__all__ += ["ArgumentError", "ArgumentTypeError", "MissingFileError", "OutputTooLargeError",
+            "OptionalDependencyError"]
+
+
 class CausalityError(BondcosimError, ValueError):
     """Causality cannot be assigned: conflicts, named by element and bond.
 
@@ -186,6 +247,22 @@ class UnknownNameError(BondcosimError, ValueError):
         where = f" of model {model!r}" if model else ""
         super().__init__(f"unknown {kind} {name!r}{where}; known {kind}s are "
                          f"{', '.join(self.known) or '(none)'}")
+
+
+class UnknownSignalError(UnknownNameError, KeyError):
+    """A signal name a result does not have (``result["nope"]``): an
+    :class:`UnknownNameError` and a ``KeyError``, as mapping lookups raise."""
+
+    def __init__(self, name: str, known, message: str | None = None):
+        super().__init__("signal", name, known)
+        if message:
+            self.args = (message,)
+
+    def __str__(self) -> str:   # KeyError would quote the message
+        return Exception.__str__(self)
+
+
+__all__ += ["UnknownSignalError"]
 
 
 class FMUError(BondcosimError, RuntimeError):

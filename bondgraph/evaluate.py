@@ -40,7 +40,7 @@ import sympy as sp
 
 from .c_build import find_compiler
 from .codegen_c_templates import NEWTON_STATUS
-from .errors import ExpressionError, ParameterError, SimulationError
+from .errors import ArgumentError, ExpressionError, ParameterError, SimulationError
 from .evaluate_c import CKernels
 from .evaluate_numpy import NumpyKernels, select_rows
 from .system import StateEquations
@@ -94,7 +94,7 @@ def compile_model(eqs, *, backend: str = "auto") -> "CompiledModel":
     if not isinstance(eqs, StateEquations):
         eqs = eqs.equations()
     if backend not in BACKENDS:
-        raise ValueError(f"backend must be one of {', '.join(map(repr, BACKENDS))}; found {backend!r}")
+        raise ArgumentError(f"backend must be one of {', '.join(map(repr, BACKENDS))}; found {backend!r}")
     if backend == "auto":
         backend = "c" if find_compiler() else "numpy"
     per_eqs = _KERNEL_CACHE.setdefault(eqs, {})
@@ -221,7 +221,7 @@ class CompiledModel:
             return np.ascontiguousarray(a.reshape(1, width))
         if a.ndim == 2 and a.shape[1] == width and a.shape[0] in (1, n):
             return np.ascontiguousarray(a)
-        raise ValueError(f"{what}: expected shape ({width},) or ({n}, {width}) for a batch of "
+        raise ArgumentError(f"{what}: expected shape ({width},) or ({n}, {width}) for a batch of "
                          f"{n}; found {a.shape}")
 
     def param_vector(self, p=None, *, n_batch: int = 1) -> np.ndarray:
@@ -270,7 +270,7 @@ class CompiledModel:
         elif x.ndim == 2 and x.shape[1] == nx:
             single = False
         else:
-            raise ValueError(f"x: expected shape ({nx},) or (n_batch, {nx}) (states "
+            raise ArgumentError(f"x: expected shape ({nx},) or (n_batch, {nx}) (states "
                              f"{', '.join(self.state_names)}); found {x.shape}")
         x = np.ascontiguousarray(x)
         n = x.shape[0]
@@ -282,7 +282,7 @@ class CompiledModel:
         else:
             t = np.ascontiguousarray(t, dtype=float).reshape(-1)
             if t.shape[0] not in (1, n):
-                raise ValueError(f"t: expected a float or shape ({n},); found {t.shape}")
+                raise ArgumentError(f"t: expected a float or shape ({n},); found {t.shape}")
         return single, x, u, t, p, d
 
     # -- algebraic loops -------------------------------------------------------------
@@ -397,7 +397,7 @@ class CompiledModel:
             Newton's method failed on an algebraic loop.
         """
         if not (float(h) > 0.0) or int(substeps) != substeps or substeps < 1:
-            raise ValueError(f"rk4_step: need h > 0 and an integer substeps >= 1; found h={h!r}, "
+            raise ArgumentError(f"rk4_step: need h > 0 and an integer substeps >= 1; found h={h!r}, "
                              f"substeps={substeps!r}")
         single, x, u, _, p, d = self._normalise(x, u, t0, p, d)
         x = x.copy()
@@ -480,7 +480,7 @@ class CompiledModel:
         ndarray, shape (n_batch, n_algebraic) or (n_algebraic,)
         """
         if z is None:
-            raise ValueError("residuals: z is required")
+            raise ArgumentError("residuals: z is required")
         return self._kernel("residuals", x, u, t, p, d, z)
 
     def solve_algebraic(self, x, u=None, *, t=0.0, p=None, d=None, z0=None) -> np.ndarray:

@@ -345,6 +345,20 @@ class BondGraph:
         from .draw import draw
         return draw(self, path, **kwargs)
 
+    def _repr_svg_(self) -> str:
+        """The drawing as SVG text, for notebooks (Jupyter shows a BondGraph as its drawing)."""
+        import io
+
+        import matplotlib.pyplot as plt
+
+        figure = self.draw()
+        try:
+            buffer = io.StringIO()
+            figure.savefig(buffer, format="svg", bbox_inches="tight")
+        finally:
+            plt.close(figure)
+        return buffer.getvalue()
+
     def to_dict(self) -> dict:
         """JSON-ready description (see docs/json-schema.md)."""
         from .io_json import graph_to_dict

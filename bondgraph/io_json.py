@@ -59,7 +59,8 @@ _WHAT = {
 }
 
 _SOURCE = {"value": "expr", "input": "id", "unit": "str", "domain": "domain", "description": "str"}
-_MODULATED = {"expression": "expr", "params": "params", "unit": "str", "domain": "domain", "description": "str"}
+_MODULATED = {"expression": "expr", "params": "params", "unit": "str", "domain": "domain", "locals": "map:expr",
+              "description": "str"}
 _STORAGE = {"value": "num", "law": "expr", "params": "params", "state": "id", "initial": "num",
             "domain": "domain", "unit": "str", "description": "str"}
 _FIELD = {"ports": "portlist", "laws": "map:expr", "energy": "expr", "params": "params", "initial": "map:num",
@@ -81,7 +82,7 @@ ELEMENT_KEYS: dict[str, dict[str, str]] = {
     "CField": _FIELD, "IField": _FIELD,
     "Eq": {"ports": "portdirs", "outputs": "map:expr", "states": "map:expr", "initial": "map:num",
            "units": "map:str", "held": "map:expr", "fixed_step": "pos", "params": "params",
-           "descriptions": "map:str", "description": "str"},
+           "descriptions": "map:str", "locals": "map:expr", "description": "str"},
 }
 
 # Top-level key -> type tag (None: checked by _check_header), and the keys a file must have.

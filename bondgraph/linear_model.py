@@ -14,7 +14,7 @@ from typing import Mapping
 
 import numpy as np
 
-from .errors import ParameterError
+from .errors import ArgumentError, ParameterError
 
 __all__ = ["LinearModel", "EQUILIBRIUM_ATOL"]
 
@@ -28,7 +28,7 @@ def _frozen_array(value, shape, what: str) -> np.ndarray:
     arr = np.array(value, dtype=float)
     if arr.shape != shape:
         if arr.size or math.prod(shape):  # JSON turns an empty (0, m) matrix into []
-            raise ValueError(f"{what}: expected shape {shape} but found {arr.shape}")
+            raise ArgumentError(f"{what}: expected shape {shape} but found {arr.shape}")
         arr = arr.reshape(shape)
     arr.flags.writeable = False
     return arr
@@ -75,6 +75,13 @@ class LinearModel:
         :math:`\\lVert \\dot x_0 \\rVert_2` (mixed SI units).
     equilibrium_atol : float
         Tolerance on `equilibrium_residual` used by :attr:`is_equilibrium`.
+    derivatives : mapping str -> str
+        How each state's and input's column was obtained: ``"symbolic"`` or
+        ``"one-sided numerical (right, step ...)"`` (see
+        :func:`bondgraph.linearization.linearize`).  Empty when not known.
+    kinks : tuple of str
+        Switches of the model on their switching surface at the point (where
+        the symbolic derivative does not apply).
     """
 
     name: str
@@ -93,6 +100,8 @@ class LinearModel:
     y: np.ndarray | None = None
     equilibrium_residual: float = 0.0
     equilibrium_atol: float = EQUILIBRIUM_ATOL
+    derivatives: Mapping = field(default_factory=dict)
+    kinks: tuple = ()
 
     def __post_init__(self):
         for name in ("states", "inputs", "outputs"):
@@ -103,7 +112,8 @@ class LinearModel:
             value = getattr(self, attr)
             value = np.zeros(shape) if value is None else value
             object.__setattr__(self, attr, _frozen_array(value, shape, f"LinearModel {self.name!r}: {attr}"))
-        for attr in ("units", "operating_point", "params"):
+        object.__setattr__(self, "kinks", tuple(str(k) for k in self.kinks))
+        for attr in ("units", "operating_point", "params", "derivatives"):
             object.__setattr__(self, attr, MappingProxyType(dict(getattr(self, attr) or {})))
         object.__setattr__(self, "t", float(self.t))
         object.__setattr__(self, "equilibrium_residual", float(self.equilibrium_residual))
@@ -251,6 +261,8 @@ class LinearModel:
             "xdot": self.xdot.tolist(), "y": self.y.tolist(),
             "equilibrium_residual": self.equilibrium_residual,
             "equilibrium_atol": self.equilibrium_atol,
+            "derivatives": dict(self.derivatives),
+            "kinks": list(self.kinks),
         }
 
     @classmethod
@@ -281,6 +293,9 @@ class LinearModel:
             + ("" if self.is_equilibrium else
                " (" + ", ".join(f"d{s}/dt = {v:.6g}" for s, v in zip(self.states, self.xdot)) + ")"),
         ]
+        numeric = [k for k, v in self.derivatives.items() if v != "symbolic"]
+        if numeric:
+            lines.append("derivatives: symbolic, except one-sided numerical (right) by " + ", ".join(numeric))
         for label, mat, rows, cols in (("A = d(dx/dt)/dx", self.A, self.states, self.states),
                                        ("B = d(dx/dt)/du", self.B, self.states, self.inputs),
                                        ("C = dy/dx", self.C, self.outputs, self.states),

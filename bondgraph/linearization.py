@@ -11,10 +11,45 @@
     \\delta y = C\\,\\delta x + D\\,\\delta u,
 
 where :math:`\\dot x_0 = f(t, x_0, u_0, z_0, d_0, p)` is zero at an
-equilibrium.  The Jacobians are taken symbolically (``sympy.Matrix.jacobian``,
-no ``simplify``) and evaluated numerically at the point, so no finite
-difference step is involved.  Held (discrete) variables ``d`` are constants
-of the linearisation, and time ``t`` is frozen at the given value.
+equilibrium.  Held (discrete) variables ``d`` are constants of the
+linearisation, and time ``t`` is frozen at the given value.
+
+How each column is obtained (``LinearModel.derivatives`` says which, per
+state and input):
+
+* **symbolic** (default, ``method="auto"``): Jacobians are taken symbolically,
+  switches (``sign``, ``Abs``, ``Heaviside``) frozen as locally constant
+  (:func:`bondgraph.derivatives.diff_almost_everywhere`, no ``simplify``),
+  and evaluated numerically at the point.  This is the derivative wherever
+  the law is differentiable.
+* **one-sided numerical**, for the variables on which a switch sits exactly
+  on its switching surface at the point (``sign(P_1 - P_out)`` with
+  :math:`P_1 = P_{out}`, a clipped valve voltage at 0 V; listed in
+  ``LinearModel.kinks``), or whose symbolic derivative is not finite there
+  (:math:`\\sqrt{|h_1 - h_2|}` at equal levels): the right-sided
+  second-order difference
+
+  .. math::
+
+      \\frac{\\partial F}{\\partial v_j} \\approx
+      \\frac{-3 F(v) + 4 F(v + \\epsilon_j e_j) - F(v + 2 \\epsilon_j e_j)}{2 \\epsilon_j},
+      \\qquad \\epsilon_j = 6\\cdot 10^{-6} \\max(1, |v_j|)
+
+  of :math:`F = (f, h)` (algebraic unknowns re-solved at each point), i.e.
+  the derivative for a small *increase* of the variable (a valve opening, a
+  muscle above atmospheric pressure).  :math:`6\\cdot 10^{-6} \\approx
+  \\epsilon_{mach}^{1/3}` balances the :math:`O(\\epsilon^2)` truncation
+  against rounding.
+  A column whose estimate does not converge (the estimates with steps
+  :math:`\\epsilon_j` and :math:`4\\epsilon_j` differ by more than 0.1 %) has an
+  unbounded one-sided derivative -- the orifice law's
+  :math:`\\sqrt{P - P_{out}}` at zero pressure difference -- and gets the
+  secant :math:`(F(v + \\Delta_j e_j) - F(v))/\\Delta_j` over
+  :math:`\\Delta_j = 10^{-3} \\max(1, |v_j|)` instead, said so in
+  ``derivatives``.  A law that *jumps* at the point (``sign(v)`` at
+  :math:`v = 0`) has no derivative at all: :class:`DerivationError`.
+* ``method="numerical"``: every column that way; ``method="symbolic"``:
+  never (a non-finite derivative is an error).
 
 Algebraic unknowns ``z`` defined implicitly by :math:`0 = r(t, x, u, z, d, p)`
 are first solved numerically at the point; their sensitivities follow from
@@ -45,8 +80,10 @@ from typing import Mapping
 import numpy as np
 import sympy as sp
 
-from .errors import DerivationError, ParameterError, SimulationError
+from .derivatives import NotDifferentiable, diff_almost_everywhere
+from .errors import DerivationError, ParameterError
 from .linear_model import EQUILIBRIUM_ATOL, LinearModel
+from .linearization_numeric import kinks_at, not_finite_columns, one_sided_column, set_column, solve_algebraic
 from .system import StateEquations
 
 __all__ = ["linearize", "LinearModel"]
@@ -54,11 +91,6 @@ __all__ = ["linearize", "LinearModel"]
 
 # Symbolic Jacobians, compiled once per StateEquations
 # ---------------------------------------------------------------------------
-def _dirac_at_point(arg, *order):
-    # d/dx sign(x) = 2 DiracDelta(x): zero away from the kink, undefined on it.
-    return sp.Piecewise((sp.nan, sp.Eq(arg, 0)), (0, True))
-
-
 class _Jacobians:
     """Lambdified f, h, r and their Jacobians w.r.t. x, u, z of one StateEquations."""
 
@@ -87,13 +119,18 @@ class _Jacobians:
         for (kind, names, _), M in zip(groups, (F, H, R)):
             for wrt, syms, wrt_names in (("x", X, eqs.state_names), ("u", U, eqs.input_names),
                                          ("z", Z, tuple(z.name for z in eqs.algebraic))):
-                J = M.jacobian(syms) if len(M) and syms else sp.zeros(len(M), len(syms))
-                J = J.replace(sp.DiracDelta, _dirac_at_point)
-                for (a, b), entry in np.ndenumerate(np.array(J, dtype=object).reshape(J.shape)):
-                    if entry.has(sp.Derivative, sp.Subs):
-                        raise DerivationError(
-                            f"{eqs.name}: {kind}[{names[a]}] has no symbolic derivative with respect "
-                            f"to {wrt_names[b]} ({entry}); rewrite it with differentiable functions")
+                J = sp.zeros(len(M), len(syms))
+                for a in range(len(M)):
+                    present = M[a].free_symbols
+                    for b, s in enumerate(syms):
+                        if s not in present:
+                            continue
+                        try:   # the derivative off the switching surfaces (see kinks below)
+                            J[a, b] = diff_almost_everywhere(M[a], s)
+                        except NotDifferentiable:
+                            raise DerivationError(
+                                f"{eqs.name}: {kind}[{names[a]}] has no symbolic derivative with respect "
+                                f"to {wrt_names[b]}; rewrite it with differentiable functions") from None
                 jac[kind + "_" + wrt] = J
         self.all = _compile(self.args, {"f": F, "h": H, "r": R, **jac})
         self.residual = _compile(self.args, {"r": R, "r_z": jac["r_z"]})
@@ -187,49 +224,12 @@ def _resolve(eqs: StateEquations, operating_point, params, t: float):
     return {n: float(v) for n, v in values.items()}, {n: float(v) for n, v in param_values.items()}
 
 
-def _solve_algebraic(eqs: StateEquations, jac: _Jacobians, vector: np.ndarray, sl: slice) -> None:
-    """Solve 0 = r(..., z, ...) for z in place (MINPACK hybrd, then Newton polish)."""
-    from scipy.optimize import root
-
-    def fun(z):
-        vector[sl] = z
-        return jac.residual(vector)["r"].reshape(-1).real
-
-    def fjac(z):
-        vector[sl] = z
-        return jac.residual(vector)["r_z"].real
-
-    guess = vector[sl].copy()
-    r0 = fun(guess)
-    with np.errstate(all="ignore"):
-        sol = root(fun, guess, jac=fjac, method="hybr", options={"xtol": 1e-13})
-    z = sol.x
-    for _ in range(3):  # Newton polish: z <- z - r_z^{-1} r, kept only while |r| falls
-        r = fun(z)
-        try:
-            step = np.linalg.solve(fjac(z), r)
-        except np.linalg.LinAlgError:
-            break
-        if not np.all(np.isfinite(step)) or np.linalg.norm(fun(z - step)) >= np.linalg.norm(r):
-            break
-        z = z - step
-    r = fun(z)
-    tol = 1e-9 * (1.0 + np.max(np.abs(r0), initial=0.0)) if np.all(np.isfinite(r0)) else 1e-9
-    if not np.all(np.isfinite(r)) or np.max(np.abs(r)) > tol:
-        names = ", ".join(s.name for s in eqs.algebraic)
-        raise SimulationError(
-            f"{eqs.name}: cannot solve the algebraic loop for {names} at the operating point "
-            f"(residuals {np.array2string(r, precision=3)} from guess {np.array2string(guess)}; "
-            f"solver: {sol.message.strip()}); give a better guess for {names} in operating_point")
-    vector[sl] = z
-
-
 # ---------------------------------------------------------------------------
 # Public entry point
 # ---------------------------------------------------------------------------
 def linearize(eqs: StateEquations, operating_point: Mapping[str, float] | None = None, *,
               params: Mapping[str, float] | None = None, t: float = 0.0,
-              equilibrium_atol: float = EQUILIBRIUM_ATOL) -> LinearModel:
+              equilibrium_atol: float = EQUILIBRIUM_ATOL, method: str = "auto") -> LinearModel:
     """Linearise state equations at an operating point (see the module docstring for the equations).
 
     Parameters
@@ -248,6 +248,10 @@ def linearize(eqs: StateEquations, operating_point: Mapping[str, float] | None =
         Time at which a time-varying model is frozen (default 0).
     equilibrium_atol : float, optional
         Tolerance on :math:`\\lVert f \\rVert_2` for :attr:`LinearModel.is_equilibrium`.
+    method : {"auto", "symbolic", "numerical"}
+        How the columns of A-D are obtained (module docstring): ``"auto"``
+        symbolic where the model is differentiable at the point, one-sided
+        numerical for the variables where it is not.
 
     Returns
     -------
@@ -286,6 +290,9 @@ def linearize(eqs: StateEquations, operating_point: Mapping[str, float] | None =
         raise ParameterError(f"linearize expects StateEquations, got {type(eqs).__name__}", name="eqs")
     if _number(t) is None:
         raise ParameterError(f"t must be a finite time in s, got {t!r}", name="t")
+    if method not in METHODS:
+        raise ParameterError(f"method must be one of {', '.join(map(repr, METHODS))}; found {method!r}",
+                             name="method")
     values, param_values = _resolve(eqs, operating_point, params, float(t))
     jac = _jacobians(eqs)
 
@@ -296,14 +303,21 @@ def linearize(eqs: StateEquations, operating_point: Mapping[str, float] | None =
     nx, nu, nz = len(eqs.states), len(eqs.inputs), len(eqs.algebraic)
     z_slice = slice(1 + nx + nu, 1 + nx + nu + nz)
     if nz:
-        _solve_algebraic(eqs, jac, vector, z_slice)
+        solve_algebraic(eqs, jac, vector, z_slice)
         values.update(zip((z.name for z in eqs.algebraic), vector[z_slice]))
     m = jac.all(vector)
-    _check_finite(eqs, m)
+    columns = [*eqs.state_names, *eqs.input_names]
+    found = kinks_at(eqs, vector) if method == "auto" else []
+    numeric = set(columns) if method == "numerical" else {s.name for k in found for s in k.symbols} & set(columns)
+    if method == "auto":
+        numeric |= not_finite_columns(eqs, m) & set(columns)
+        if nz and numeric:
+            numeric = set(columns)   # a one-sided step re-solves z, so do every column alike
+    _check_finite(eqs, m, skip=numeric if method != "symbolic" else set(), values_only=method == "numerical")
     m = {k: v.real for k, v in m.items()}
 
     A, B, C, D = m["f_x"], m["f_u"], m["h_x"], m["h_u"]
-    if nz:
+    if nz and len(numeric) < len(columns):
         # Implicit-function theorem [2]: dz/d[x u] = -r_z^{-1} [r_x r_u], by a solve.
         r_z = m["r_z"]
         if np.linalg.cond(r_z) > 1.0 / np.finfo(float).eps:
@@ -315,6 +329,20 @@ def linearize(eqs: StateEquations, operating_point: Mapping[str, float] | None =
         dz_dx, dz_du = dz[:, :nx], dz[:, nx:]
         A, B = A + m["f_z"] @ dz_dx, B + m["f_z"] @ dz_du
         C, D = C + m["h_z"] @ dz_dx, D + m["h_z"] @ dz_du
+    derivatives = {}
+    for j, name in enumerate(columns):
+        if name not in numeric:
+            derivatives[name] = "symbolic"
+            continue
+        col, how = one_sided_column(eqs, jac, vector, 1 + j, z_slice)
+        if not nz:   # rows that do not contain the variable have an exact zero (no difference noise)
+            symbol = (*eqs.states, *eqs.inputs)[j]
+            col = np.where([symbol in e.free_symbols for e in (*eqs.f, *eqs.h)], col, 0.0)
+        if j < nx:
+            A, C = set_column(A, j, col[:nx]), set_column(C, j, col[nx:])
+        else:
+            B, D = set_column(B, j - nx, col[:nx]), set_column(D, j - nx, col[nx:])
+        derivatives[name] = how
 
     xdot = m["f"].reshape(-1)
     everything = (*eqs.state_names, *eqs.input_names, *eqs.outputs, *eqs.held_names,
@@ -325,18 +353,26 @@ def linearize(eqs: StateEquations, operating_point: Mapping[str, float] | None =
         units={n: eqs.units.get(n, "") for n in everything},
         operating_point=values, t=float(t), params=param_values,
         xdot=xdot, y=m["h"].reshape(-1),
-        equilibrium_residual=float(np.linalg.norm(xdot)), equilibrium_atol=float(equilibrium_atol))
+        equilibrium_residual=float(np.linalg.norm(xdot)), equilibrium_atol=float(equilibrium_atol),
+        derivatives=derivatives, kinks=tuple(str(k) for k in found))
 
 
-def _check_finite(eqs: StateEquations, m: dict) -> None:
-    """Every value and derivative at the point must be a finite real number."""
+#: Accepted values of ``linearize(method=...)``.
+METHODS = ("auto", "symbolic", "numerical")
+def _check_finite(eqs: StateEquations, m: dict, *, skip=frozenset(), values_only: bool = False) -> None:
+    """Every value and derivative at the point must be a finite real number
+    (except derivatives by the variables in `skip`, or all when `values_only`)."""
     row_names = {"f": eqs.state_names, "h": eqs.outputs, "r": tuple(z.name for z in eqs.algebraic)}
     col_names = {"x": eqs.state_names, "u": eqs.input_names, "z": tuple(z.name for z in eqs.algebraic)}
     bad = []
     for key, value in m.items():
         kind, _, wrt = key.partition("_")
+        if wrt and values_only:
+            continue
         for (a, b), v in np.ndenumerate(value):
             if np.isfinite(v) and abs(v.imag) <= 1e-12 * max(1.0, abs(v.real)):
+                continue
+            if wrt and col_names[wrt][b] in skip:
                 continue
             what = f"{kind}[{row_names[kind][a]}]"
             if wrt:

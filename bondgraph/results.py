@@ -25,6 +25,8 @@ from typing import Mapping
 
 import numpy as np
 
+from .errors import ArgumentError, UnknownSignalError
+
 __all__ = ["SimulationResult", "KINDS"]
 
 #: Signal kinds a result may hold, in the order they are listed.
@@ -73,15 +75,15 @@ class SimulationResult:
                  kinds: Mapping | None = None, info: Mapping | None = None):
         t = np.array(t, dtype=float).reshape(-1)
         if t.size > 1 and np.any(np.diff(t) < 0):
-            raise ValueError("t: time points must be non-decreasing")
+            raise ArgumentError("t: time points must be non-decreasing")
         t.flags.writeable = False
         data = {}
         for name, values in signals.items():
             if not isinstance(name, str) or not name:
-                raise ValueError(f"signal names must be non-empty strings; found {name!r}")
+                raise ArgumentError(f"signal names must be non-empty strings; found {name!r}")
             a = np.array(values, dtype=float).reshape(-1)
             if a.shape != t.shape:
-                raise ValueError(f"signal {name!r}: expected shape {t.shape} (one value per time "
+                raise ArgumentError(f"signal {name!r}: expected shape {t.shape} (one value per time "
                                  f"point); found {np.shape(values)}")
             a.flags.writeable = False
             data[name] = a
@@ -89,11 +91,11 @@ class SimulationResult:
         for label, mapping in (("units", units), ("kinds", kinds)):
             extra = sorted(set(mapping) - set(data))
             if extra:
-                raise ValueError(f"{label} given for unknown signal(s) {', '.join(extra)}; "
+                raise ArgumentError(f"{label} given for unknown signal(s) {', '.join(extra)}; "
                                  f"signals are {', '.join(data)}")
         bad = sorted(k for k, v in kinds.items() if v not in KINDS)
         if bad:
-            raise ValueError(f"kind of {', '.join(bad)} must be one of {', '.join(KINDS)}")
+            raise ArgumentError(f"kind of {', '.join(bad)} must be one of {', '.join(KINDS)}")
         object.__setattr__(self, "_t", t)
         object.__setattr__(self, "_data", data)
         object.__setattr__(self, "_units", MappingProxyType({k: str(units.get(k, "")) for k in data}))
@@ -123,7 +125,7 @@ class SimulationResult:
     def names_of(self, kind: str) -> tuple[str, ...]:
         """Names of the signals of one kind (``"state"``, ``"output"``...)."""
         if kind not in KINDS:
-            raise ValueError(f"kind must be one of {', '.join(KINDS)}; found {kind!r}")
+            raise ArgumentError(f"kind must be one of {', '.join(KINDS)}; found {kind!r}")
         return tuple(n for n, k in self._kinds.items() if k == kind)
 
     def __getitem__(self, name: str) -> np.ndarray:
@@ -131,8 +133,9 @@ class SimulationResult:
         try:
             return self._data[name]
         except (KeyError, TypeError):
-            raise KeyError(f"no signal {name!r}; signals are {', '.join(self._data) or '(none)'}"
-                           " (time is .t)") from None
+            raise UnknownSignalError(name, list(self._data),
+                                     f"no signal {name!r}; signals are {', '.join(self._data) or '(none)'}"
+                                     " (time is .t)") from None
 
     def __contains__(self, name) -> bool:
         return name in self._data
@@ -184,7 +187,7 @@ class SimulationResult:
         with open(path, newline="") as fh:
             header = next(csv.reader(fh), None)
             if not header:
-                raise ValueError(f"{path}: empty file, expected a header row 'time [s],name [unit],...'")
+                raise ArgumentError(f"{path}: empty file, expected a header row 'time [s],name [unit],...'")
             names, units = [], {}
             for cell in header:
                 m = _HEADER.match(cell.strip())
@@ -192,22 +195,32 @@ class SimulationResult:
                 names.append(name)
                 units[name] = unit
             if names[0] != "time" or units[names[0]] not in ("s", ""):
-                raise ValueError(f"{path}: first column must be 'time [s]'; found {header[0]!r}")
+                raise ArgumentError(f"{path}: first column must be 'time [s]'; found {header[0]!r}")
             dup = sorted({n for n in names if names.count(n) > 1})
             if dup:
-                raise ValueError(f"{path}: repeated column name(s) {', '.join(dup)}")
+                raise ArgumentError(f"{path}: repeated column name(s) {', '.join(dup)}")
             try:
                 table = np.loadtxt(fh, delimiter=",", ndmin=2)
             except ValueError as exc:
-                raise ValueError(f"{path}: cannot read the values: {exc}") from None
+                raise ArgumentError(f"{path}: cannot read the values: {exc}") from None
         if table.size == 0:
             table = np.empty((0, len(names)))
         if table.shape[1] != len(names):
-            raise ValueError(f"{path}: header has {len(names)} columns but rows have {table.shape[1]}")
+            raise ArgumentError(f"{path}: header has {len(names)} columns but rows have {table.shape[1]}")
         signals = {n: table[:, i + 1] for i, n in enumerate(names[1:])}
         return cls(table[:, 0], signals, units={n: units[n] for n in names[1:]})
 
     # -- plot --------------------------------------------------------------------
+    def to_pandas(self):
+        """A ``pandas.DataFrame`` (index ``t``, s) with units in ``attrs`` (see :func:`bondgraph.results_export.to_pandas`)."""
+        from .results_export import to_pandas
+        return to_pandas(self)
+
+    def to_xarray(self):
+        """An ``xarray.Dataset`` with a ``units`` attribute per variable (see :func:`bondgraph.results_export.to_xarray`)."""
+        from .results_export import to_xarray
+        return to_xarray(self)
+
     def plot(self, names=None, *, ax=None):
         """Plot signals against time, one subplot per unit.
 
@@ -242,7 +255,7 @@ class SimulationResult:
         else:
             axes = list(ax)
             if len(axes) != len(groups):
-                raise ValueError(f"ax: expected {len(groups)} Axes (one per unit: "
+                raise ArgumentError(f"ax: expected {len(groups)} Axes (one per unit: "
                                  f"{', '.join(u or '-' for u in groups)}); found {len(axes)}")
             fig = axes[0].figure
         for a, (unit, members) in zip(axes, groups.items()):

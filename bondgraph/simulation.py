@@ -51,13 +51,13 @@ from __future__ import annotations
 
 import math
 import numbers
-import sys
-import time as _time
 
 import numpy as np
 import sympy as sp
 
-from .errors import ExpressionError, SimulationError, UnknownNameError
+from .errors import ArgumentError, ExpressionError, SimulationError, UnknownNameError
+from .memory import check_result_size
+from .progress import Progress
 from .evaluate import compile_model
 from .results import SimulationResult
 from .symbols import as_expression
@@ -77,7 +77,7 @@ _MAX_DEFAULT_POINTS = 10000  # cap for non-smooth models
 
 def simulate(system, t_span, *, inputs=None, x0=None, params=None, method="auto", dt=None,
              output_interval=None, backend="auto", rtol=1e-8, atol=1e-10,
-             progress=False, max_nfev: int = 500_000) -> SimulationResult:
+             progress=False, max_nfev: int = 500_000, held0=None) -> SimulationResult:
     """Simulate a model over a time span.
 
     Parameters
@@ -109,6 +109,9 @@ def simulate(system, t_span, *, inputs=None, x0=None, params=None, method="auto"
         Tolerances of the ``solve_ivp`` methods (states in SI units).
     progress : bool
         Print a progress line to stderr.
+    held0 : array_like, shape (n_held,), or dict str -> float, optional
+        Initial held (discrete) values, e.g. to continue a run where an
+        earlier one stopped; default ``held_initial``.
     max_nfev : int
         Budget of right-hand-side evaluations of the ``solve_ivp`` methods
         (about 10 s of work): a solver grinding towards a singularity (a
@@ -131,27 +134,34 @@ def simulate(system, t_span, *, inputs=None, x0=None, params=None, method="auto"
         or an input callable that fails at ``t0``.
     ParameterError
         An unknown parameter name or a non-finite parameter value.
-    ValueError
-        A wrong shape, span, step or method.
+    ArgumentError
+        A wrong shape, span, step or method (a ``ValueError``).
+    OutputTooLargeError
+        The samples asked for would not fit in memory (a ``MemoryError``),
+        raised before any work.
     SimulationError
         Solver failure, non-finite state (named), or an unsolvable algebraic loop.
     """
     eqs = system if isinstance(system, StateEquations) else system.equations()
-    model = compile_model(eqs, backend=backend)
     t0, t1 = _span(t_span)
+    for label, value in (("dt", dt), ("output_interval", output_interval)):
+        if value is not None and not (isinstance(value, numbers.Real) and math.isfinite(value) and value > 0):
+            raise ArgumentError(f"{label}: expected a positive number of seconds; found {value!r}", name=label)
+    if output_interval is not None:   # refuse a result that cannot fit before compiling anything
+        n_signals = 1 + len(eqs.states) + len(eqs.inputs) + len(eqs.outputs) + len(eqs.held)
+        check_result_size(t1 - t0, output_interval, n_signals, what=f"simulation of {eqs.name!r}")
+    model = compile_model(eqs, backend=backend)
     plan = _InputPlan(eqs, inputs, t0)
     x_init = _initial_state(model, x0)
     p = model.param_vector(params)
-    d0 = model.default_held.reshape(1, -1)
+    d0 = _initial_held(model, held0).reshape(1, -1)
     fixed = (not eqs.is_smooth) or method == "RK4"
     if not eqs.is_smooth and method not in ("auto", "RK4"):
-        raise ValueError(f"model {eqs.name!r} is not smooth (held variables or fixed_step="
+        raise ArgumentError(f"model {eqs.name!r} is not smooth (held variables or fixed_step="
                          f"{eqs.fixed_step}); it is integrated with fixed-step 'RK4', so method "
                          f"must be 'auto' or 'RK4'; found {method!r}")
-    for label, value in (("dt", dt), ("output_interval", output_interval)):
-        if value is not None and not (math.isfinite(value) and value > 0):
-            raise ValueError(f"{label}: expected a positive number of seconds; found {value!r}")
-    bar = _Progress(progress, t0, t1, eqs.name)
+    bar = Progress(t1 - t0, fmt=f"simulate {eqs.name}: {{percentage:5.1f}} %  {{desc}}", enabled=progress,
+                   start=t0, value_fmt="t = {:.6g} s")
     try:
         if fixed:
             h_max = min([v for v in (dt, eqs.fixed_step) if v] or [output_interval or (t1 - t0) / _DEFAULT_POINTS])
@@ -176,9 +186,9 @@ def _span(t_span):
     try:
         t0, t1 = (float(v) for v in t_span)
     except (TypeError, ValueError):
-        raise ValueError(f"t_span: expected (t0, t1) in seconds; found {t_span!r}") from None
+        raise ArgumentError(f"t_span: expected (t0, t1) in seconds; found {t_span!r}") from None
     if not (math.isfinite(t0) and math.isfinite(t1) and t1 > t0):
-        raise ValueError(f"t_span: expected finite t0 < t1; found ({t0}, {t1})")
+        raise ArgumentError(f"t_span: expected finite t0 < t1; found ({t0}, {t1})")
     return t0, t1
 
 
@@ -205,12 +215,32 @@ def _initial_state(model, x0):
     else:
         x = np.array(x0, dtype=float)
         if x.shape != (len(names),):
-            raise ValueError(f"x0: expected shape ({len(names)},) (states {', '.join(names)}); "
+            raise ArgumentError(f"x0: expected shape ({len(names)},) (states {', '.join(names)}); "
                              f"found {x.shape}")
     bad = [n for n, v in zip(names, x) if not math.isfinite(v)]
     if bad:
-        raise ValueError(f"x0: non-finite initial value of state(s) {', '.join(bad)}")
+        raise ArgumentError(f"x0: non-finite initial value of state(s) {', '.join(bad)}")
     return x
+
+
+def _initial_held(model, held0):
+    names = model.held_names
+    d = model.default_held.copy()
+    if held0 is None:
+        return d
+    if isinstance(held0, dict):
+        for name, value in held0.items():
+            if name not in names:
+                raise UnknownNameError("held variable", name, names, model.equations.name)
+            d[names.index(name)] = float(value)
+    else:
+        d = np.array(held0, dtype=float)
+        if d.shape != (len(names),):
+            raise ArgumentError(f"held0: expected shape ({len(names)},) (held variables "
+                                f"{', '.join(names) or '(none)'}); found {d.shape}", name="held0")
+    if not np.all(np.isfinite(d)):
+        raise ArgumentError("held0: non-finite initial held value(s)", name="held0")
+    return d
 
 
 class _InputPlan:
@@ -291,12 +321,12 @@ class _InputPlan:
 def _table(name, spec):
     times, values = (np.asarray(v, dtype=float) for v in spec)
     if times.ndim != 1 or times.shape != values.shape or times.size == 0:
-        raise ValueError(f"input {name!r}: a table must be (times, values), two 1-D arrays of "
+        raise ArgumentError(f"input {name!r}: a table must be (times, values), two 1-D arrays of "
                          f"equal length; found shapes {times.shape} and {values.shape}")
     if not (np.isfinite(times).all() and np.isfinite(values).all()):
-        raise ValueError(f"input {name!r}: table contains non-finite numbers")
+        raise ArgumentError(f"input {name!r}: table contains non-finite numbers")
     if np.any(np.diff(times) <= 0):
-        raise ValueError(f"input {name!r}: table times must be strictly increasing")
+        raise ArgumentError(f"input {name!r}: table times must be strictly increasing")
     return times, values
 
 
@@ -347,14 +377,14 @@ def _integrate_smooth(model, plan, x0, p, d, times, method, dt, rtol, atol, bar,
     if method == "auto":
         method, info["stiffness"] = _choose_method(model, plan, x0, p, d, t0, t1 - t0)
     elif isinstance(method, str) and method not in IVP_METHODS:
-        raise ValueError(f"method: expected 'auto', 'RK4' or one of {', '.join(IVP_METHODS)}; "
+        raise ArgumentError(f"method: expected 'auto', 'RK4' or one of {', '.join(IVP_METHODS)}; "
                          f"found {method!r}")
     info["method"] = method if isinstance(method, str) else getattr(method, "__name__", str(method))
     hold = [t0]
     counts = {"nfev": 0, "njev": 0}
 
     def rhs(t, x):
-        bar.update(t)
+        bar.update_to(t)
         _check_finite(model, x, t)
         x2 = np.ascontiguousarray(x, dtype=float).reshape(1, -1)
         dx = model._call("f", np.array([t]), x2, plan.vector(t, hold[0]), p, d)[0]
@@ -402,7 +432,7 @@ def _integrate_fixed(model, plan, x0, d0, p, times, h_max, bar):
     nfev, h = 0, h_max
     for k in range(times.size - 1):
         ta, tb = times[k], times[k + 1]
-        bar.update(ta)
+        bar.update_to(ta)
         u = plan.vector(ta)   # zero-order hold over the output interval
         m = max(1, math.ceil((tb - ta) / h_max - 1e-9))
         h = (tb - ta) / m
@@ -448,31 +478,3 @@ def _assemble(model, plan, times, X, D, p, info):
             signals[key], units[key], kinds[key] = values[:, j], eqs.units.get(name, ""), kind
     info = {"model": eqs.name, **info}
     return SimulationResult(times, signals, units=units, kinds=kinds, info=info)
-
-
-class _Progress:
-    """One self-overwriting line on stderr, at most every 0.2 s."""
-
-    def __init__(self, enabled, t0, t1, name):
-        self.enabled, self.t0, self.span, self.name = enabled, t0, t1 - t0, name
-        self._last = 0.0
-        if enabled:
-            self._write(t0)
-
-    def _write(self, t):
-        pct = 100.0 * min(1.0, max(0.0, (t - self.t0) / self.span))
-        sys.stderr.write(f"\rsimulate {self.name}: {pct:5.1f} %  t = {t:.6g} s")
-        sys.stderr.flush()
-
-    def update(self, t):
-        if self.enabled:
-            now = _time.monotonic()
-            if now - self._last >= 0.2:
-                self._last = now
-                self._write(t)
-
-    def close(self):
-        if self.enabled:
-            self._write(self.t0 + self.span)
-            sys.stderr.write("\n")
-            sys.stderr.flush()

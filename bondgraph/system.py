@@ -31,6 +31,7 @@ from types import MappingProxyType
 from typing import Mapping
 
 import sympy as sp
+from .errors import ArgumentError
 
 __all__ = ["StateEquations", "CausalityReport"]
 
@@ -116,6 +117,16 @@ class StateEquations:
         ``inputs`` so a user may override them.
     report : CausalityReport
         Derivative causality and algebraic loops found.
+    assignments : tuple of (sympy.Symbol, sympy.Expr)
+        Ordered causal assignments: named intermediates (element locals such
+        as ``valve1.alpha``, bond variables such as ``f_m1``), each an
+        expression of states, inputs, parameters, held and algebraic
+        variables and the earlier intermediates (see
+        :mod:`bondgraph.assignments`).  Empty for equations built by hand.
+    f_short, h_short, held_update_short : tuple of sympy.Expr
+        ``f``, ``h`` and ``held_update`` in terms of the assignments:
+        substituting ``assignments`` in reverse order gives the flat forms.
+        Empty tuples mean "same as the flat form".
     """
 
     name: str
@@ -141,22 +152,32 @@ class StateEquations:
     owners: Mapping = field(default_factory=dict)
     input_functions: Mapping = field(default_factory=dict)
     report: CausalityReport = field(default_factory=CausalityReport)
+    assignments: tuple = ()
+    f_short: tuple = ()
+    h_short: tuple = ()
+    held_update_short: tuple = ()
 
     def __post_init__(self):
         for name in ("states", "inputs", "params", "outputs", "f", "h",
                      "algebraic", "residuals", "held", "held_update"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
+        object.__setattr__(self, "assignments", tuple((s, e) for s, e in self.assignments))
+        for name, flat in (("f_short", "f"), ("h_short", "h"), ("held_update_short", "held_update")):
+            value = tuple(getattr(self, name)) or getattr(self, flat)
+            if len(value) != len(getattr(self, flat)):
+                raise ArgumentError(f"{len(value)} {name} expressions for {len(getattr(self, flat))} {flat}")
+            object.__setattr__(self, name, value)
         for name in ("param_values", "initial_state", "input_defaults", "held_initial",
                      "units", "descriptions", "owners", "input_functions"):
             object.__setattr__(self, name, _frozen(getattr(self, name)))
         if len(self.f) != len(self.states):
-            raise ValueError(f"{len(self.f)} right-hand sides for {len(self.states)} states")
+            raise ArgumentError(f"{len(self.f)} right-hand sides for {len(self.states)} states")
         if len(self.h) != len(self.outputs):
-            raise ValueError(f"{len(self.h)} output expressions for {len(self.outputs)} outputs")
+            raise ArgumentError(f"{len(self.h)} output expressions for {len(self.outputs)} outputs")
         if len(self.residuals) != len(self.algebraic):
-            raise ValueError(f"{len(self.residuals)} residuals for {len(self.algebraic)} algebraic unknowns")
+            raise ArgumentError(f"{len(self.residuals)} residuals for {len(self.algebraic)} algebraic unknowns")
         if len(self.held_update) != len(self.held):
-            raise ValueError(f"{len(self.held_update)} updates for {len(self.held)} held variables")
+            raise ArgumentError(f"{len(self.held_update)} updates for {len(self.held)} held variables")
 
     # -- names -------------------------------------------------------------
     @property
@@ -185,15 +206,19 @@ class StateEquations:
         return self.fixed_step is None and not self.held
 
     # -- presentation and analysis -----------------------------------------
-    def pretty(self, *, simplify: bool = False) -> str:
+    def pretty(self, *, simplify: bool = False, flat: bool = False) -> str:
         """The equations as readable text (see :func:`bondgraph.printing.pretty`)."""
         from .printing import pretty
-        return pretty(self, simplify=simplify)
+        return pretty(self, simplify=simplify, flat=flat)
 
-    def latex(self) -> str:
-        """The equations as a LaTeX ``aligned`` block."""
+    def latex(self, *, flat: bool = False) -> str:
+        """The equations as a LaTeX ``aligned`` block (assignments first unless `flat`)."""
         from .printing import latex
-        return latex(self)
+        return latex(self, flat=flat)
+
+    def assignment_names(self) -> tuple[str, ...]:
+        """Names of the ordered intermediates, e.g. ``("valve1.alpha", ...)``."""
+        return tuple(s.name for s, _ in self.assignments)
 
     def to_dict(self) -> dict:
         """JSON-ready summary (names, parameter values, expressions as strings)."""

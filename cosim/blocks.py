@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from bondgraph.errors import CosimError
+from cosim.errors import CosimError
 
 from .component import Port, PythonBlock
 

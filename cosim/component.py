@@ -23,7 +23,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from bondgraph.errors import CosimError
+from cosim.errors import CosimError, PortTypeError
 
 __all__ = ["Port", "Component", "PythonBlock"]
 
@@ -97,7 +97,7 @@ def _as_port(p) -> Port:
         return p
     if isinstance(p, str):
         return Port(p)
-    raise TypeError(f"a port must be a Port or a name (str); found {p!r}")
+    raise PortTypeError(f"a port must be a Port or a name (str); found {p!r}")
 
 
 class PythonBlock:

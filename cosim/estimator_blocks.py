@@ -32,13 +32,13 @@ algebraic loop through the controller), and the block logs exactly what
 References
 ----------
 .. [1] T. Shin, T. Ibayashi, K. Kogiso, "Detailed dynamic model of antagonistic
-   PAM system and its experimental validation", ``shared/seeds/000_e88691151ec17d16.txt``.
+   PAM system and its experimental validation", seed 000 (``docs/references.md``).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from bondgraph.errors import CosimError, UnknownNameError
+from cosim.errors import CosimError, UnknownNameError
 from estimators import UnscentedKalmanFilter
 
 from .component import Port, PythonBlock

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bondgraph.errors import CosimError, FMUError, UnknownNameError
+from cosim.errors import CosimError, FMUError, UnknownNameError
 from fmus.loading import extract_fmu, find_variable, read_fmu, remove_extracted, variable_unit
 
 from .component import Port

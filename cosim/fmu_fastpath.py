@@ -67,7 +67,7 @@ int bc_advance3(void *set, void *step, void *get, void *c,
 @functools.cache
 def _library():
     from bondgraph.c_build import compile_source
-    from bondgraph.errors import CompilationError
+    from cosim.errors import CompilationError
     try:
         lib = ctypes.CDLL(str(compile_source(_SOURCE)))
     except CompilationError:

@@ -32,7 +32,8 @@ import time as _time
 
 import numpy as np
 
-from bondgraph.errors import BondcosimError, CosimError, SimulationError
+from cosim.errors import BondcosimError, CosimError, SimulationError
+from bondgraph.progress import Progress
 from bondgraph.results import SimulationResult
 
 from .component import Component, PythonBlock
@@ -302,6 +303,7 @@ class CoSimulation:
                     is not PythonBlock.advance]
         take = sig.take   # bound method: no per-call dispatch (np.take costs 3x more)
         step, started, t = self.step, [], t0
+        bar = Progress(max(n, 1), fmt="co-simulation [{bar:40}] {percentage:3.0f}%", enabled=show)
         try:
             for c in comps:
                 u, y, _ = views[c.name]
@@ -325,25 +327,16 @@ class CoSimulation:
                     if k < n:   # the last point is only observed
                         for adv in advances:
                             adv(t, step)
-                if show:
-                    _bar(min(k0 + chunk, n), n, t0 + min(k0 + chunk, n) * step)
+                bar.update_to(min(k0 + chunk, n))
         except BondcosimError:
             raise
         except Exception as exc:
             raise SimulationError(f"{_culprit(exc, comps)} raised {type(exc).__name__} at "
                                   f"t = {t:.12g} s: {exc}", time=t) from exc
         finally:
-            if show:
-                sys.stderr.write("\n")
+            bar.close()
             _stop_all(started, sys.exc_info()[0] is not None)
         return log
-
-
-def _bar(k: int, n: int, t: float) -> None:
-    done = int(40 * k / max(n, 1))
-    sys.stderr.write(f"\rco-simulation [{'#' * done}{'.' * (40 - done)}] {100 * k // max(n, 1):3d}% "
-                     f"t = {t:.6g} s")
-    sys.stderr.flush()
 
 
 def _culprit(exc: BaseException, comps) -> str:

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import networkx as nx
 
-from bondgraph.errors import AlgebraicLoopError
+from cosim.errors import AlgebraicLoopError
 
 __all__ = ["port_graph", "algebraic_loops", "execution_plan"]
 

@@ -30,7 +30,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bondgraph.errors import UnknownNameError
 from bondgraph.io_json import graph_from_dict
 
 from .catalogue_common import ParamSpec, add_parameter
@@ -40,8 +39,8 @@ from .catalogue_scales import experiment_times, junction_scales
 from .catalogue_signals import (INPUT_KINDS, OUTPUT_KINDS, build_signal, explain_signal, make_input,
                                 make_output)
 from .catalogue_storage import STORAGE_KINDS, build_storage, explain_storage, make_storage
-from .errors import DiagnosisError
 from .place import Place
+from .errors import DiagnosisError, UnknownNameError
 
 __all__ = ["KINDS", "ParamSpec", "Candidate", "candidates"]
 

@@ -80,7 +80,7 @@ def substitute(text: str, name: str, replacement: str) -> str:
 
 
 #: keys of an element entry holding expressions (strings or maps of strings)
-_EXPRESSION_KEYS = ("expression", "effort", "flow", "law", "modulus", "outputs", "states", "held")
+_EXPRESSION_KEYS = ("expression", "effort", "flow", "law", "modulus", "outputs", "states", "held", "locals")
 
 
 def expression_fields(entry: dict):
@@ -227,9 +227,12 @@ def _adopt_states(data: dict, users: list[dict], u: str) -> str:
         if entry["kind"] in ("MSe", "MSf"):
             name, role = entry["name"], "e" if entry["kind"] == "MSe" else "f"
             expression, desc = entry["expression"], entry.get("description", "")
+            named = entry.get("locals")
             entry.clear()
             entry.update({"kind": "Eq", "name": name, "ports": {"out": "out"},
                           "outputs": {f"{role}_out": expression}, "description": desc})
+            if named:
+                entry["locals"] = named
             _rename_port(data, name)
             return name
     raise DiagnosisError(f"input {u!r} feeds no source, modulated source or equation element that could "

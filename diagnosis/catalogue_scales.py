@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bondgraph.errors import BondcosimError
+from .errors import BondcosimError
 from bondgraph.io_json import graph_from_dict
 
 __all__ = ["Scales", "simulate_expressions", "rms", "pressure_variables"]

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bondgraph.errors import BondcosimError
+from .errors import BondcosimError
 
 from .catalogue_common import ParamSpec, fresh_name, route_input
 

@@ -28,6 +28,7 @@ import numpy as np
 from bondgraph.params import DOMAINS
 
 from .catalogue_common import ParamSpec, fresh_name, junction_domain, junction_elements, junction_units, substitute
+from .errors import DiagnosisError
 
 __all__ = ["STORAGE_KINDS", "make_storage", "build_storage", "explain_storage"]
 
@@ -134,7 +135,7 @@ def _c_law(entry: dict) -> str:
                                                     "unit": entry.pop("unit", ""),
                                                     "description": f"{key} of {name}"}
             return form
-    raise ValueError(f"C {name!r} has neither a law nor a value")  # pragma: no cover - loader guarantees one
+    raise DiagnosisError(f"C {name!r} has neither a law nor a value")  # pragma: no cover - loader guarantees one
 
 
 def explain_storage(cand, values: dict, show) -> str:

@@ -7,9 +7,10 @@ Other diagnosis modules append their own classes here.
 """
 from __future__ import annotations
 
-from bondgraph.errors import BondcosimError, UnknownNameError
+from bondgraph.errors import BondcosimError, SimulationError, UnknownNameError
 
-__all__ = ["DiagnosisError", "UnitError", "RecordingError", "UnknownColumnError"]
+__all__ = ["DiagnosisError", "UnitError", "RecordingError", "UnknownColumnError", "UnknownCaseError",
+           "BondcosimError", "SimulationError", "UnknownNameError"]
 
 
 class DiagnosisError(BondcosimError, ValueError):
@@ -72,3 +73,11 @@ class UnknownColumnError(UnknownNameError, RecordingError):
         why = f" (wanted for {wanted_for})" if wanted_for else ""
         Exception.__init__(self, f"{source}: no column {name!r}{why}; columns are "
                                  f"{', '.join(self.known) or '(none)'}")
+
+
+class UnknownCaseError(DiagnosisError, KeyError):
+    """A diagnosis case, truth-model parameter or element name that does not exist
+    (a ``KeyError`` too, as the lookups it replaces raised)."""
+
+    def __str__(self) -> str:   # KeyError would quote the message
+        return Exception.__str__(self)

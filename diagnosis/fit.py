@@ -25,10 +25,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bondgraph.errors import BondcosimError
 
 from .catalogue_common import ParamSpec
-from .errors import DiagnosisError
+from .errors import BondcosimError, DiagnosisError
 
 __all__ = ["CandidateFit", "fit_candidate", "choose", "noise_floor", "PARAMETER_PRICE", "MIN_SHARE", "MIN_GAIN",
            "TIE"]

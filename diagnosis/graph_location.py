@@ -69,9 +69,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import DiagnosisError
 from .graph_location_graph import augment, junction_unit, report_bond, with_inputs
 from .place import Place
+from .errors import DiagnosisError
 
 __all__ = ["PlaceScore", "candidate_places", "locate_on_graph"]
 
@@ -269,7 +269,7 @@ class _Context:
 
     def simulate_with(self, column: str, values) -> dict | None:
         """Outputs with input `column` replaced by `values` (None if the simulation fails)."""
-        from bondgraph.errors import BondcosimError
+        from diagnosis.errors import BondcosimError
 
         j = self.sim.model.input_index[column]
         saved = self.sim.U[:, j].copy()

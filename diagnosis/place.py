@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from .errors import DiagnosisError
 
 __all__ = ["Place", "PLACE_KINDS"]
 
@@ -35,9 +36,9 @@ class Place:
 
     def __post_init__(self):
         if self.kind not in PLACE_KINDS:
-            raise ValueError(f"place kind {self.kind!r} is not one of {PLACE_KINDS}")
+            raise DiagnosisError(f"place kind {self.kind!r} is not one of {PLACE_KINDS}")
         if not isinstance(self.name, str) or not self.name:
-            raise ValueError(f"place name must be a non-empty string, got {self.name!r}")
+            raise DiagnosisError(f"place name must be a non-empty string, got {self.name!r}")
 
     def __str__(self) -> str:
         return f"{self.kind} {self.name}"

@@ -15,9 +15,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bondgraph.errors import UnknownNameError
 
-from .errors import RecordingError, UnitError, UnknownColumnError
+from .errors import RecordingError, UnitError, UnknownColumnError, UnknownNameError
 from .units import convert, parse_unit
 
 __all__ = ["Recording", "Binding", "Experiment", "bind", "TIME_NAMES"]

@@ -79,7 +79,7 @@ def input_matrix(eqs, t, inputs: dict) -> np.ndarray:
     UnknownNameError
         An input name the model does not have.
     """
-    from bondgraph.errors import UnknownNameError
+    from diagnosis.errors import UnknownNameError
 
     for name in inputs:
         if name not in eqs.input_names:
@@ -129,7 +129,7 @@ class OutputSimulator:
     """
 
     def __init__(self, model, experiment, *, outputs=None, backend: str = "auto"):
-        from bondgraph.errors import UnknownNameError
+        from diagnosis.errors import UnknownNameError
         from bondgraph.evaluate import compile_model
         from bondgraph.system import StateEquations
 
@@ -171,7 +171,7 @@ class OutputSimulator:
 
     def initial_state(self, x0=None) -> np.ndarray:
         """The initial state vector from None (model default), a dict by name, or an array."""
-        from bondgraph.errors import UnknownNameError
+        from diagnosis.errors import UnknownNameError
 
         x = self.model.default_state.copy()
         if isinstance(x0, dict):
@@ -182,7 +182,7 @@ class OutputSimulator:
         elif x0 is not None:
             x = np.asarray(x0, dtype=float).reshape(-1)
             if x.shape != self.model.default_state.shape:
-                raise ValueError(f"x0: expected {len(self.model.state_names)} states "
+                raise DiagnosisError(f"x0: expected {len(self.model.state_names)} states "
                                  f"({', '.join(self.model.state_names)}); found shape {x.shape}")
         return x
 
@@ -239,7 +239,7 @@ class OutputSimulator:
         list of SimRun
             One per entry of `params_list`, in order.
         """
-        from bondgraph.errors import SimulationError
+        from diagnosis.errors import SimulationError
 
         m = self.model
         P = np.ascontiguousarray(np.vstack([m.param_vector(q) for q in params_list]))

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-from bondgraph.errors import EstimatorError
+from estimators.errors import EstimatorError
 
 __all__ = ["as_matrix", "as_vector", "check_covariance", "zoh", "riccati_call"]
 

@@ -38,7 +38,7 @@ from typing import Sequence
 import numpy as np
 import scipy.linalg
 
-from bondgraph.errors import EstimatorError
+from estimators.errors import EstimatorError
 
 from ._linalg import as_matrix, as_vector, check_covariance
 

@@ -53,13 +53,13 @@ References
 ----------
 .. [1] Yang H., Hao L., Chen Y., Xue B., "Kalman-PID control for chattering
    phenomena of bionic elbow joint actuated by pneumatic artificial muscles",
-   Control Theory & Applications (2017); ``shared/seeds/002_cb2dc7ef6c6d2e82.txt``.
+   Control Theory & Applications (2017); seed 002 (``docs/references.md``).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from bondgraph.errors import EstimatorError
+from estimators.errors import EstimatorError
 
 from ._linalg import zoh
 

@@ -30,7 +30,7 @@ python-control's ``lqr``/``dlqr`` give the same gains (tested to 1e-9).
 References
 ----------
 .. [1] Exoskeleton bond graph / Kalman observer paper,
-   ``shared/seeds/004_e7537f0e64a650f8.txt``, Section 5.2, eqs. (10)-(17).
+   seed 004 (``docs/references.md``), Section 5.2, eqs. (10)-(17).
 """
 from __future__ import annotations
 
@@ -39,7 +39,7 @@ from typing import Literal, Sequence
 
 import numpy as np
 
-from bondgraph.errors import EstimatorError
+from estimators.errors import EstimatorError
 
 from ._linalg import as_matrix, as_vector
 from .lqr import _solve, _weights

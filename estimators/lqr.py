@@ -14,7 +14,7 @@ from typing import Sequence
 import numpy as np
 import scipy.linalg
 
-from bondgraph.errors import EstimatorError
+from estimators.errors import EstimatorError
 
 from ._linalg import as_matrix, check_covariance, riccati_call
 from .modes import check_stabilizable

@@ -31,7 +31,7 @@ from typing import Sequence
 
 import numpy as np
 
-from bondgraph.errors import UncontrollableModeError, UnobservableModeError
+from estimators.errors import UncontrollableModeError, UnobservableModeError
 
 from ._linalg import as_matrix
 

@@ -17,7 +17,7 @@ unobservable, unstable mode by eigenvalue and state combination
 References
 ----------
 .. [1] Exoskeleton bond graph / Kalman observer paper,
-   ``shared/seeds/004_e7537f0e64a650f8.txt``, Section 3, eqs. (8)-(9).
+   seed 004 (``docs/references.md``), Section 3, eqs. (8)-(9).
 """
 from __future__ import annotations
 
@@ -27,7 +27,7 @@ from typing import Sequence
 import numpy as np
 import scipy.linalg
 
-from bondgraph.errors import EstimatorError
+from estimators.errors import EstimatorError
 
 from ._linalg import as_matrix, as_vector, check_covariance, riccati_call, zoh
 from .kalman import KalmanResult

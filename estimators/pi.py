@@ -47,7 +47,7 @@ References
 ----------
 .. [1] T. Shin and K. Kogiso, "Detailed dynamic model of antagonistic PAM
    system and its experimental validation: sensor-less angle and torque
-   control with UKF"; ``shared/seeds/000_e88691151ec17d16.txt``.
+   control with UKF"; seed 000 (``docs/references.md``).
 """
 from __future__ import annotations
 
@@ -55,7 +55,7 @@ from typing import Literal
 
 import numpy as np
 
-from bondgraph.errors import EstimatorError
+from estimators.errors import EstimatorError
 
 __all__ = ["DiscretePI", "PAPER_GAINS"]
 

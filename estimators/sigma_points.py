@@ -30,7 +30,7 @@ References
 .. [1] S. J. Julier, J. K. Uhlmann, "A new extension of the Kalman filter to
    nonlinear systems", Proc. SPIE 3068, 1997.
 .. [2] T. Shin, T. Ibayashi, K. Kogiso, "Detailed dynamic model of antagonistic
-   PAM system and its experimental validation", ``shared/seeds/000_e88691151ec17d16.txt``,
+   PAM system and its experimental validation", seed 000 (``docs/references.md``),
    Section III-A, eqs. (13)-(18).
 .. [3] R. van der Merwe, "Sigma-point Kalman filters for probabilistic inference
    in dynamic state-space models", PhD thesis, OGI, 2004.
@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bondgraph.errors import EstimatorError
+from estimators.errors import EstimatorError
 
 __all__ = ["SigmaPoints", "JulierSigmaPoints", "MerweScaledSigmaPoints"]
 

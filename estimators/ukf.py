@@ -35,18 +35,19 @@ propagated silently.
 References
 ----------
 .. [1] T. Shin, T. Ibayashi, K. Kogiso, "Detailed dynamic model of antagonistic
-   PAM system and its experimental validation", ``shared/seeds/000_e88691151ec17d16.txt``.
+   PAM system and its experimental validation", seed 000 (``docs/references.md``).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from bondgraph.errors import EstimatorError
+from bondgraph.progress import Progress
+from estimators.errors import EstimatorError
 
 from .ukf_checks import check_covariance, check_vector, raise_problems, validate_setup
 from .ukf_engine import NumpyEngine
 from .ukf_model import ModelFunctions, StateMap, substeps_for
-from .ukf_result import UKFResult, _Progress
+from .ukf_result import UKFResult
 
 __all__ = ["UnscentedKalmanFilter", "UKFResult", "KERNELS"]
 
@@ -361,19 +362,19 @@ class UnscentedKalmanFilter:
         X, P = np.empty((N, self.dim_x)), np.empty((N, self.dim_x, self.dim_x))
         X[0], P[0] = self._e.x, self._e.P
         t_start = self.t
-        bar = _Progress(progress, N)
+        bar = Progress(max(1, N), fmt="ukf: {percentage:5.1f} %  ({n}/{total} samples)", enabled=progress)
         if self._e.kind == "c" and N > 1:
             Zc = np.ascontiguousarray(Z[1:])
             for a in range(1, N, 2000):   # chunks, for the progress line
                 b = min(N, a + 2000)
                 self._e.run(U[a - 1:b - 1], Zc[a - 1:b - 1], X[a:b], P[a:b])
-                bar.update(b)
+                bar.update_to(b)
         else:
             for k in range(1, N):
                 self._e.predict(None if U is None else U[k - 1])
                 self._e.update(Z[k], None)
                 X[k], P[k] = self._e.x, self._e.P
-                bar.update(k + 1)
+                bar.update_to(k + 1)
         bar.close()
         if times is None:   # without a sample time (Python models, dt = 0): sample numbers
             times = t_start + (self._e.dt or 1.0) * np.arange(N)

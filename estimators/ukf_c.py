@@ -19,7 +19,7 @@ import numpy as np
 
 from bondgraph.c_build import compile_source, find_compiler
 from bondgraph.codegen_c import generate_source
-from bondgraph.errors import EstimatorError
+from estimators.errors import EstimatorError
 
 from .ukf_c_source import STATUS, layout, ukf_source
 

@@ -30,7 +30,7 @@ both agree to rounding.
 References
 ----------
 .. [1] T. Shin, T. Ibayashi, K. Kogiso, "Detailed dynamic model of antagonistic
-   PAM system and its experimental validation", ``shared/seeds/000_e88691151ec17d16.txt``,
+   PAM system and its experimental validation", seed 000 (``docs/references.md``),
    Section III-A.
 """
 from __future__ import annotations

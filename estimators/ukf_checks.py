@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bondgraph.errors import EstimatorError
+from estimators.errors import EstimatorError
 
 from .sigma_points import SigmaPoints
 

@@ -32,7 +32,7 @@ already contains :math:`R`; we add :math:`R` once, as the UKF of [2]_.
 References
 ----------
 .. [1] T. Shin, T. Ibayashi, K. Kogiso, "Detailed dynamic model of antagonistic
-   PAM system and its experimental validation", ``shared/seeds/000_e88691151ec17d16.txt``,
+   PAM system and its experimental validation", seed 000 (``docs/references.md``),
    Section III-A.
 .. [2] S. J. Julier, J. K. Uhlmann, "A new extension of the Kalman filter to
    nonlinear systems", Proc. SPIE 3068, 1997.
@@ -42,7 +42,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg import cho_solve
 
-from bondgraph.errors import EstimatorError
+from estimators.errors import EstimatorError
 
 from .sigma_points import spread
 

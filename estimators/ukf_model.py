@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bondgraph.errors import EstimatorError, UnknownNameError
+from estimators.errors import EstimatorError, UnknownNameError
 
 __all__ = ["StateMap", "ModelFunctions", "substeps_for"]
 

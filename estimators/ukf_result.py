@@ -1,11 +1,10 @@
-"""Results of :meth:`estimators.ukf.UnscentedKalmanFilter.batch_filter`, and its progress line."""
+"""Results of :meth:`estimators.ukf.UnscentedKalmanFilter.batch_filter`."""
 from __future__ import annotations
 
-import sys
-import time as _time
 from dataclasses import dataclass
 
 import numpy as np
+from estimators.errors import UnknownStateError
 
 __all__ = ["UKFResult"]
 
@@ -36,29 +35,9 @@ class UKFResult:
         try:
             return self.x[:, self.state_names.index(name)]
         except ValueError:
-            raise KeyError(f"no state {name!r}; states are {', '.join(self.state_names)}") from None
+            raise UnknownStateError(f"no state {name!r}; states are {', '.join(self.state_names)}") from None
 
     @property
     def std(self) -> np.ndarray:
         """Standard deviations, shape (N, n): square roots of the diagonals of ``P``."""
         return np.sqrt(np.einsum("kii->ki", self.P))
-
-
-class _Progress:
-    """One self-overwriting line on stderr, at most every 0.2 s."""
-
-    def __init__(self, enabled, total):
-        self.enabled, self.total, self._last = enabled, max(1, total), 0.0
-
-    def update(self, done):
-        if self.enabled and _time.monotonic() - self._last >= 0.2:
-            self._last = _time.monotonic()
-            sys.stderr.write(f"\rukf: {100.0 * done / self.total:5.1f} %  ({done}/{self.total} samples)")
-            sys.stderr.flush()
-
-    def close(self):
-        if self.enabled:
-            self._last = 0.0
-            self.update(self.total)
-            sys.stderr.write("\n")
-            sys.stderr.flush()

@@ -13,7 +13,7 @@ import tempfile
 from pathlib import Path
 
 from bondgraph.c_build import cache_dir, find_compiler
-from bondgraph.errors import CompilationError
+from fmus.errors import CompilationError
 
 __all__ = ["compile_fmu_binary", "fmi_headers", "WRAPPERS", "FMU_CFLAGS"]
 

@@ -34,7 +34,7 @@ import numpy as np
 import sympy as sp
 
 from bondgraph.codegen_c import generate_source
-from bondgraph.errors import FMUError
+from fmus.errors import FMUError, FMUModelTypeError
 
 from .build import compile_fmu_binary
 from .c_header import model_header
@@ -80,7 +80,9 @@ def fmu_equations(eqs):
     return dataclasses.replace(
         eqs, inputs=tuple(s for s in eqs.inputs if s not in sub),
         f=rep(eqs.f), h=rep(eqs.h), residuals=rep(eqs.residuals),
-        held_update=rep(eqs.held_update), input_functions={})
+        held_update=rep(eqs.held_update), input_functions={},
+        assignments=tuple((a, sp.sympify(e).xreplace(sub)) for a, e in eqs.assignments),
+        f_short=rep(eqs.f_short), h_short=rep(eqs.h_short), held_update_short=rep(eqs.held_update_short))
 
 
 def default_solver_step(eqs) -> float:
@@ -108,7 +110,7 @@ def _equations_of(model):
         return model.equations()
     if hasattr(model, "states") and hasattr(model, "f"):
         return model
-    raise TypeError(f"export needs a BondGraph or StateEquations, got {type(model).__name__}")
+    raise FMUModelTypeError(f"export needs a BondGraph or StateEquations, got {type(model).__name__}")
 
 
 def export(model, path, *, fmi_version: int = 2, solver_step: float | None = None,

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from bondgraph.errors import FMUError
+from fmus.errors import FMUError
 
 __all__ = ["FmuVariable", "variable_layout", "derivative_unit", "model_identifier", "SOLVER_STEP"]
 

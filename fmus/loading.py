@@ -14,14 +14,14 @@ import tempfile
 import zipfile
 from pathlib import Path
 
-from bondgraph.errors import FMUError, UnknownNameError
+from fmus.errors import FMUError, FMUFileNotFoundError, UnknownNameError
 
 __all__ = ["read_fmu", "extract_fmu", "remove_extracted", "find_variable", "variable_unit"]
 
 
 def _check_archive(path: Path) -> None:
     if not path.exists():
-        raise FMUError(f"FMU file {str(path)!r} does not exist", path)
+        raise FMUFileNotFoundError(f"FMU file {str(path)!r} does not exist", path)
     if path.is_dir():
         raise FMUError(f"{str(path)!r} is a directory; expected an .fmu file (a zip archive)",
                        path)

@@ -6,3 +6,15 @@ def test_derivation_benchmark_runs(capsys, load_script):
     bench.main(sizes=(2,), skip_bgt=True, repeats=1)
     out = capsys.readouterr().out
     assert "states" in out and "    2 " in out
+
+
+def test_codegen_benchmark_runs(capsys, load_script):
+    from bondgraph.c_build import find_compiler
+    if find_compiler() is None:
+        import pytest
+        pytest.skip("no C compiler")
+    from bondgraph.library.chain import mass_spring_chain
+    bench = load_script("benchmarks/codegen.py")
+    rows = bench.main({"chain2": mass_spring_chain(2)})
+    assert rows[0]["model"] == "chain2" and rows[0]["assignments"][2] > 0
+    assert "ratio" in capsys.readouterr().out

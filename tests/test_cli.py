@@ -17,14 +17,18 @@ def test_list_names_every_builtin_model(capsys):
 
 def test_equations_text(capsys):
     assert main(["equations", "mass-spring-damper"]) == 0
+    out = capsys.readouterr().out   # assignments first, then the state equations over them
+    assert "f_m     = p_m/m" in out and "dp_m/dt = F - b*f_m - k*q_k" in out
+    assert main(["equations", "mass-spring-damper", "--flat"]) == 0
     out = capsys.readouterr().out
-    assert "dp_m/dt" in out and "F - b*p_m/m - k*q_k" in out
+    assert "dp_m/dt" in out and "F - b*p_m/m - k*q_k" in out and "f_m     =" not in out
 
 
 def test_equations_json_has_the_documented_keys_and_matrices(capsys):
     assert main(["equations", "mass-spring-damper", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
-    assert set(data) == {"states", "inputs", "outputs", "parameters", "f", "h", "A", "B", "C", "D"}
+    assert set(data) == {"states", "inputs", "outputs", "parameters", "f", "h", "assignments", "f_short",
+                         "h_short", "A", "B", "C", "D", "linearisation"}
     m, b, k = 1.0, 0.4, 4.0   # library defaults
     assert data["states"] == ["p_m", "q_k"] and data["parameters"] == {"m": m, "b": b, "k": k}
     assert np.allclose(data["A"], [[-b / m, -k], [1 / m, 0.0]])

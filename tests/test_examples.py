@@ -22,6 +22,49 @@ def test_pneumatic_cylinder(tmp_path, load_script):
     assert (tmp_path / "pneumatic_cylinder.png").exists()
 
 
+def test_readable_equations(tmp_path, load_script, capsys):
+    result = load_script("examples/readable_equations.py").main(tmp_path)
+    assert {"valve1.alpha", "muscle1.V", "muscle1.F", "f_valve1"} <= set(result["names"])
+    assert max(result["short"]) < 120 < 2000 < min(result["flat"][:2]) and result["round_trip"]
+    assert "valve1.alpha" in capsys.readouterr().out and (tmp_path / "pam_equations.tex").stat().st_size > 0
+
+
+def test_linearise_switched(tmp_path, load_script):
+    result = load_script("examples/linearise_switched.py").main(tmp_path)
+    assert result["rest"].derivatives["u1"].startswith("one-sided")
+    assert set(result["working"].derivatives.values()) == {"symbolic"}
+    # the valve opens: more voltage, more pressure rise in its own muscle only
+    assert result["working"].B[0, 0] > 0 and result["working"].B[0, 1] == 0
+    assert (tmp_path / "pam_linear.json").exists()
+
+
+def test_results_to_pandas(tmp_path, load_script):
+    pytest.importorskip("pandas")
+    pytest.importorskip("xarray")
+    result = load_script("examples/results_to_pandas.py").main(tmp_path)
+    frame, data = result["frame"], result["dataset"]
+    assert frame.attrs["units"]["w_m"] == "rad/s" and data["w_m"].attrs["units"] == "rad/s"
+    assert data["t"].attrs["units"] == "s" and frame.index.name == "t"
+    # same numbers both ways; steady speed of the motor: w = km V / (Ra bm + km^2) / n ... both equal
+    assert frame["w_m"].to_numpy() == pytest.approx(data["w_m"].to_numpy())
+    assert (tmp_path / "dc_motor_pandas.csv").exists()
+
+
+def test_errors(load_script):
+    messages = load_script("examples/errors.py").main()
+    assert messages["negative span"][:2] == ("ArgumentError", "ValueError")
+    assert messages["unknown input"][:2] == ("UnknownNameError", "ValueError") and "'Q'" in messages["unknown input"][2]
+    assert messages["too many samples"][:2] == ("OutputTooLargeError", "MemoryError")
+
+
+def test_notebook_display(tmp_path, load_script):
+    result = load_script("examples/notebook_display.py").main(tmp_path)
+    assert result["svg"].lstrip().startswith("<?xml") and "<svg" in result["svg"]
+    assert result["latex"].startswith("$\\begin{aligned}")
+    assert result["control"].nstates == 2
+
+
 def test_examples_are_all_tested():
-    tested = {"quickstart", "pneumatic_cylinder"}
+    tested = {"quickstart", "pneumatic_cylinder", "readable_equations", "linearise_switched", "results_to_pandas",
+              "errors", "notebook_display"}
     assert {p.stem for p in EXAMPLES.glob("*.py")} == tested

@@ -1,7 +1,7 @@
 """Exoskeleton (seed 004): the Fig. 6 bond graph against the paper's block diagram, eq. (3).
 
-References: ``shared/seeds/004_e7537f0e64a650f8.txt`` (eqs. (1), (3), (5), (6), Sec. 5.1) and
-``shared/exo-parameters.md`` (parameter values and status).
+References: seed 004 (``docs/references.md``) (eqs. (1), (3), (5), (6), Sec. 5.1) and
+``docs/exo-parameters.md`` (parameter values and status).
 """
 import numpy as np
 import pytest
@@ -48,7 +48,7 @@ def test_parameters_carry_unit_and_source_status():
     for p in PARAMETERS.values():
         assert p.unit, p.name
         assert any(s in p.description for s in statuses), p.name
-    # values as in shared/exo-parameters.md (table "Parameters")
+    # values as in docs/exo-parameters.md (table "Parameters")
     assert parameter_values()["r_g"] == 160.0 and parameter_values()["b_g"] == 0.65
     assert parameter_values()["b_f"] == 0.48e-3 and parameter_values()["k_eh"] == 1125.0
     graph_values = exoskeleton().equations().param_values

@@ -1,7 +1,7 @@
 """Antagonistic PAM joint (seed 000): the state-space model (11a) written in plain numpy.
 
-References: ``shared/seeds/000_e88691151ec17d16.txt`` ([1]: eqs. (2)-(11), Table II, Sec. II-A) and
-``shared/pam-conventions.md`` ([2]: kappa knots, orifice law, index readings, Kikuuwe friction,
+References: seed 000 (``docs/references.md``) ([1]: eqs. (2)-(11), Table II, Sec. II-A) and
+``docs/pam-conventions.md`` ([2]: kappa knots, orifice law, index readings, Kikuuwe friction,
 fixed-step scheme).  Reference numbers below are computed in the tests from the textbook formulas
 quoted in [2], not from the module.
 """

@@ -1,7 +1,7 @@
 """Antagonistic PAM joint (seed 000) as a bond graph: physics tests and analytic spot checks.
 
-References: ``shared/seeds/000_e88691151ec17d16.txt`` ([1]: eqs. (2)-(11), Table II, Sec. II-A)
-and ``shared/pam-conventions.md`` ([C]: kappa table, orifice law, friction, fixed-step scheme).
+References: seed 000 (``docs/references.md``) ([1]: eqs. (2)-(11), Table II, Sec. II-A)
+and ``docs/pam-conventions.md`` ([C]: kappa table, orifice law, friction, fixed-step scheme).
 Every hand formula below is written here from those texts, independently of
 ``bondgraph/library/pam.py``.
 """

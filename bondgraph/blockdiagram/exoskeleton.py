@@ -17,7 +17,7 @@ graph's state names.
 
 References
 ----------
-.. [1] Exoskeleton bond graph / Kalman observer paper, ``shared/seeds/004_e7537f0e64a650f8.txt``.
+.. [1] Exoskeleton bond graph / Kalman observer paper, seed 004 (``docs/references.md``).
 """
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ from typing import Mapping
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import ArgumentError, ParameterError
 
 __all__ = ["STATES", "INPUTS", "OUTPUTS", "PARAMETER_NAMES", "state_space", "simulate_zoh", "matrix_difference",
            "section_5_1_inputs", "bond_graph_state_map", "compare_section_5_1", "Comparison", "compare_plot"]
@@ -80,7 +80,7 @@ def state_space(params: Mapping[str, float], *, b_g_exponent: int = 2):
     A : ndarray, shape (7, 7), B : ndarray, shape (7, 2), C : ndarray, shape (4, 7), D : ndarray, shape (4, 2)
     """
     if b_g_exponent not in (1, 2):
-        raise ValueError(f"b_g_exponent must be 1 or 2, got {b_g_exponent!r}")
+        raise ArgumentError(f"b_g_exponent must be 1 or 2, got {b_g_exponent!r}")
     p = _check(params)
     J1, r = p["J_m"] + p["J_g"], p["r_g"]
     kg, dg, ks, ds, keh, deh = p["k_g"], p["d_g"], p["k_s"], p["d_s"], p["k_eh"], p["d_eh"]
@@ -140,7 +140,7 @@ def simulate_zoh(A, B, C, D, t, u, *, x0=None):
     u = np.asarray(u, dtype=float).reshape(len(t), -1)
     dt = np.diff(t)
     if len(t) < 2 or not np.allclose(dt, dt[0], rtol=1e-9, atol=0.0) or dt[0] <= 0:
-        raise ValueError("simulate_zoh: t must hold at least two uniformly increasing sample times")
+        raise ArgumentError("simulate_zoh: t must hold at least two uniformly increasing sample times")
     n, m = B.shape
     M = np.zeros((n + m, n + m))
     M[:n, :n], M[:n, n:] = A, B

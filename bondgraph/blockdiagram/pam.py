@@ -27,9 +27,9 @@ References
 ----------
 .. [1] T. Shin, T. Ibayashi, K. Kogiso, "Detailed dynamic model of antagonistic
    PAM system and its experimental validation: sensor-less angle and torque
-   control with UKF", ``shared/seeds/000_e88691151ec17d16.txt``.
+   control with UKF", seed 000 (``docs/references.md``).
 .. [2] "Antagonistic PAM joint (seed 000): the project's reference conventions",
-   ``shared/pam-conventions.md``.
+   ``docs/pam-conventions.md``.
 """
 from __future__ import annotations
 
@@ -39,7 +39,7 @@ from typing import Mapping
 
 import numpy as np
 
-from ..errors import ParameterError, SimulationError
+from ..errors import ArgumentError, ParameterError, SimulationError
 
 __all__ = ["STATES", "INPUTS", "OUTPUTS", "VARIANTS", "PARAMS", "PARAM_UNITS", "KAPPA_U", "KAPPA_ALPHA",
            "SAMPLE_TIME", "SUBSTEPS", "DP_MIN", "kappa", "valve_mass_flow", "static_pressure", "equilibrium", "volume",
@@ -125,7 +125,7 @@ def _resolve(params: Mapping[str, float] | None) -> dict[str, float]:
 
 def _check_muscle(muscle: int) -> int:
     if muscle not in (1, 2):
-        raise ValueError(f"muscle must be 1 or 2, got {muscle!r}")
+        raise ArgumentError(f"muscle must be 1 or 2, got {muscle!r}")
     return muscle
 
 
@@ -243,7 +243,7 @@ def _plant(params) -> _Plant:
 def _columns(x):
     x = np.asarray(x, dtype=float)
     if x.shape[-1:] != (4,):
-        raise ValueError(f"x must have shape (..., 4) (psi, dpsi, P1, P2), found {x.shape}")
+        raise ArgumentError(f"x must have shape (..., 4) (psi, dpsi, P1, P2), found {x.shape}")
     return x[..., 0], x[..., 1], x[..., 2], x[..., 3]
 
 
@@ -329,7 +329,7 @@ def equilibrium(u, params=None, *, variant="full"):
         ``(psi [rad], 0, P1 [Pa], P2 [Pa])``.
     """
     if variant not in VARIANTS:
-        raise ValueError(f"unknown variant {variant!r}; expected one of {', '.join(VARIANTS)}")
+        raise ArgumentError(f"unknown variant {variant!r}; expected one of {', '.join(VARIANTS)}")
     plant = _plant(params)
     P1, P2 = static_pressure(np.asarray(u, dtype=float).reshape(2), params)
     x = np.array([0.0, 0.0, P1, P2])
@@ -341,7 +341,7 @@ def equilibrium(u, params=None, *, variant="full"):
 
     lo, hi = -0.6, 0.6
     if T0(lo) * T0(hi) > 0.0:
-        raise ValueError(f"no rest angle within +-0.6 rad for u = {u} (P1 = {P1:.0f} Pa, P2 = {P2:.0f} Pa)")
+        raise ArgumentError(f"no rest angle within +-0.6 rad for u = {u} (P1 = {P1:.0f} Pa, P2 = {P2:.0f} Pa)")
     for _ in range(60):
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if T0(mid) * T0(lo) > 0.0 else (lo, mid)
@@ -546,7 +546,7 @@ def derivatives(x, u, params=None, T_f=0.0):
     """
     alpha = kappa(np.asarray(u, dtype=float))
     if alpha.shape[-1:] != (2,):
-        raise ValueError(f"u must have shape (..., 2) (u1, u2), found {alpha.shape}")
+        raise ArgumentError(f"u must have shape (..., 2) (u1, u2), found {alpha.shape}")
     rates = _plant(params).rates(*_columns(x), alpha[..., 0], alpha[..., 1], T_f, _NP)
     return np.stack(np.broadcast_arrays(*rates), axis=-1)
 
@@ -613,20 +613,20 @@ def simulate(u_profile, T, *, variant="full", x0=None, params=None) -> dict:
         If a state stops being finite (its ``time`` is the first bad sample).
     """
     if variant not in VARIANTS:
-        raise ValueError(f"unknown variant {variant!r}; expected one of {', '.join(VARIANTS)}")
+        raise ArgumentError(f"unknown variant {variant!r}; expected one of {', '.join(VARIANTS)}")
     plant = _plant(params)
     n = int(round(T / SAMPLE_TIME))
     if n < 1 or abs(n * SAMPLE_TIME - T) > 1e-9:
-        raise ValueError(f"T must be a positive whole number of {SAMPLE_TIME} s samples, got {T!r}")
+        raise ArgumentError(f"T must be a positive whole number of {SAMPLE_TIME} s samples, got {T!r}")
     u = np.asarray(u_profile, dtype=float)
     if u.ndim != 2 or u.shape[1] != 2 or u.shape[0] < n:
-        raise ValueError(f"u_profile must have shape (n_samples >= {n}, 2), found {u.shape}")
+        raise ArgumentError(f"u_profile must have shape (n_samples >= {n}, 2), found {u.shape}")
     p = plant.p
     x = np.array([0.0, 0.0, p["P_out"], p["P_out"]]) if x0 is None else np.array(x0, dtype=float)
     if x.shape != (4,):
-        raise ValueError(f"x0 must have shape (4,), found {x.shape}")
+        raise ArgumentError(f"x0 must have shape (4,), found {x.shape}")
     if variant == "locked" and (x[0] != 0.0 or x[1] != 0.0):
-        raise ValueError(f"the locked variant holds psi = dpsi = 0; x0 has psi = {x[0]}, dpsi = {x[1]}")
+        raise ArgumentError(f"the locked variant holds psi = dpsi = 0; x0 has psi = {x[0]}, dpsi = {x[1]}")
     with np.errstate(all="ignore"):
         try:
             xs = _integrate(plant, kappa(u[:n]), x, variant)
@@ -698,7 +698,7 @@ def fig8_profile(*, segment: float = 10.0, params=None):
     """
     m = int(round(segment / SAMPLE_TIME))
     if m < 1 or abs(m * SAMPLE_TIME - segment) > 1e-9:
-        raise ValueError(f"segment must be a positive whole number of {SAMPLE_TIME} s samples, got {segment!r}")
+        raise ArgumentError(f"segment must be a positive whole number of {SAMPLE_TIME} s samples, got {segment!r}")
     n_seg = len(FIG8_SEGMENTS)
     P = np.empty((n_seg * m + 1, 2))
     prev = np.array(FIG8_SEGMENTS[0][1:])

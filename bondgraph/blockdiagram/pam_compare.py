@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import pam as bd
+from ..errors import ArgumentError
 
 __all__ = ["PamComparison", "compare_fig8", "SIGNALS"]
 
@@ -77,7 +78,7 @@ def compare_fig8(*, variant: str = "full", duration: float = 20.0, segment: floa
     _, u = bd.fig8_profile(segment=segment)
     n = int(round(duration / bd.SAMPLE_TIME))
     if n > len(u):
-        raise ValueError(f"duration {duration} s is longer than the profile ({len(u) * bd.SAMPLE_TIME:g} s)")
+        raise ArgumentError(f"duration {duration} s is longer than the profile ({len(u) * bd.SAMPLE_TIME:g} s)")
     u = u[:n]
     x0 = bd.equilibrium(u[0], variant=variant)
     ref = bd.simulate(u, duration, variant=variant, x0=x0)

@@ -110,6 +110,7 @@ class Contribution:
     """What an element adds to the equations, given its causality."""
 
     defs: list = field(default_factory=list)        # (bond symbol, expression)
+    locals: list = field(default_factory=list)      # (local symbol ``<element>.<name>``, expression)
     states: list = field(default_factory=list)      # StateDecl
     derivative: list = field(default_factory=list)  # DerivativeDecl
     held: list = field(default_factory=list)        # HeldDecl
@@ -140,6 +141,36 @@ class Element(ABC):
                              "(letters, digits and _, not starting with a digit)")
         self.name = name
         self.description = description
+        self.locals: dict[str, object] = {}
+        self._local_defs: list = []
+
+    # -- named locals --------------------------------------------------------
+    def _set_locals(self, locals_) -> None:
+        """Store the element's named locals (name -> expression, in evaluation order)."""
+        items = dict(locals_ or {})
+        bad = [k for k in items if not isinstance(k, str) or not k.isidentifier()]
+        if bad:
+            raise GraphError(f"{self.kind} {self.name!r}: local names must be identifiers, got "
+                             f"{', '.join(map(repr, bad))}")
+        self.locals = items
+
+    def local_symbol(self, local: str) -> sp.Symbol:
+        """The symbol of the element's local `local`: ``<element>.<local>`` (real)."""
+        return sp.Symbol(f"{self.name}.{local}", real=True)
+
+    def _parse_locals(self, table: Mapping[str, sp.Basic]) -> dict:
+        """Parse the locals in order (each may use the earlier ones) into
+        ``self._local_defs``; returns `table` extended with the local names."""
+        table = dict(table)
+        self._local_defs = []
+        for key, text in self.locals.items():
+            if key in table:
+                raise GraphError(f"{self.kind} {self.name!r}: local {key!r} shadows a name of the graph "
+                                 "(a parameter, state, input or port variable); rename it")
+            symbol = self.local_symbol(key)
+            self._local_defs.append((symbol, self._expr(text, table, f"local {key}")))
+            table[key] = symbol
+        return table
 
     # -- declarations (used to build the graph's name table) ----------------
     def parameters(self) -> list[Param]:

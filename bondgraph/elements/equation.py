@@ -57,14 +57,21 @@ class EquationElement(Element):
         `held` is given.
     params : mapping or list of Param, optional
         Parameters the expressions use.
+    locals : mapping str -> expression, optional
+        Named intermediate quantities (a muscle's volume and force), in
+        evaluation order; each may use the port variables, the graph's names
+        and the earlier locals, and every other expression may use them.
+        They appear as ``<element>.<name>`` in the equations' ordered
+        assignments (:attr:`StateEquations.assignments`).
     """
 
     kind = "Eq"
 
     def __init__(self, name: str, *, ports, outputs, states=None, initial=None, units=None,
                  held=None, fixed_step: float | None = None, params=None, descriptions=None,
-                 description: str = ""):
+                 locals=None, description: str = ""):
         super().__init__(name, description=description)
+        self._set_locals(locals)
         ports = dict(ports)
         bad = {p: d for p, d in ports.items() if d not in ("in", "out") or not str(p).isidentifier()}
         if not ports or bad:
@@ -135,6 +142,7 @@ class EquationElement(Element):
     def prepare(self, names):
         local = dict(names)
         local.update(self._placeholders())
+        local = self._parse_locals(local)
         self._outputs = {key: self._expr(text, local, f"output {key}") for key, text in self.outputs.items()}
         self._rates = {s: self._expr(text, local, f"rate of {s}") for s, text in self.states.items()}
         self._updates = {v: self._expr(text, local, f"update of {v}") for v, text in self.held.items()}
@@ -154,7 +162,7 @@ class EquationElement(Element):
         for p, pv in ports.items():
             actual[sym(f"{self.name}.e_{p}")] = pv.e
             actual[sym(f"{self.name}.f_{p}")] = pv.flow
-        out = Contribution()
+        out = Contribution(locals=[(s, e.xreplace(actual)) for s, e in self._local_defs])
         for key, value in self._outputs.items():
             kind, _, port = key.partition("_")
             pv = ports[port]
@@ -184,4 +192,6 @@ class EquationElement(Element):
                 spec[key] = dict(getattr(self, key))
         if self.params:
             spec["params"] = {k: p.to_dict() for k, p in self.params.items()}
+        if self.locals:
+            spec["locals"] = {k: str(v) for k, v in self.locals.items()}
         return spec

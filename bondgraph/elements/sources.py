@@ -92,7 +92,7 @@ class _Modulated(Element):
     _role = EFFORT
 
     def __init__(self, name: str, expression, *, params=None, unit: str | None = None,
-                 domain: str = "generic", description: str = ""):
+                 domain: str = "generic", locals=None, description: str = ""):
         """A source whose value is an expression of states, inputs, parameters,
         held variables, bond variables (``e_<bond>``, ``f_<bond>``) and ``t``.
 
@@ -102,6 +102,11 @@ class _Modulated(Element):
             The modulation law.
         params : mapping or list of Param, optional
             Parameters the expression uses that are not defined elsewhere.
+        locals : mapping str -> expression, optional
+            Named intermediate quantities, in evaluation order; each may use
+            the graph's names and the earlier locals, and `expression` may use
+            them all.  They appear as ``<element>.<name>`` in the equations'
+            ordered assignments (:attr:`StateEquations.assignments`).
         """
         from .base import param_dict
         super().__init__(name, description=description)
@@ -109,6 +114,7 @@ class _Modulated(Element):
         self.params = param_dict(params, f"{self.kind} {name!r}")
         self.domain = domain
         self.unit = unit if unit is not None else unit_of(domain, "effort" if self._role == EFFORT else "flow")
+        self._set_locals(locals)
 
     def parameters(self):
         return list(self.params.values())
@@ -117,19 +123,21 @@ class _Modulated(Element):
         return {"": self._role}
 
     def prepare(self, names):
-        self._value = self._expr(self.expression, names, "modulation")
+        self._value = self._expr(self.expression, self._parse_locals(names), "modulation")
 
     def contribute(self, ports, names):
         port = ports[""]
         value = self._value
         if self._role == EFFORT:
-            return Contribution(defs=[(port.e, value)])
-        return Contribution(defs=[(port.f, port.sign * value)])
+            return Contribution(defs=[(port.e, value)], locals=list(self._local_defs))
+        return Contribution(defs=[(port.f, port.sign * value)], locals=list(self._local_defs))
 
     def _spec(self):
         spec = {"expression": str(self.expression), "domain": self.domain, "unit": self.unit}
         if self.params:
             spec["params"] = {k: p.to_dict() for k, p in self.params.items()}
+        if self.locals:
+            spec["locals"] = {k: str(v) for k, v in self.locals.items()}
         return spec
 
 

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from ..elements import C, I, One, R, Se, Zero
 from ..graph import BondGraph
+from ..errors import ArgumentError
 
 __all__ = ["mass_spring_chain"]
 
@@ -14,7 +15,7 @@ def mass_spring_chain(n: int = 5, *, m: float = 1.0, b: float = 0.5, compliance:
     followed by a 0-junction with compliance ``k<k>``.
     """
     if not isinstance(n, int) or n < 1:
-        raise ValueError(f"chain length must be a positive integer, got {n!r}")
+        raise ArgumentError(f"chain length must be a positive integer, got {n!r}")
     g = BondGraph(f"chain{n}", description=f"chain of {n} mass-spring-damper stages")
     g.add(Se("F", 1.0, domain="translation"))
     prev = "F"

@@ -1,6 +1,6 @@
 """The pneumatic-cylinder seal-friction rig as an ideal (frictionless) bond graph.
 
-The rig (``shared/data/pneumatic_cylinder_friction/SOURCE.md``, Zillen's
+The rig (``tests/data/pneumatic_cylinder_friction/SOURCE.md``, Zillen's
 3D-printed cylinder, Ø25 mm bore): the chamber is held at a constant gauge
 pressure ``p`` while a linear drive moves the piston rod back and forth and a
 load cell measures the rod force ``F``.  The ideal actuator gives
@@ -43,6 +43,7 @@ import math
 from ..elements import EquationElement, MTF, One, Se
 from ..graph import BondGraph
 from ..params import Param
+from ..errors import ArgumentError
 
 __all__ = ["pneumatic_cylinder", "BORE_AREA"]
 
@@ -75,7 +76,7 @@ def pneumatic_cylinder(*, area: float = BORE_AREA, tau_servo: float = 0.02) -> B
     """
     for label, value in (("area", area), ("tau_servo", tau_servo)):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-            raise ValueError(f"pneumatic_cylinder: {label} must be a positive number; found {value!r}")
+            raise ArgumentError(f"pneumatic_cylinder: {label} must be a positive number; found {value!r}")
     g = BondGraph("pneumatic_cylinder", description="ideal pneumatic cylinder F = p A, imposed rod position")
     g.add_parameter(Param("A", area, "m^2", "piston area (bore 25 mm)"))
     g.add_parameter(Param("tau_servo", tau_servo, "s", "time constant of the position follower"))

@@ -3,7 +3,7 @@
 BLDC motor -> harmonic drive -> torque sensor -> human trunk.  Inputs: the
 motor torque ``tau_m`` (Se) and the trunk velocity ``w_h`` (Sf, the paper's
 :math:`\\dot\\theta_h`).  Parameter values, units and their status (PAPER,
-DATASHEET, PROXY, ASSUMED) come from ``shared/exo-parameters.md``; every
+DATASHEET, PROXY, ASSUMED) come from ``docs/exo-parameters.md``; every
 :class:`~bondgraph.Param` carries them in its description.
 
 Structure (junction names are the flows / efforts they carry)::
@@ -41,7 +41,7 @@ Reconstruction choices (``docs/models.md`` gives the reasons):
 
 References
 ----------
-.. [1] Exoskeleton bond graph / Kalman observer paper, ``shared/seeds/004_e7537f0e64a650f8.txt``:
+.. [1] Exoskeleton bond graph / Kalman observer paper, seed 004 (``docs/references.md``):
    eq. (1) per-body equations, eq. (3) state matrices, Fig. 6 bond graph,
    Sec. 4 parameters, Sec. 5.1 comparison test.
 """

@@ -5,7 +5,7 @@ the two ends of a seesaw.  The pneumatic side is a pseudo-bond graph
 (effort: absolute pressure, Pa; flow: mass flow, kg/s, positive INTO the
 muscle); the mechanical side is a rotational bond graph (torque, N m /
 angular velocity, rad/s).  Every reading of the paper that it leaves open
-follows ``shared/pam-conventions.md``, the project's reference conventions.
+follows ``docs/pam-conventions.md``, the project's reference conventions.
 
 Structure (full variant)::
 
@@ -52,7 +52,7 @@ The conventions' fixed-step scheme (1 ms samples, 4 classic RK4 sub-steps of
 References
 ----------
 .. [1] T. Shin, T. Ibayashi, K. Kogiso, "Detailed dynamic model of antagonistic
-   PAM system and its experimental validation", ``shared/seeds/000_e88691151ec17d16.txt``:
+   PAM system and its experimental validation", seed 000 (``docs/references.md``):
    eqs. (2)-(11), Table II.
 """
 from __future__ import annotations
@@ -63,9 +63,10 @@ from typing import Literal, Mapping
 from ..elements import C, EquationElement, I, MSf, MTF, One
 from ..graph import BondGraph
 from ..params import Param, values_with_overrides
+from ..errors import ArgumentError
 
 __all__ = ["pam", "PARAMETERS", "KAPPA_KNOTS", "FRICTION_STEP", "DP_CLAMP", "parameter_values",
-           "kappa_law", "orifice_flux_law", "valve_law"]
+           "kappa_law", "orifice_flux_law", "valve_law", "valve_locals", "VALVE_FLOW"]
 
 #: Sub-step of the friction law and of the conventions' RK4 scheme, s (4 per 1 ms sample).
 FRICTION_STEP = 0.25e-3
@@ -136,18 +137,22 @@ def parameter_values(overrides: Mapping[str, float] | None = None) -> dict[str, 
 
 # -- constitutive laws, as expression text over the graph's names -------------------------
 
-def kappa_law(u: str) -> str:
+def kappa_law(u: str, *, clipped: bool = False) -> str:
     """Open rate :math:`\\alpha = \\kappa(u)` as a Piecewise of linear segments.
 
-    `u` (V) is clipped to [0, 10] first; between the knots of
-    :data:`KAPPA_KNOTS` (conventions' table) alpha is linear in u.
+    `u` (V) is clipped to [0, 10] first (unless `clipped` says it already
+    is); between the knots of :data:`KAPPA_KNOTS` (conventions' table) alpha
+    is linear in u.
     """
-    uc = f"Min(Max({u}, 0), 10)"
+    uc = u if clipped else f"Min(Max({u}, 0), 10)"
     pieces = []
     for (ua, aa), (ub, ab) in zip(KAPPA_KNOTS, KAPPA_KNOTS[1:]):
-        slope = (ab - aa) / (ub - ua)
+        # alpha = slope u + intercept; the knots are short decimals, so are these (round
+        # away the float noise of the division: 0.09, not 0.08999999999999997)
+        slope = round((ab - aa) / (ub - ua), 10)
+        intercept = round(aa - slope * ua, 10)
         cond = "True" if ub == KAPPA_KNOTS[-1][0] else f"{uc} <= {ub!r}"
-        pieces.append(f"({aa!r} + {slope!r}*({uc} - {ua!r}), {cond})")
+        pieces.append(f"({slope!r}*{uc} + {intercept!r}, {cond})")
     return f"Piecewise({', '.join(pieces)})"
 
 
@@ -193,6 +198,23 @@ def valve_law(u: str, p: str) -> str:
     return f"((A1 + A2)/2*{net} + (A1 - A2)/2*Abs({net}))"
 
 
+def valve_locals(u: str, p: str) -> dict[str, str]:
+    """The valve law :func:`valve_law` as named locals, in evaluation order.
+
+    ``u_c`` (clipped voltage, V), ``alpha`` (open rate), ``m_in`` and
+    ``m_out`` (signed fluxes per unit area tank -> muscle and muscle ->
+    atmosphere, kg/(s m^2)) and ``net``; the valve's mass flow is then
+    :data:`VALVE_FLOW` over these names.
+    """
+    return {"u_c": f"Min(Max({u}, 0), 10)", "alpha": kappa_law("u_c", clipped=True),
+            "m_in": orifice_flux_law("P_tank", p), "m_out": orifice_flux_law(p, "P_out"),
+            "net": "alpha*m_in - (1 - alpha)*m_out"}
+
+
+#: Mass flow into the muscle over :func:`valve_locals`' names, eq. (5) (A1 if net > 0, else A2).
+VALVE_FLOW = "(A1 + A2)/2*net + (A1 - A2)/2*Abs(net)"
+
+
 def _length(i: int, psi: str) -> str:
     """Muscle length eq. (2) (conventions): l1 = L0 - r sin psi, l2 = L0 + r sin psi."""
     return f"(L0 {'-' if i == 1 else '+'} r*sin({psi}))"
@@ -210,13 +232,14 @@ def _torque(psi: str) -> str:
 
 
 def _muscle(i: int, psi: str) -> EquationElement:
-    l = _length(i, psi)
-    volume = f"(D1*{l}**2 + D2*{l} + D3)"
     return EquationElement(
         f"muscle{i}", ports={"pn": "in", "mech": "in"},
-        outputs={"e_pn": f"P_{i}", "e_mech": _force(i, psi)},
+        # length eq. (2), volume eq. (3), contraction force eqs. (6)-(7)
+        locals={"l": _length(i, psi), "V": "D1*l**2 + D2*l + D3",
+                "F": f"(p_v1{i}*l + p_v2{i})*P_{i} + p_w1{i}*l + p_w2{i}"},
+        outputs={"e_pn": f"P_{i}", "e_mech": "F"},
         # eq. (4), with dV/dt = (2 D1 l + D2) dl/dt and dl/dt = f_mech (elongation rate)
-        states={f"P_{i}": f"k1*R*T*f_pn/{volume} - k2*(2*D1*{l} + D2)*f_mech*P_{i}/{volume}"},
+        states={f"P_{i}": f"k1*R*T*f_pn/V - k2*(2*D1*l + D2)*f_mech*P_{i}/V"},
         initial={f"P_{i}": PARAMETERS["P_out"].value}, units={f"P_{i}": "Pa"},
         descriptions={f"P_{i}": f"absolute pressure in muscle {i}"},
         description=f"muscle {i}: chamber eq. (4), volume eq. (3), contraction force eqs. (6)-(7); "
@@ -225,16 +248,18 @@ def _muscle(i: int, psi: str) -> EquationElement:
 
 def _friction() -> EquationElement:
     """Kikuuwe friction eq. (10) (conventions: Z = h/J, T_s, T_p with the clamp)."""
-    t0 = f"({_torque('q_psi')} - k_s*q_psi)"
     z = "(h_step/J)"
-    w = f"(f_shaft + {z}*{t0})"
-    t_s = f"r_p*mu_s*Abs({_force(1, 'q_psi')} + {_force(2, 'q_psi')} - M*g)"
-    t_p = f"mu_p*(1/Max(P_1 - P_out, {DP_CLAMP!r})**2 + 1/Max(P_2 - P_out, {DP_CLAMP!r})**2)"
-    fc = f"({t_s} + {t_p})"
-    law = (f"Piecewise((({fc}*sign({w}) + c_s*{w})/(1 + {z}*c_s), Abs({w}) > {z}*{fc}), "
-           f"({w}/{z}, True))")
+    law = (f"Piecewise(((F_c*sign(w) + c_s*w)/(1 + {z}*c_s), Abs(w) > {z}*F_c), "
+           f"(w/{z}, True))")
+    named = {
+        "F_1": _force(1, "q_psi"), "F_2": _force(2, "q_psi"),
+        "w": f"f_shaft + {z}*(r*cos(q_psi)*(F_1 - F_2) - k_s*q_psi)",   # velocity predictor
+        "T_s": "r_p*mu_s*Abs(F_1 + F_2 - M*g)",                          # shaft Coulomb
+        "T_p": f"mu_p*(1/Max(P_1 - P_out, {DP_CLAMP!r})**2 + 1/Max(P_2 - P_out, {DP_CLAMP!r})**2)",
+        "F_c": "T_s + T_p",
+    }
     return EquationElement(
-        "friction", ports={"shaft": "in"}, outputs={"e_shaft": "T_f"},
+        "friction", ports={"shaft": "in"}, outputs={"e_shaft": "T_f"}, locals=named,
         held={"T_f": law}, fixed_step=FRICTION_STEP, units={"T_f": "N m"},
         descriptions={"T_f": "Kikuuwe friction torque eq. (10), held over each sub-step"},
         description="joint friction (Kikuuwe, eq. (10)): shaft T_s + tube T_p Coulomb, viscous c_s")
@@ -279,7 +304,7 @@ def pam(variant: Variant = "full", *, params: Mapping[str, float] | None = None)
     ('P_1', 'P_2')
     """
     if variant not in _GRAPH_NAMES:
-        raise ValueError(f"pam: variant must be one of {', '.join(map(repr, _GRAPH_NAMES))}; "
+        raise ArgumentError(f"pam: variant must be one of {', '.join(map(repr, _GRAPH_NAMES))}; "
                          f"found {variant!r}")
     values = parameter_values(params)
     g = BondGraph(_GRAPH_NAMES[variant], description=f"antagonistic PAM joint, seed 000 ({variant})")
@@ -298,7 +323,7 @@ def pam(variant: Variant = "full", *, params: Mapping[str, float] | None = None)
     psi = "0" if locked else "q_psi"
     g.add(One("seesaw", description="joint angular velocity psi'"))
     for i in (1, 2):
-        g.add(MSf(f"valve{i}", valve_law(f"u{i}", f"P_{i}"), domain="pneumatic",
+        g.add(MSf(f"valve{i}", VALVE_FLOW, locals=valve_locals(f"u{i}", f"P_{i}"), domain="pneumatic",
                   description=f"valve {i}, eq. (5): mass flow into muscle {i}"))
         g.add(_muscle(i, psi))
         g.add(MTF(f"arm{i}", f"{'-' if i == 1 else ''}r*cos({psi})",

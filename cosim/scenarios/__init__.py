@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import importlib
 
-from bondgraph.errors import UnknownNameError
+from cosim.errors import UnknownNameError
 
 __all__ = ["names", "describe", "run", "SCENARIOS"]
 

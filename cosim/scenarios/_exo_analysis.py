@@ -19,7 +19,7 @@ python-control's ``stability_margins`` does.
 References
 ----------
 .. [1] Exoskeleton bond graph / Kalman observer paper,
-   ``shared/seeds/004_e7537f0e64a650f8.txt``, Section 5.2, Figs. 13-15.
+   seed 004 (``docs/references.md``), Section 5.2, Figs. 13-15.
 """
 from __future__ import annotations
 

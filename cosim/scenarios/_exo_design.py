@@ -39,7 +39,7 @@ sample variances or for the continuous intensities ``a^2 dt / 3``.
 References
 ----------
 .. [1] Exoskeleton bond graph / Kalman observer paper,
-   ``shared/seeds/004_e7537f0e64a650f8.txt``, Sections 3-5, eqs. (3)-(17).
+   seed 004 (``docs/references.md``), Sections 3-5, eqs. (3)-(17).
 """
 from __future__ import annotations
 
@@ -50,7 +50,7 @@ import numpy as np
 from scipy.signal import cont2discrete
 
 from bondgraph.blockdiagram.exoskeleton import state_space
-from bondgraph.errors import ParameterError
+from cosim.errors import ParameterError
 from bondgraph.library.exoskeleton import parameter_values
 from estimators.lqi import LQIGain, lqi
 from estimators.observer import ObserverGain, continuous_kalman_gain, discrete_kalman_gain

@@ -18,14 +18,14 @@ velocity, a known input of the observer (eq. (8)).
 References
 ----------
 .. [1] Exoskeleton bond graph / Kalman observer paper,
-   ``shared/seeds/004_e7537f0e64a650f8.txt``, Section 5.2.
+   seed 004 (``docs/references.md``), Section 5.2.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from bondgraph.blockdiagram.exoskeleton import state_space
-from bondgraph.errors import CosimError
+from cosim.errors import CosimError
 
 from ..blocks import Constant, Step
 from ..component import Port, PythonBlock

@@ -3,7 +3,7 @@
 References
 ----------
 .. [1] Exoskeleton bond graph / Kalman observer paper,
-   ``shared/seeds/004_e7537f0e64a650f8.txt``, Section 5.2.
+   seed 004 (``docs/references.md``), Section 5.2.
 """
 from __future__ import annotations
 

@@ -17,11 +17,12 @@ standard textbook definitions, stated here and in ``docs/reproduction_kpid.md``:
 References
 ----------
 .. [1] Yang H. et al., Control Theory & Applications (2017);
-   ``shared/seeds/002_cb2dc7ef6c6d2e82.txt``.
+   seed 002 (``docs/references.md``).
 """
 from __future__ import annotations
 
 import numpy as np
+from cosim.errors import ScenarioError
 
 __all__ = ["tracking_precision_pct", "step_metrics", "SETTLING_BAND", "STEADY_FRACTION"]
 
@@ -34,7 +35,7 @@ STEADY_FRACTION = 0.25
 def _arrays(t, y, name="y"):
     t, y = np.asarray(t, dtype=float), np.asarray(y, dtype=float)
     if t.ndim != 1 or t.shape != y.shape or t.size < 2:
-        raise ValueError(f"{name}: expected 1-D t and {name} of the same length >= 2; "
+        raise ScenarioError(f"{name}: expected 1-D t and {name} of the same length >= 2; "
                          f"found shapes {t.shape} and {y.shape}")
     return t, y
 
@@ -50,7 +51,7 @@ def tracking_precision_pct(reference, y) -> float:
     yd, y = np.asarray(reference, dtype=float), np.asarray(y, dtype=float)
     span = float(np.max(yd) - np.min(yd))
     if yd.shape != y.shape or span <= 0.0:
-        raise ValueError("tracking_precision_pct needs a non-constant reference and an output "
+        raise ScenarioError("tracking_precision_pct needs a non-constant reference and an output "
                          f"of the same shape; found shapes {yd.shape}, {y.shape}, range {span}")
     return float(100.0 * np.mean(np.abs(yd - y)) / span)
 
@@ -84,7 +85,7 @@ def step_metrics(t, y, target: float, *, y0: float = 0.0) -> dict:
     t, y = _arrays(t, y)
     step = float(target) - float(y0)
     if step == 0.0:
-        raise ValueError("step_metrics: target equals y0 (no step)")
+        raise ScenarioError("step_metrics: target equals y0 (no step)")
     rising = step > 0
     t10 = _first_crossing(t, y, y0 + 0.1 * step, rising)
     t90 = _first_crossing(t, y, y0 + 0.9 * step, rising)

@@ -54,7 +54,7 @@ References
 ----------
 .. [1] Yang H., Hao L., Chen Y., Xue B., "Kalman-PID control for chattering
    phenomena of bionic elbow joint actuated by pneumatic artificial muscles",
-   Control Theory & Applications (2017); ``shared/seeds/002_cb2dc7ef6c6d2e82.txt``.
+   Control Theory & Applications (2017); seed 002 (``docs/references.md``).
 """
 from __future__ import annotations
 
@@ -62,6 +62,7 @@ import numpy as np
 import sympy as sp
 
 from bondgraph.system import StateEquations
+from cosim.errors import ScenarioError
 
 __all__ = ["ARX_A", "ARX_B", "T_ID", "continuous_modes", "pam_single_equations", "arx_response"]
 
@@ -98,7 +99,7 @@ def continuous_modes(a=ARX_A, b=ARX_B, T: float = T_ID) -> dict:
     real = [x for x in lam if abs(x.imag) < 1e-12]
     cplx = [x for x in lam if x.imag > 1e-12]
     if len(real) != 1 or len(cplx) != 1 or real[0].real <= 0.0:
-        raise ValueError(f"expected one positive real pole and one complex pair; poles are {lam}")
+        raise ScenarioError(f"expected one positive real pole and one complex pair; poles are {lam}")
     dden = np.polyder(den)
 
     def mode(lz):

@@ -11,7 +11,7 @@ References
 ----------
 .. [1] T. Shin, T. Ibayashi, K. Kogiso, "Detailed dynamic model of antagonistic
    PAM system and its experimental validation: sensor-less angle and torque
-   control with UKF", ``shared/seeds/000_e88691151ec17d16.txt``.
+   control with UKF", seed 000 (``docs/references.md``).
 """
 from __future__ import annotations
 

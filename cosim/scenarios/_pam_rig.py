@@ -34,8 +34,8 @@ References
 ----------
 .. [1] T. Shin, T. Ibayashi, K. Kogiso, "Detailed dynamic model of antagonistic
    PAM system and its experimental validation: sensor-less angle and torque
-   control with UKF", ``shared/seeds/000_e88691151ec17d16.txt``.
-.. [2] ``shared/pam-conventions.md``; :func:`bondgraph.library.pam.pam`.
+   control with UKF", seed 000 (``docs/references.md``).
+.. [2] ``docs/pam-conventions.md``; :func:`bondgraph.library.pam.pam`.
 """
 from __future__ import annotations
 
@@ -49,6 +49,7 @@ import numpy as np
 from bondgraph.blockdiagram import pam as pam_bd
 from bondgraph.library.pam import FRICTION_STEP, pam, parameter_values
 from fmus import export
+from cosim.errors import ScenarioError
 
 __all__ = ["RIG_PERTURBATION", "rig_params", "rig_graph", "nominal_equations", "export_rig",
            "rig_start_values", "add_pressure_noise"]
@@ -166,7 +167,7 @@ def rig_start_values(u0=(5.0, 5.0), *, locked: bool = False) -> dict[str, float]
     """
     u = np.asarray(u0, dtype=float)
     if u.shape != (2,) or not np.all(np.isfinite(u)) or np.any((u < 0.0) | (u > 10.0)):
-        raise ValueError(f"rig_start_values: u0 must be two voltages within [0, 10] V, got {u0!r}")
+        raise ScenarioError(f"rig_start_values: u0 must be two voltages within [0, 10] V, got {u0!r}")
     psi, _, P1, P2 = pam_bd.equilibrium(u, rig_params(), variant="locked" if locked else "full")
     start = {"u1": float(u[0]), "u2": float(u[1]), "P_1": float(P1), "P_2": float(P2)}
     if not locked:
@@ -197,6 +198,6 @@ def add_pressure_noise(p, rng: np.random.Generator, sigma_pa: float) -> np.ndarr
         `sigma_pa` negative or not finite.
     """
     if not np.isfinite(sigma_pa) or sigma_pa < 0.0:
-        raise ValueError(f"add_pressure_noise: sigma_pa must be a finite value >= 0 Pa, got {sigma_pa!r}")
+        raise ScenarioError(f"add_pressure_noise: sigma_pa must be a finite value >= 0 Pa, got {sigma_pa!r}")
     p = np.asarray(p, dtype=float)
     return p + rng.normal(0.0, sigma_pa, size=p.shape)

@@ -18,7 +18,7 @@ References
 ----------
 .. [1] T. Shin, T. Ibayashi, K. Kogiso, "Detailed dynamic model of antagonistic
    PAM system and its experimental validation: sensor-less angle and torque
-   control with UKF", ``shared/seeds/000_e88691151ec17d16.txt``.
+   control with UKF", seed 000 (``docs/references.md``).
 """
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ import numpy as np
 
 import bondgraph.library as library
 from bondgraph.blockdiagram import pam as pam_bd
-from bondgraph.errors import CosimError
+from cosim.errors import CosimError
 from bondgraph.evaluate import compile_model
 from estimators import DiscretePI, JulierSigmaPoints
 

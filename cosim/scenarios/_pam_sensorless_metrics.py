@@ -22,13 +22,13 @@ References
 ----------
 .. [1] T. Shin, T. Ibayashi, K. Kogiso, "Detailed dynamic model of antagonistic
    PAM system and its experimental validation: sensor-less angle and torque
-   control with UKF", ``shared/seeds/000_e88691151ec17d16.txt``.
+   control with UKF", seed 000 (``docs/references.md``).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from bondgraph.errors import CosimError
+from cosim.errors import CosimError
 
 __all__ = ["steady_state_mask", "steady_state_performance", "plot_loop"]
 

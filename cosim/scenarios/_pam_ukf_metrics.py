@@ -19,11 +19,12 @@ References
 ----------
 .. [1] T. Shin, T. Ibayashi, K. Kogiso, "Detailed dynamic model of antagonistic
    PAM system and its experimental validation: sensor-less angle and torque
-   control with UKF", ``shared/seeds/000_e88691151ec17d16.txt``.
+   control with UKF", seed 000 (``docs/references.md``).
 """
 from __future__ import annotations
 
 import numpy as np
+from cosim.errors import ScenarioError
 
 __all__ = ["rmse_index", "max_index", "ratio_index", "indices"]
 
@@ -31,10 +32,10 @@ __all__ = ["rmse_index", "max_index", "ratio_index", "indices"]
 def _error(z, name: str = "z") -> np.ndarray:
     z = np.asarray(z, dtype=float)
     if z.ndim != 1 or z.size < 2:
-        raise ValueError(f"{name} must be a 1-D signal of at least 2 samples (k = 0..N, N >= 1); "
+        raise ScenarioError(f"{name} must be a 1-D signal of at least 2 samples (k = 0..N, N >= 1); "
                          f"found shape {z.shape}")
     if not np.all(np.isfinite(z)):
-        raise ValueError(f"{name} has {int(np.sum(~np.isfinite(z)))} non-finite value(s), the first at "
+        raise ScenarioError(f"{name} has {int(np.sum(~np.isfinite(z)))} non-finite value(s), the first at "
                          f"k = {int(np.argmax(~np.isfinite(z)))}")
     return z
 
@@ -94,10 +95,10 @@ def ratio_index(z, xi) -> float:
     """
     z, xi = _error(z), _error(xi, "xi")
     if z.shape != xi.shape:
-        raise ValueError(f"z and xi must have the same shape; found {z.shape} and {xi.shape}")
+        raise ScenarioError(f"z and xi must have the same shape; found {z.shape} and {xi.shape}")
     span = float(np.max(xi) - np.min(xi))
     if span <= 0.0:
-        raise ValueError("xi is constant: Q needs a signal with a non-zero range")
+        raise ScenarioError("xi is constant: Q needs a signal with a non-zero range")
     return max_index(z) / span
 
 
@@ -115,6 +116,6 @@ def indices(truth, estimate) -> dict[str, float]:
     """
     truth, estimate = _error(truth, "truth"), _error(estimate, "estimate")
     if truth.shape != estimate.shape:
-        raise ValueError(f"truth and estimate must have the same shape; found {truth.shape} and {estimate.shape}")
+        raise ScenarioError(f"truth and estimate must have the same shape; found {truth.shape} and {estimate.shape}")
     z = truth - estimate
     return {"I": rmse_index(z), "M": max_index(z), "Q": ratio_index(z, truth)}

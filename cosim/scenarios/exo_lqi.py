@@ -27,7 +27,7 @@ Run:  python -m cosim.scenarios.exo_lqi [OUTPUT_DIR]
 References
 ----------
 .. [1] Exoskeleton bond graph / Kalman observer paper,
-   ``shared/seeds/004_e7537f0e64a650f8.txt``, Sections 3-5.
+   seed 004 (``docs/references.md``), Sections 3-5.
 """
 from __future__ import annotations
 
@@ -69,7 +69,7 @@ READING = ("relative angles (theta_h removed, theta_h_dot a known observer input
            "Kalman covariances and the simulated noise; loop run at 0.1 ms with the discrete steady-state Kalman "
            "filter of the ZOH model (margins and Bode from the continuous Kalman-Bucy gain, eq. 9); bandwidth = "
            "upper -3 dB frequency below the peak (DC gain is 0 under double integral action); unpublished "
-           "parameters from shared/exo-parameters.md (k_g, k_s, J_sint, J_sext assumed)")
+           "parameters from docs/exo-parameters.md (k_g, k_s, J_sint, J_sext assumed)")
 
 
 def noise(n: int, *, seed: int = SEED) -> np.ndarray:

@@ -32,7 +32,7 @@ References
 ----------
 .. [1] Yang H., Hao L., Chen Y., Xue B., "Kalman-PID control for chattering
    phenomena of bionic elbow joint actuated by pneumatic artificial muscles",
-   Control Theory & Applications (2017); ``shared/seeds/002_cb2dc7ef6c6d2e82.txt``.
+   Control Theory & Applications (2017); seed 002 (``docs/references.md``).
 """
 from __future__ import annotations
 
@@ -51,6 +51,7 @@ from ..fmu_component import FMUComponent
 from ..master import CoSimulation
 from ._kpid_metrics import step_metrics, tracking_precision_pct
 from ._kpid_plant import ARX_A, ARX_B, pam_single_equations
+from cosim.errors import ScenarioError
 
 NAME = "kpid"
 DESCRIPTION = "single PAM of seed 002 (eq. 15) as FMU: PID vs Kalman-PID under the paper's noise"
@@ -117,7 +118,7 @@ def make_controller(kind: str):
         return PID(p["Kp"], p["Ki"], p["Kd"], T=p["T"])
     if kind == "kpid":
         return KPID(p["Kp"], p["Ki"], p["Kd"], T=p["T"], Q=p["Q"], R=p["R"])
-    raise ValueError(f"controller kind must be 'pid' or 'kpid'; found {kind!r}")
+    raise ScenarioError(f"controller kind must be 'pid' or 'kpid'; found {kind!r}")
 
 
 def reference(kind: str):
@@ -126,7 +127,7 @@ def reference(kind: str):
         return lambda t: 20.0 * np.cos(0.5 * np.pi * t) + 20.0
     if kind == "step":
         return lambda t: 30.0
-    raise ValueError(f"reference kind must be 'periodic' or 'step'; found {kind!r}")
+    raise ScenarioError(f"reference kind must be 'periodic' or 'step'; found {kind!r}")
 
 
 def noise(n: int, *, seed: int = SEED, distribution: str = "gaussian", scale: float = 1.0):
@@ -142,7 +143,7 @@ def noise(n: int, *, seed: int = SEED, distribution: str = "gaussian", scale: fl
         m = rng.uniform(-MEASUREMENT_NOISE, MEASUREMENT_NOISE, n)
         r = rng.uniform(-PROCESS_NOISE, PROCESS_NOISE, n)
     else:
-        raise ValueError(f"distribution must be 'gaussian' or 'uniform'; found {distribution!r}")
+        raise ScenarioError(f"distribution must be 'gaussian' or 'uniform'; found {distribution!r}")
     return scale * r, scale * m
 
 

@@ -43,7 +43,7 @@ References
 ----------
 .. [1] T. Shin, T. Ibayashi, K. Kogiso, "Detailed dynamic model of antagonistic
    PAM system and its experimental validation: sensor-less angle and torque
-   control with UKF", ``shared/seeds/000_e88691151ec17d16.txt``.
+   control with UKF", seed 000 (``docs/references.md``).
 """
 from __future__ import annotations
 
@@ -67,6 +67,7 @@ from ..master import CoSimulation
 from ._pam_paper_ukf import KAPPA, PAPER_P0, PAPER_Q, PAPER_R, paper_state_map
 from ._pam_rig import RIG_PERTURBATION, add_pressure_noise, export_rig, nominal_equations, rig_start_values
 from ._pam_ukf_metrics import indices
+from cosim.errors import ScenarioError
 
 __all__ = ["NAME", "DESCRIPTION", "run", "inputs", "record_rig", "make_ukf", "ukf_estimates",
            "model_alone", "estimator_start", "experiment", "PAPER_OFFLINE"]
@@ -142,12 +143,12 @@ def _profile(t, u, who: str):
     """`t`, `u` as float arrays; u of shape (len(t), 2), t = 0, 1 ms, 2 ms, ..."""
     t, u = np.asarray(t, dtype=float), np.asarray(u, dtype=float)
     if t.ndim != 1 or t.size < 2 or u.shape != (t.size, 2):
-        raise ValueError(f"{who}: need t of shape (n >= 2,) and u of shape (n, 2) (V); found t {t.shape}, "
+        raise ScenarioError(f"{who}: need t of shape (n >= 2,) and u of shape (n, 2) (V); found t {t.shape}, "
                          f"u {u.shape}")
     if not np.allclose(t, np.arange(t.size) * SAMPLE_TIME, rtol=0.0, atol=1e-9):
-        raise ValueError(f"{who}: t must be 0, 1 ms, 2 ms, ... (the rig's sampling)")
+        raise ScenarioError(f"{who}: t must be 0, 1 ms, 2 ms, ... (the rig's sampling)")
     if not np.all(np.isfinite(u)):
-        raise ValueError(f"{who}: u has non-finite values (first at row {int(np.argmax(~np.isfinite(u).all(1)))})")
+        raise ScenarioError(f"{who}: u has non-finite values (first at row {int(np.argmax(~np.isfinite(u).all(1)))})")
     return t, u
 
 

@@ -26,6 +26,7 @@ from ..place import Place
 from . import profiles as pr
 from .truth import (CubicSpring, Effect, EffectParam, InputDelay, InputSaturation, PamValveLag,
                     ResistiveEffect, SensorGain, SensorOffset)
+from ..errors import UnknownCaseError
 
 __all__ = ["Signal", "Case", "CASES", "case"]
 
@@ -281,4 +282,4 @@ def case(name: str) -> Case:
     for c in CASES:
         if c.name == name:
             return c
-    raise KeyError(f"no diagnosis case {name!r}; cases are {', '.join(c.name for c in CASES)}")
+    raise UnknownCaseError(f"no diagnosis case {name!r}; cases are {', '.join(c.name for c in CASES)}")

@@ -19,6 +19,7 @@ import bondgraph.library as library
 from bondgraph import simulate
 
 from .definitions import CASES, Case
+from ..errors import DiagnosisError
 
 __all__ = ["sample_times", "commands", "simulate_case", "GeneratedRecording", "record", "write_case",
            "manifest_entry", "write_all", "effect_ratio", "MANIFEST", "HOLDOUT"]
@@ -98,7 +99,7 @@ def simulate_case(case: Case, t: np.ndarray, model_commands: dict, *, truth: boo
                       params=effect.simulation_params() if with_effect else None,
                       output_interval=float(t[1] - t[0]))
     if len(result.t) != len(t) or not np.allclose(result.t, t, atol=1e-9):
-        raise RuntimeError(f"case {case.name}: the simulation's time grid does not match the samples")
+        raise DiagnosisError(f"case {case.name}: the simulation's time grid does not match the samples")
     outputs = {s.name: np.asarray(result[s.name], dtype=float) for s in case.outputs}
     if truth and effect is not None:
         outputs = effect.outputs(outputs)

@@ -26,6 +26,7 @@ from bondgraph.elements import C, MSf, One, R, Se
 from bondgraph.params import Param
 
 from ..place import Place
+from ..errors import UnknownCaseError
 
 __all__ = ["EffectParam", "Effect", "ResistiveEffect", "CubicSpring", "PamValveLag",
            "InputSaturation", "InputDelay", "SensorGain", "SensorOffset", "copy_graph"]
@@ -59,13 +60,13 @@ class Effect:
         for p in self.params:
             if p.name == name:
                 return p.value
-        raise KeyError(f"{self.kind}: no parameter {name!r}; it has {[p.name for p in self.params]}")
+        raise UnknownCaseError(f"{self.kind}: no parameter {name!r}; it has {[p.name for p in self.params]}")
 
     def with_values(self, **values: float) -> "Effect":
         """The same effect with some parameter values replaced (SI)."""
         unknown = set(values) - {p.name for p in self.params}
         if unknown:
-            raise KeyError(f"{self.kind}: no parameter(s) {sorted(unknown)}")
+            raise UnknownCaseError(f"{self.kind}: no parameter(s) {sorted(unknown)}")
         return replace(self, params=tuple(replace(p, value=float(values.get(p.name, p.value)))
                                           for p in self.params))
 
@@ -278,7 +279,7 @@ def copy_graph(graph: BondGraph, *, replace: dict | None = None, drop_inputs=())
     replace = dict(replace or {})
     unknown = set(replace) - set(graph.elements)
     if unknown:
-        raise KeyError(f"copy_graph: {graph.name!r} has no element(s) {sorted(unknown)}")
+        raise UnknownCaseError(f"copy_graph: {graph.name!r} has no element(s) {sorted(unknown)}")
     new = BondGraph(graph.name, description=graph.description)
     for p in graph.extra_params.values():
         new.add_parameter(p)

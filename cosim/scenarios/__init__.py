@@ -29,7 +29,7 @@ import importlib
 
 from bondgraph.errors import ParameterError, UnknownNameError
 
-__all__ = ["names", "describe", "run", "parameters", "export_fmus", "SCENARIOS"]
+__all__ = ["names", "describe", "run", "parameters", "export_fmus", "headline_metrics", "SCENARIOS"]
 
 #: Scenario name -> module (in this package).
 SCENARIOS = {
@@ -67,6 +67,12 @@ def parameters(name: str) -> dict:
         No scenario has that name.
     """
     return dict(getattr(_module(name), "PARAMETERS", {}))
+
+
+def headline_metrics(name: str) -> tuple:
+    """The scenario's main numbers, as flattened result keys (``"ukf.angle.I"``), for sweep plots;
+    empty if it names none (``SWEEP_METRICS`` of its module)."""
+    return tuple(getattr(_module(name), "SWEEP_METRICS", ()))
 
 
 def export_fmus(name: str, directory) -> dict:

@@ -51,8 +51,8 @@ from ._exo_design import NOISE_BOUNDS, PAPER_GAINS, PAPER_SIMULATION_PARAMS, Q_P
     disturbance_to_estimate, loop_at_plant_input, sampled_loop_at_plant_input
 from ._exo_loop import NOISE_COLUMNS, cosimulate, monolithic
 
-__all__ = ["NAME", "DESCRIPTION", "PARAMETERS", "FMU_FILES", "run", "simulate", "export_plant", "export_fmus",
-           "noise"]
+__all__ = ["NAME", "DESCRIPTION", "PARAMETERS", "SWEEP_METRICS", "FMU_FILES", "run", "simulate", "export_plant",
+           "export_fmus", "noise"]
 
 NAME = "exo-lqi"
 DESCRIPTION = "exoskeleton (seed 004 Sec. 5.2) as FMU: Kalman observer + LQI with double integral action"
@@ -84,6 +84,10 @@ READING = ("relative angles (theta_h removed, theta_h_dot a known observer input
 #: follows the plant, as it would for a redesigned exoskeleton.
 PARAMETERS = MappingProxyType({n: Param(n, PAPER_SIMULATION_PARAMS.get(n, p.value), p.unit, p.description)
                                for n, p in EXO_PARAMETERS.items()})
+#: The main numbers, for sweep plots: margins (dB, deg, s), bandwidth (Hz), motor torque and
+#: body-torque estimation error (N m).
+SWEEP_METRICS = ("margins.gain_db", "margins.phase_deg", "margins.delay_s", "bandwidth_hz", "max_motor_torque",
+                 "estimation_rms_Nm")
 #: File name of the plant FMU in a ``fmu_dir`` (:func:`export_fmus`).
 FMU_FILES = MappingProxyType({"plant": "exoskeleton.fmu"})
 

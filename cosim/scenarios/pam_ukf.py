@@ -72,8 +72,9 @@ from ._pam_rig import RIG_PERTURBATION, add_pressure_noise, export_rig, nominal_
     rig_start_values
 from ._pam_ukf_metrics import indices
 
-__all__ = ["NAME", "DESCRIPTION", "PARAMETERS", "run", "export_fmus", "inputs", "record_rig", "make_ukf", "ukf_estimates",
-           "model_alone", "estimator_start", "experiment", "PAPER_OFFLINE"]
+__all__ = ["NAME", "DESCRIPTION", "PARAMETERS", "SWEEP_METRICS", "FMU_FILES", "run", "export_fmus", "inputs",
+           "record_rig", "make_ukf", "ukf_estimates", "model_alone", "estimator_start", "experiment",
+           "PAPER_OFFLINE"]
 
 NAME = "pam-ukf"
 DESCRIPTION = "UKF estimating PAM joint angle and torque from P1, P2 on a perturbed rig FMU (seed 000)"
@@ -101,6 +102,9 @@ def _parameters():
 #: default is the rig's value, Table II times :data:`RIG_PERTURBATION`), ``segment_s`` and
 #: ``sigma_p``.  The estimators keep the nominal Table II model whatever the rig.
 PARAMETERS = _parameters()
+
+#: The main numbers, for sweep plots: angle and torque RMSE (index I; deg, N m), UKF and model alone.
+SWEEP_METRICS = ("ukf.angle.I", "model_only.angle.I", "ukf.torque.I", "model_only.torque.I")
 
 #: Section IV-A of [1]: offline estimation (Figs. 9, 10), angle in deg, torque in N m.
 PAPER_OFFLINE = {

@@ -29,7 +29,6 @@ from __future__ import annotations
 import logging
 import math
 import os
-import sys
 import time
 from dataclasses import dataclass
 
@@ -95,7 +94,7 @@ def _chunk_size(requested, runner, n_todo: int, n_workers: int) -> int:
 
 
 def execute(runner, runs: list, store, *, workers=None, scheduler: str | None = None, client=None,
-            chunk_size: int | None = None, progress=sys.stderr, on_chunk=None) -> ExecutionStats:
+            chunk_size: int | None = None, progress=True, on_chunk=None) -> ExecutionStats:
     """Run the `runs` not yet in `store`, writing each finished chunk to it.
 
     Parameters
@@ -113,8 +112,8 @@ def execute(runner, runs: list, store, *, workers=None, scheduler: str | None = 
         An existing client (tests, notebooks); not closed here.
     chunk_size : int, optional
         Runs per task (default: see the module docstring).
-    progress : file or None
-        Where the progress bar goes.
+    progress : file or bool
+        Where the progress bar goes (``True``: stderr; ``None``/``False``: nowhere).
     on_chunk : callable, optional
         Called with each chunk's rows after they are written.
 

@@ -42,11 +42,10 @@ def _hist(table, metrics, path: Path) -> Path:
     for ax, group in zip(axes[:, 0], groups):
         values = [ok[m].to_numpy(dtype=float) for m in group]
         values = [v[np.isfinite(v)] for v in values]
-        every = np.concatenate(values) if values else np.array([])
-        bins = np.histogram_bin_edges(every, bins=min(30, max(5, every.size // 4))) if every.size else 10
         for m, v in zip(group, values):
             if not v.size:
                 continue
+            bins = min(30, max(5, v.size // 3))     # each metric over its own range (they may lie far apart)
             q05, q50, q95 = np.quantile(v, [0.05, 0.5, 0.95])
             patch = ax.hist(v, bins=bins, alpha=0.55, label=f"{m.removeprefix('metric.')}: median {q50:.3g} "
                                                          f"(5-95 %: {q05:.3g}-{q95:.3g})")[2]
@@ -63,7 +62,7 @@ def _hist(table, metrics, path: Path) -> Path:
     return path
 
 
-def _scatter(table, metrics, params, ranking, path: Path) -> Path:
+def _scatter(table, metrics, params, ranking, units, path: Path) -> Path:
     import matplotlib.pyplot as plt
     ok, bad = table[table["status"] == "ok"], table[table["status"] != "ok"]
     metrics, params = metrics[:_MAX], params[:_MAX]
@@ -80,7 +79,8 @@ def _scatter(table, metrics, params, ranking, path: Path) -> Path:
             r = rho.get((m.removeprefix("metric."), p.removeprefix("param.")), float("nan"))
             ax.set_title(f"Spearman {r:+.2f}", fontsize=8)
             if i == len(metrics) - 1:
-                ax.set_xlabel(p.removeprefix("param."), fontsize=8)
+                name = p.removeprefix("param.")
+                ax.set_xlabel(f"{name} ({units[name]})" if units.get(name) else name, fontsize=8)
             if j == 0:
                 ax.set_ylabel(m.removeprefix("metric."), fontsize=8)
             ax.tick_params(labelsize=7)
@@ -110,7 +110,7 @@ def _heatmap(table, metric, x, y, path: Path) -> Path:
     return path
 
 
-def save_plots(table, directory, *, metrics, params, grid_params=(), ranking=()) -> dict:
+def save_plots(table, directory, *, metrics, params, grid_params=(), ranking=(), units=None) -> dict:
     """Write the sweep's plots into `directory`.
 
     Parameters
@@ -123,6 +123,8 @@ def save_plots(table, directory, *, metrics, params, grid_params=(), ranking=())
         ``param.*`` columns that are grid axes; two or more give heat maps (first two axes).
     ranking : list of dict
         :func:`sweeps.summary.sensitivity`, for the scatter titles.
+    units : dict str -> str, optional
+        Parameter units (names without ``param.``), for the axis labels.
 
     Returns
     -------
@@ -138,7 +140,8 @@ def save_plots(table, directory, *, metrics, params, grid_params=(), ranking=())
         return written
     written["histograms"] = _hist(table, metrics, directory / "metrics_histograms.png")
     if params:
-        written["sensitivity"] = _scatter(table, metrics, params, ranking, directory / "sensitivity.png")
+        written["sensitivity"] = _scatter(table, metrics, params, ranking, dict(units or {}),
+                                          directory / "sensitivity.png")
     if len(grid_params) >= 2:
         for m in metrics[:4]:
             name = m.removeprefix("metric.").replace(".", "_")

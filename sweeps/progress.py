@@ -17,11 +17,15 @@ class ProgressBar:
     ----------
     total : int
         Runs to do in this session (not those resumed from disk).
-    stream : file, optional
-        Default ``sys.stderr``; ``None`` prints nothing.
+    stream : file or bool, optional
+        ``True`` (default): ``sys.stderr`` at the time of the call; ``None`` or ``False``: print nothing.
     """
 
-    def __init__(self, total: int, *, stream=sys.stderr, label: str = "runs"):
+    def __init__(self, total: int, *, stream=True, label: str = "runs"):
+        if stream is True:
+            stream = sys.stderr
+        elif stream is False:
+            stream = None
         self.total, self.stream, self.label = int(total), stream, label
         self.done = self.failed = self.running = 0
         self.start = time.perf_counter()

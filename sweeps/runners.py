@@ -34,7 +34,7 @@ from .distributions import Distribution, Grid
 from .errors import MetricError, SpecError
 from .spec import OUTPUT_STATS, ModelTarget, ScenarioTarget, SweepSpec
 
-__all__ = ["RunSpec", "ScenarioRunner", "ModelRunner", "make_runner", "plan_runs", "run_chunk", "flatten"]
+__all__ = ["RunSpec", "ScenarioRunner", "ModelRunner", "make_runner", "plan_runs", "run_chunk", "flatten", "load_graph"]
 
 
 @dataclass(frozen=True)
@@ -197,6 +197,11 @@ class ModelRunner:
 def _equations(model: str, graph):
     if graph is not None:
         return graph if hasattr(graph, "param_values") else graph.equations()
+    return load_graph(model).equations()
+
+
+def load_graph(model: str):
+    """The bond graph of a built-in model name or a ``.json`` graph file."""
     from bondgraph import library
     from bondgraph.errors import GraphError
     path = Path(model)
@@ -204,11 +209,11 @@ def _equations(model: str, graph):
         if not path.is_file():
             raise GraphError(f"model file {model!r} does not exist")
         from bondgraph.io_json import load
-        return load(path).equations()
+        return load(path)
     if model not in library.names():
         raise GraphError(f"unknown model {model!r}: not a built-in model ({', '.join(library.names())}) "
                          "nor a .json graph file")
-    return library.build(model).equations()
+    return library.build(model)
 
 
 def make_runner(spec: SweepSpec, *, graph=None):

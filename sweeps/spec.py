@@ -34,7 +34,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Mapping
 
-from .distributions import Distribution, Grid, parse
+from .distributions import Grid, parse
 from .errors import DistributionError, SpecError
 
 __all__ = ["ScenarioTarget", "ModelTarget", "SweepSpec", "load_spec", "spec_from_dict", "OUTPUT_STATS"]

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -113,7 +112,7 @@ def summarise(table, spec: SweepSpec, runner) -> dict:
 
 
 def run_sweep(spec: SweepSpec, out, *, resume: bool = False, workers=None, scheduler=None, client=None,
-              chunk_size=None, graph=None, plots: bool = True, progress=sys.stderr, on_chunk=None) -> SweepResult:
+              chunk_size=None, graph=None, plots: bool = True, progress=True, on_chunk=None) -> SweepResult:
     """Run every run of `spec` not yet in `out`, streaming rows to Parquet; then summarise and plot.
 
     Parameters
@@ -135,8 +134,8 @@ def run_sweep(spec: SweepSpec, out, *, resume: bool = False, workers=None, sched
         A model target already loaded.
     plots : bool
         Write the plots (:mod:`sweeps.plots`).
-    progress : file or None
-        Progress bar stream.
+    progress : file or bool
+        Where the progress bar goes (``True``: stderr; ``None``/``False``: nowhere).
     on_chunk : callable, optional
         Called with each finished chunk's rows.
 
@@ -171,5 +170,5 @@ def run_sweep(spec: SweepSpec, out, *, resume: bool = False, workers=None, sched
         files.update(save_plots(table, out, metrics=[f"metric.{m}" for m in summary["metrics"]],
                                 params=[f"param.{p}" for p in summary["varied"]],
                                 grid_params=[f"param.{n}" for n in spec.grid_names if f"param.{n}" in table],
-                                ranking=summary["sensitivity"]))
+                                ranking=summary["sensitivity"], units=summary["units"]))
     return SweepResult(Path(out), table, stats, summary, files)

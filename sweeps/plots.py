@@ -79,8 +79,7 @@ def _scatter(table, metrics, params, ranking, units, path: Path) -> Path:
             r = rho.get((m.removeprefix("metric."), p.removeprefix("param.")), float("nan"))
             ax.set_title(f"Spearman {r:+.2f}", fontsize=8)
             if i == len(metrics) - 1:
-                name = p.removeprefix("param.")
-                ax.set_xlabel(f"{name} ({units[name]})" if units.get(name) else name, fontsize=8)
+                ax.set_xlabel(_label(p, units), fontsize=8)
             if j == 0:
                 ax.set_ylabel(m.removeprefix("metric."), fontsize=8)
             ax.tick_params(labelsize=7)
@@ -91,15 +90,20 @@ def _scatter(table, metrics, params, ranking, units, path: Path) -> Path:
     return path
 
 
-def _heatmap(table, metric, x, y, path: Path) -> Path:
+def _label(column: str, units: dict) -> str:
+    name = column.removeprefix("param.")
+    return f"{name} ({units[name]})" if units.get(name) else name
+
+
+def _heatmap(table, metric, x, y, units, path: Path) -> Path:
     import matplotlib.pyplot as plt
     xs, ys, values = grid_table(table, metric, x, y)
     fig, ax = plt.subplots(figsize=(6, 4.5))
     mesh = ax.imshow(values, origin="lower", aspect="auto", cmap="viridis")
     ax.set_xticks(range(xs.size), [f"{v:.3g}" for v in xs], fontsize=7, rotation=45)
     ax.set_yticks(range(ys.size), [f"{v:.3g}" for v in ys], fontsize=7)
-    ax.set_xlabel(x.removeprefix("param."))
-    ax.set_ylabel(y.removeprefix("param."))
+    ax.set_xlabel(_label(x, units))
+    ax.set_ylabel(_label(y, units))
     for (r, c), v in np.ndenumerate(values):
         ax.text(c, r, "failed" if np.isnan(v) else f"{v:.3g}", ha="center", va="center", fontsize=6, color="w")
     fig.colorbar(mesh, ax=ax, label=metric.removeprefix("metric."))
@@ -145,6 +149,6 @@ def save_plots(table, directory, *, metrics, params, grid_params=(), ranking=(),
     if len(grid_params) >= 2:
         for m in metrics[:4]:
             name = m.removeprefix("metric.").replace(".", "_")
-            written[f"heatmap:{m}"] = _heatmap(table, m, grid_params[0], grid_params[1],
+            written[f"heatmap:{m}"] = _heatmap(table, m, grid_params[0], grid_params[1], dict(units or {}),
                                                directory / f"heatmap_{name}.png")
     return written

@@ -77,6 +77,7 @@ def test_an_unknown_metric_stops_the_sweep_with_its_name(tmp_path):
 
 
 def test_a_worker_killed_mid_sweep_loses_no_row(tmp_path):
+    """Through a scheduler address (as ``--scheduler tcp://...``), two worker processes, one SIGKILLed."""
     from distributed import Client, LocalCluster
     spec = spec_from_dict({"model": {**MSD, "stop_time": 60.0}, "vary": {"k": "uniform(2, 6)"}, "samples": 12,
                            "metrics": ["x.final"]})
@@ -90,8 +91,8 @@ def test_a_worker_killed_mid_sweep_loses_no_row(tmp_path):
                 os.kill(pids[0], signal.SIGKILL)
                 killed.append(pids[0])
 
-        result = run_sweep(spec, tmp_path / "dask", client=client, chunk_size=2, progress=None, plots=False,
-                           on_chunk=kill_one)
+        result = run_sweep(spec, tmp_path / "dask", scheduler=cluster.scheduler_address, chunk_size=2,
+                           progress=None, plots=False, on_chunk=kill_one)
     assert killed and len(result.table) == 12 and (result.table["status"] == "ok").all()
     serial = run_sweep(spec, tmp_path / "serial", workers=0, progress=None, plots=False)
     np.testing.assert_array_equal(result.table["metric.x.final"], serial.table["metric.x.final"])

@@ -112,3 +112,12 @@ def test_montecarlo_spec_from_command_line_pairs():
 
 def test_flatten_keeps_numeric_leaves_only():
     assert flatten({"a": {"b": 1, "c": "text"}, "d": [1.0], "e": False}) == {"a.b": 1.0, "e": False}
+
+
+@pytest.mark.parametrize("name", ["sweep_exo_grid.toml", "montecarlo_pam_ukf.yaml"])
+def test_example_specs_load_and_name_only_known_parameters(name):
+    from pathlib import Path
+    spec = load_spec(Path(__file__).resolve().parent.parent / "examples" / name)
+    runner = make_runner(spec)                 # checks every parameter name against the scenario
+    runs = plan_runs(spec, runner.nominal)
+    assert len(runs) == {"sweep_exo_grid.toml": 25, "montecarlo_pam_ukf.yaml": 200}[name]

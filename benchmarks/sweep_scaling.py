@@ -13,13 +13,16 @@ a fresh results directory, wall clock:
 (d) overhead: M no-op tasks through the local cluster's scheduler (per-task
     round trip), and the sweep's own overhead,
     ``(wall x workers - sum of run times) / tasks``, which also counts the
-    workers' warm-up (imports, deriving the model) and the idle tail.
+    workers' warm-up (imports, deriving the model) and the idle tail;
+(e) chunking: `--model-runs` short runs (``mass-spring-damper``, 20 s, tens of
+    ms each) on the local cluster, one run per task against the automatic chunk
+    size: the overhead per run, as a fraction of the run time.
 
 The machine load (1-min load average) is printed before and after each
 measurement: on a shared machine the speed-up is bounded by the free cores, not
 by the code.  ``docs/scaling.md`` records a run and extrapolates to 100 nodes.
 
-Run:  python benchmarks/sweep_scaling.py [--runs 200] [--segment 0.3] [--workers 2] [--no-external]
+Run:  python benchmarks/sweep_scaling.py [--runs 200] [--segment 0.3] [--workers 2] [--no-external] [--model-runs 400]
 """
 from __future__ import annotations
 
@@ -63,6 +66,30 @@ def _timed(label, fn) -> dict:
     first = result.table.groupby("worker")["duration_s"]
     row["warmup_s"] = float((first.first() - first.median()).mean())
     return row
+
+
+def chunking(n_runs: int, workers: int) -> list:
+    """(e): the same short-run sweep with one run per task and with the automatic chunks."""
+    from distributed import Client, LocalCluster
+
+    from sweeps import spec_from_dict
+    spec = spec_from_dict({"model": {"name": "mass-spring-damper", "stop_time": 20.0, "output_interval": 0.05},
+                           "vary": {"k": "uniform(2, 6)", "b": "uniform(0.2, 0.6)"}, "samples": n_runs,
+                           "metrics": ["x.final"]})
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp, \
+            LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        run_sweep(spec, Path(tmp) / "warm", client=client, chunk_size=8, plots=False, progress=None)  # warm workers
+        for label, size in (("1 run/task", 1), ("auto", None)):
+            before = _load()
+            s = run_sweep(spec, Path(tmp) / label.replace("/", "-"), client=client, chunk_size=size, plots=False,
+                          progress=None).stats
+            overhead = max(0.0, s.wall_s * s.n_workers - s.busy_s)
+            rows.append({"chunks": label, "chunk_size": s.chunk_size, "tasks": s.n_chunks, "wall_s": s.wall_s,
+                         "mean_run_ms": 1e3 * s.busy_s / n_runs, "overhead_per_run_ms": 1e3 * overhead / n_runs,
+                         "overhead_fraction": overhead / s.busy_s, "load_before": before})
+    return rows
 
 
 def _noop(i):
@@ -111,7 +138,7 @@ def external_cluster(workers: int, directory: Path):
 
 
 def main(runs: int = 200, segment: float = 0.3, workers: int = 2, external: bool = True, null_tasks: int = 1000,
-         json_path=None) -> dict:
+         json_path=None, model_runs: int = 400) -> dict:
     spec = setup(runs, segment)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -132,6 +159,7 @@ def main(runs: int = 200, segment: float = 0.3, workers: int = 2, external: bool
                 for p in procs:
                     p.wait(timeout=30)
         null = null_task_overhead(workers, null_tasks)
+    chunks = chunking(model_runs, workers) if model_runs else []
     serial = rows[0]["wall_s"]
     print(f"{runs} pam-ukf runs of 13 x {segment} s on {os.cpu_count()} cores")
     print(f"{'engine':<12} {'wall s':>8} {'setup s':>8} {'speed-up':>9} {'tasks':>6} {'ovh/task ms':>12} "
@@ -142,7 +170,12 @@ def main(runs: int = 200, segment: float = 0.3, workers: int = 2, external: bool
               f"{r['load_before']:>12.2f} {r['load_after']:>6.2f}")
     print(f"mean run time (serial): {rows[0]['busy_s'] / runs:.3f} s; no-op task round trip through the local "
           f"scheduler: {null['per_task_ms']:.2f} ms ({null['tasks_per_s']:.0f} tasks/s, load {null['load_before']:.2f})")
-    result = {"runs": runs, "segment_s": segment, "cores": os.cpu_count(), "rows": rows, "null_tasks": null}
+    for c in chunks:
+        print(f"{model_runs} model runs, {c['chunks']:<10} (chunk {c['chunk_size']:>3}, {c['tasks']:>4} tasks): "
+              f"wall {c['wall_s']:.2f} s, run {c['mean_run_ms']:.1f} ms, overhead {c['overhead_per_run_ms']:.1f} ms "
+              f"per run = {100 * c['overhead_fraction']:.1f} % of run time (load {c['load_before']:.2f})")
+    result = {"runs": runs, "segment_s": segment, "cores": os.cpu_count(), "rows": rows, "null_tasks": null,
+              "chunking": chunks}
     if json_path:
         Path(json_path).write_text(json.dumps(result, indent=1))
     return result
@@ -155,6 +188,7 @@ if __name__ == "__main__":
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--null-tasks", type=int, default=1000)
     ap.add_argument("--no-external", action="store_true", help="skip the dask scheduler / dask worker processes")
+    ap.add_argument("--model-runs", type=int, default=400, help="short runs for the chunking comparison (0: skip)")
     ap.add_argument("--json", default=None, help="also write the numbers to this JSON file")
     a = ap.parse_args()
-    main(a.runs, a.segment, a.workers, not a.no_external, a.null_tasks, a.json)
+    main(a.runs, a.segment, a.workers, not a.no_external, a.null_tasks, a.json, a.model_runs)

@@ -25,6 +25,8 @@ def add_parsers(sub) -> None:
     p.add_argument("spec", help="spec file (.toml, .yaml); keys in docs/sweeps.md")
     _engine_options(p)
     p.add_argument("--chunk-size", type=int, default=None, metavar="N", help="runs per Dask task (default: auto)")
+    p.add_argument("--flush-interval", type=float, default=0.0, metavar="S",
+                   help="write results at most every S s instead of per chunk (large clusters; default 0)")
 
     p = sub.add_parser("montecarlo", help="Monte-Carlo of a scenario: draw its parameters, run it N times")
     p.add_argument("scenario", help="scenario name (bondcosim cosim --list)")
@@ -95,7 +97,7 @@ def _cmd_sweep(args) -> int:
         from .models import load_model
         graph = load_model(spec.target.model)
     result = run_sweep(spec, args.out, resume=args.resume, workers=args.workers, scheduler=args.scheduler,
-                       chunk_size=args.chunk_size, graph=graph)
+                       chunk_size=args.chunk_size, graph=graph, flush_interval_s=args.flush_interval)
     _print_sweep(result)
     return 0
 

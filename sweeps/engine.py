@@ -18,10 +18,11 @@ Losing nothing:
   as failed rows naming that;
 - a killed client: every chunk written is kept; ``resume=True`` runs only the missing run ids.
 
-Chunk size: a scenario run takes 0.3 s or more, against a few ms of Dask
-overhead per task, so one run per task; a model run takes tens of ms, so 16
-per task; in both cases capped so that every worker gets about four chunks
-(load balance at the end of the sweep).  ``benchmarks/sweep_scaling.py``
+Chunk size (:func:`_chunk_size`): tasks of at least :data:`MIN_TASK_S` (a
+scenario run takes 0.3 s or more, so one run per task; a model run tens of ms,
+so about 17), larger on big clusters so that the scheduler sees at most
+:data:`SCHEDULER_RATE` tasks per second, and capped so that every worker gets
+about four chunks (load balance at the end of the sweep).  ``benchmarks/sweep_scaling.py``
 measures the overhead (``docs/scaling.md``).
 """
 from __future__ import annotations
@@ -83,18 +84,37 @@ def chunked(runs: list, size: int) -> list:
     return [runs[i:i + size] for i in range(0, len(runs), size)]
 
 
+#: Tasks per second one Dask scheduler is asked to handle at most, whatever the cluster's size
+#: (it manages a few thousand; ``docs/scaling.md``).
+SCHEDULER_RATE = 250.0
+#: Shortest task wanted, s: against a few ms of Dask overhead per task, under 1 %.
+MIN_TASK_S = 0.5
+
+
 def _chunk_size(requested, runner, n_todo: int, n_workers: int) -> int:
+    """Runs per task.
+
+    With a run time :math:`t_r` (the runner's ``run_time_hint_s``) and W workers, a task of c runs
+    lasts :math:`c t_r` and the scheduler sees :math:`W / (c t_r)` tasks per second, so
+
+    .. math:: c = \max\left(\lceil T_{min} / t_r \rceil, \lceil W / (R\, t_r) \rceil\right)
+
+    with :data:`MIN_TASK_S` and :data:`SCHEDULER_RATE`; then capped at
+    :math:`\lceil n / 4W \rceil` so that every worker gets about four chunks.
+    """
     if requested is not None:
         if int(requested) < 1:
             raise EngineError("", f"chunk size must be >= 1, got {requested!r}")
         return int(requested)
-    hint = getattr(runner, "chunk_hint", 1)
+    t_run = float(getattr(runner, "run_time_hint_s", MIN_TASK_S))
+    wanted = max(math.ceil(MIN_TASK_S / t_run), math.ceil(n_workers / (SCHEDULER_RATE * t_run)))
     balance = math.ceil(n_todo / (4 * max(n_workers, 1))) if n_todo else 1
-    return max(1, min(hint, balance))
+    return max(1, min(wanted, balance))
 
 
 def execute(runner, runs: list, store, *, workers=None, scheduler: str | None = None, client=None,
-            chunk_size: int | None = None, progress=True, on_chunk=None) -> ExecutionStats:
+            chunk_size: int | None = None, progress=True, on_chunk=None,
+            flush_interval_s: float = 0.0) -> ExecutionStats:
     """Run the `runs` not yet in `store`, writing each finished chunk to it.
 
     Parameters
@@ -115,7 +135,12 @@ def execute(runner, runs: list, store, *, workers=None, scheduler: str | None = 
     progress : file or bool
         Where the progress bar goes (``True``: stderr; ``None``/``False``: nowhere).
     on_chunk : callable, optional
-        Called with each chunk's rows after they are written.
+        Called with each chunk's rows once they are recorded.
+    flush_interval_s : float, s
+        0 (default): each chunk is written the moment it arrives.  Above 0:
+        rows are gathered and written at most once per interval (and at the
+        end), for clusters so large that a file per chunk would be too many;
+        a killed client then loses at most that interval's rows (``--resume`` reruns them).
 
     Returns
     -------
@@ -142,11 +167,12 @@ def execute(runner, runs: list, store, *, workers=None, scheduler: str | None = 
     size = _chunk_size(chunk_size, runner, len(todo), n_workers)
     chunks = chunked(todo, size)
     bar = ProgressBar(len(todo), stream=progress)
+    writer = _Writer(store, flush_interval_s)
     busy = [0.0]
     failed = [0]
 
     def record(rows):
-        store.write(rows)
+        writer.add(rows)
         n_bad = sum(r["status"] != "ok" for r in rows)
         failed[0] += n_bad
         busy[0] += sum(r["duration_s"] for r in rows)
@@ -164,6 +190,7 @@ def execute(runner, runs: list, store, *, workers=None, scheduler: str | None = 
         elif chunks:
             _dask_loop(client, runner, chunks, n_workers, record, bar, on_chunk)
     finally:
+        writer.flush()
         bar.close()
         if own_client is not None:
             own_client.close()
@@ -171,6 +198,25 @@ def execute(runner, runs: list, store, *, workers=None, scheduler: str | None = 
             own_cluster.close()
     return ExecutionStats(len(runs), len(runs) - len(todo), len(todo), failed[0], len(chunks), size, engine,
                           n_workers, time.perf_counter() - start, busy[0], setup_s)
+
+
+class _Writer:
+    """Rows to the store: at once, or gathered for `interval` s."""
+
+    def __init__(self, store, interval: float):
+        self.store, self.interval = store, float(interval)
+        self.rows, self.last = [], time.perf_counter()
+
+    def add(self, rows) -> None:
+        self.rows.extend(rows)
+        if self.interval <= 0 or time.perf_counter() - self.last >= self.interval:
+            self.flush()
+
+    def flush(self) -> None:
+        if self.rows:
+            self.store.write(self.rows)
+            self.rows = []
+        self.last = time.perf_counter()
 
 
 def _connect(client, scheduler, workers):

@@ -40,8 +40,8 @@ class DiagnosisRunner:
         ``outputs``, ``time``, ``holdout``, ``uncertain``, ``top``, ``max_effects``).
     """
 
-    #: Runs per Dask task: a diagnosis takes seconds to minutes.
-    chunk_hint = 1
+    #: Typical run time, s (a diagnosis takes seconds to minutes), for the chunk size.
+    run_time_hint_s = 10.0
 
     def __init__(self, graph, options: dict):
         from bondgraph.io_json import graph_to_dict

@@ -97,8 +97,8 @@ class ScenarioRunner:
     units : dict str -> str
     """
 
-    #: Runs per Dask task: a scenario run takes 0.3 s or more, the task overhead a few ms.
-    chunk_hint = 1
+    #: Typical run time, s (``pam-ukf`` quick: 0.3-0.5 s), for the chunk size (:mod:`sweeps.engine`).
+    run_time_hint_s = 0.5
 
     def __init__(self, spec: SweepSpec):
         from cosim import scenarios
@@ -147,8 +147,8 @@ class ModelRunner:
         the target's built-in name or ``.json`` file.
     """
 
-    #: Runs per Dask task: a textbook model's run takes tens of ms.
-    chunk_hint = 16
+    #: Typical run time, s (a textbook model), for the chunk size (:mod:`sweeps.engine`).
+    run_time_hint_s = 0.03
 
     def __init__(self, spec: SweepSpec, graph=None):
         target = self.target = spec.target

@@ -112,7 +112,8 @@ def summarise(table, spec: SweepSpec, runner) -> dict:
 
 
 def run_sweep(spec: SweepSpec, out, *, resume: bool = False, workers=None, scheduler=None, client=None,
-              chunk_size=None, graph=None, plots: bool = True, progress=True, on_chunk=None) -> SweepResult:
+              chunk_size=None, graph=None, plots: bool = True, progress=True, on_chunk=None,
+              flush_interval_s: float = 0.0) -> SweepResult:
     """Run every run of `spec` not yet in `out`, streaming rows to Parquet; then summarise and plot.
 
     Parameters
@@ -138,6 +139,8 @@ def run_sweep(spec: SweepSpec, out, *, resume: bool = False, workers=None, sched
         Where the progress bar goes (``True``: stderr; ``None``/``False``: nowhere).
     on_chunk : callable, optional
         Called with each finished chunk's rows.
+    flush_interval_s : float, s
+        Write rows at most once per interval instead of once per chunk (:func:`sweeps.engine.execute`).
 
     Returns
     -------
@@ -158,7 +161,8 @@ def run_sweep(spec: SweepSpec, out, *, resume: bool = False, workers=None, sched
     if len(store.done()) < len(runs):
         runner.prepare()
     stats = execute(runner, runs, store, workers=workers, scheduler=scheduler, client=client,
-                    chunk_size=chunk_size, progress=progress, on_chunk=on_chunk)
+                    chunk_size=chunk_size, progress=progress, on_chunk=on_chunk,
+                    flush_interval_s=flush_interval_s)
     files = {"runs": store.consolidate()}
     table = store.read()
     summary = summarise(table, spec, runner)

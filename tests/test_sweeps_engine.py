@@ -69,6 +69,13 @@ def test_resume_runs_only_the_missing_rows(tmp_path):
         run_sweep(_grid_spec(seed=1), tmp_path, resume=True, workers=0, progress=None)
 
 
+def test_a_flush_interval_gathers_rows_into_fewer_files_losing_none(tmp_path):
+    result = run_sweep(_grid_spec(), tmp_path, workers=0, chunk_size=1, progress=None, plots=False,
+                       flush_interval_s=3600.0)
+    assert result.stats.n_chunks == 6 and len(list((tmp_path / "parts").glob("part-*.parquet"))) == 1
+    assert result.table["run_id"].tolist() == list(range(6))
+
+
 def test_an_unknown_metric_stops_the_sweep_with_its_name(tmp_path):
     spec = montecarlo_spec("pam-ukf", samples=1, vary={"A1": "uniform(0.9, 1.1)*nominal"}, quick=True,
                            metrics=["ukf.angle.X"])

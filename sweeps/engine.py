@@ -92,7 +92,7 @@ MIN_TASK_S = 0.5
 
 
 def _chunk_size(requested, runner, n_todo: int, n_workers: int) -> int:
-    """Runs per task.
+    r"""Runs per task.
 
     With a run time :math:`t_r` (the runner's ``run_time_hint_s``) and W workers, a task of c runs
     lasts :math:`c t_r` and the scheduler sees :math:`W / (c t_r)` tasks per second, so

@@ -248,7 +248,8 @@ def _identity(x):
 
 def _failed_rows(chunk, exc) -> list:
     text = f"{type(exc).__name__}: {exc}"[:4000]
-    return [{"run_id": r.run_id, "status": "failed", "error": text, "seed": r.seed, "duration_s": 0.0,
+    return [{"run_id": r.run_id, "status": "failed", "error": text, "seed": r.seed, "started": time.time(),
+             "duration_s": 0.0,
              "worker": "", **{f"param.{k}": v for k, v in r.params.items()}} for r in chunk]
 
 

@@ -287,13 +287,13 @@ def run_chunk(runner, runs) -> list:
     -------
     list of dict
         ``run_id``, ``status`` (``"ok"``/``"failed"``), ``error``, ``seed``,
-        ``duration_s`` (s), ``worker`` (``host:pid``), ``param.NAME`` and
-        ``metric.NAME`` (or ``output.NAME``) columns.
+        ``started`` (s since the epoch), ``duration_s`` (s), ``worker``
+        (``host:pid``), ``param.NAME`` and ``metric.NAME`` (or ``output.NAME``) columns.
     """
     worker = f"{socket.gethostname()}:{os.getpid()}"
     rows = []
     for run in runs:
-        start = time.perf_counter()
+        started, start = time.time(), time.perf_counter()
         status, error, metrics = "ok", "", {}
         try:
             metrics = runner(dict(run.params), run.seed)
@@ -302,7 +302,7 @@ def run_chunk(runner, runs) -> list:
         except Exception as exc:  # any failure of one run is recorded with its text; the sweep goes on
             status, error = "failed", f"{type(exc).__name__}: {exc}"[:4000]
         row = {"run_id": run.run_id, "status": status, "error": error, "seed": run.seed,
-               "duration_s": time.perf_counter() - start, "worker": worker}
+               "started": started, "duration_s": time.perf_counter() - start, "worker": worker}
         row.update({f"param.{k}": v for k, v in run.params.items()})
         row.update({(k if k.startswith("output.") else f"metric.{k}"): v for k, v in metrics.items()})
         rows.append(row)

@@ -100,7 +100,7 @@ class RunStore:
         frames = [pd.read_parquet(p) for p in sorted(self.parts.glob("part-*.parquet"))]
         frames = [f for f in frames if len(f)]
         if not frames:
-            return pd.DataFrame(columns=["run_id", "status", "error", "seed", "duration_s", "worker"])
+            return pd.DataFrame(columns=["run_id", "status", "error", "seed", "started", "duration_s", "worker"])
         table = pd.concat(frames, ignore_index=True, sort=False)
         table = table.drop_duplicates("run_id", keep="last").sort_values("run_id").reset_index(drop=True)
         return table

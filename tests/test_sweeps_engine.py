@@ -60,8 +60,8 @@ def test_resume_runs_only_the_missing_rows(tmp_path):
     parts[1].unlink()                     # as if the sweep had been killed before that chunk finished
     again = run_sweep(spec, tmp_path, resume=True, workers=0, progress=None, plots=False)
     assert (again.stats.n_run, again.stats.n_skipped) == (2, 4)
-    pd.testing.assert_frame_equal(again.table.drop(columns=["duration_s", "worker"]),
-                                  first.table.drop(columns=["duration_s", "worker"]))
+    pd.testing.assert_frame_equal(again.table.drop(columns=["started", "duration_s", "worker"]),
+                                  first.table.drop(columns=["started", "duration_s", "worker"]))
     assert run_sweep(spec, tmp_path, resume=True, workers=0, progress=None, plots=False).stats.n_run == 0
     with pytest.raises(StoreError, match="pass --resume"):
         run_sweep(spec, tmp_path, workers=0, progress=None)

@@ -3,6 +3,7 @@ vary by +-20 %, on a local Dask cluster, with its histogram of UKF vs model-alon
 from __future__ import annotations
 
 import os
+import shutil
 from pathlib import Path
 
 __all__ = ["run_montecarlo", "VARY"]
@@ -26,7 +27,9 @@ def run_montecarlo(out: Path, *, quick: bool = False) -> dict:
     command = (f"bondcosim montecarlo pam-ukf --samples {samples} --set segment_s={segment} --seed 2026 "
                + " ".join(f"--vary '{k}={v}'" for k, v in VARY.items()) + f" --out {directory}")
     print(f"   same as: {command}")
-    result = run_sweep(spec, directory, resume=directory.exists(), workers=workers)
+    if directory.exists():                    # a demo starts afresh (a user's sweep would --resume)
+        shutil.rmtree(directory)
+    result = run_sweep(spec, directory, workers=workers)
     q = result.summary["quantiles"]
     print(f"   {result.summary['n_ok']} of {result.summary['n_runs']} runs ok on {result.stats.engine} in "
           f"{result.stats.wall_s:.1f} s; angle RMSE median UKF {q['ukf.angle.I']['q50']:.3g} deg "

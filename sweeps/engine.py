@@ -155,7 +155,8 @@ def execute(runner, runs: list, store, *, workers=None, scheduler: str | None = 
     """
     done = store.done()
     todo = [r for r in runs if r.run_id not in done]
-    serial = client is None and scheduler is None and workers == 0
+    # nothing left to run (a finished sweep resumed): no cluster to start
+    serial = (client is None and scheduler is None and workers == 0) or not todo
     setup_start = time.perf_counter()
     own_cluster = own_client = None
     if serial:

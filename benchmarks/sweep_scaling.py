@@ -170,7 +170,8 @@ def main(runs: int = 200, segment: float = 0.3, workers: int = 2, external: bool
               f"{r['tasks']:>6} {r['overhead_per_task_ms']:>12.1f} {r['warmup_s']:>10.2f} "
               f"{r['load_before']:>12.2f} {r['load_after']:>6.2f}")
     print(f"mean run time (serial): {rows[0]['busy_s'] / runs:.3f} s; no-op task round trip through the local "
-          f"scheduler: {null['per_task_ms']:.2f} ms ({null['tasks_per_s']:.0f} tasks/s, load {null['load_before']:.2f})")
+          f"scheduler: {null['per_task_ms']:.2f} ms ({null['tasks_per_s']:.0f} tasks/s, "
+          f"load {null['load_before']:.2f})")
     for c in chunks:
         print(f"{model_runs} model runs, {c['chunks']:<10} (chunk {c['chunk_size']:>3}, {c['tasks']:>4} tasks): "
               f"wall {c['wall_s']:.2f} s, run {c['mean_run_ms']:.1f} ms, overhead {c['overhead_per_run_ms']:.1f} ms "

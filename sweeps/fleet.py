@@ -105,7 +105,7 @@ def fleet_summary(table) -> dict:
     """Counts of each kind found (and of recordings with none), where each attached, the
     distribution of each kind's fitted parameters, and the held-out improvement
     (``1 - improved / nominal`` NRMSE) per output and per kind."""
-    ok = table[table["status"] == "ok"]
+    ok, bad = table[table["status"] == "ok"], table[table["status"] != "ok"]
     kinds, places, params, by_kind = {}, {}, {}, {}
     improvement_cols = [c for c in table.columns if c.startswith("metric.improvement.")]
     for _, row in ok.iterrows():
@@ -120,7 +120,7 @@ def fleet_summary(table) -> dict:
                 params.setdefault(kind, {}).setdefault(name, []).append(np.nan if value is None else value)
             by_kind.setdefault(kind, []).extend(row[c] for c in improvement_cols)
     return {"n_recordings": int(len(table)), "n_ok": int(len(ok)), "n_failed": int(len(table) - len(ok)),
-            "failed": {str(r["param.recording"]): str(r["error"]) for _, r in table[table["status"] != "ok"].iterrows()},
+            "failed": {str(r["param.recording"]): str(r["error"]) for _, r in bad.iterrows()},
             "kinds": dict(sorted(kinds.items(), key=lambda kv: -kv[1])), "places": places,
             "parameters": {k: {n: _quantiles(v) for n, v in p.items()} for k, p in params.items()},
             "improvement": {c.removeprefix("metric.improvement."): _quantiles(ok[c]) for c in improvement_cols},

@@ -140,6 +140,11 @@ def parse(name: str, text) -> Distribution | Grid:
         return Grid(tuple(values), False, str(list(text)))
     text = str(text)
     stripped = text.strip()
+    if stripped.startswith("[") and stripped.endswith("]"):        # a list's text (SweepSpec.to_dict)
+        values = _numbers(name, text, stripped[1:-1])
+        if not values:
+            raise DistributionError(name, text, "an empty list")
+        return Grid(tuple(values), False, text)
     relative_number = re.match(r"^\s*(?:nominal\s*\*\s*)?([^*()]+?)\s*(\*\s*nominal\s*)?$", stripped)
     if relative_number and _is_float(relative_number.group(1)):
         rel = stripped.startswith("nominal") or relative_number.group(2) is not None

@@ -22,6 +22,7 @@ def test_grids_parse_to_their_values():
     assert parse_law("p", "geomspace(1, 100, 3)").values(nominal=5.0) == pytest.approx((1.0, 10.0, 100.0))
     assert parse_law("p", "grid(1, 2.5)").values(nominal=5.0) == (1.0, 2.5)
     assert parse_law("p", [3, 4]).values(nominal=0.0) == (3.0, 4.0)
+    assert parse_law("p", parse_law("p", [3, 4]).text).values(nominal=0.0) == (3.0, 4.0)   # round trip
     assert parse_law("p", "1.1*nominal").values(nominal=2.0) == pytest.approx((2.2,))
 
 

@@ -105,6 +105,10 @@ class ScenarioRunner:
         self.target = spec.target
         self.label = f"scenario {self.target.name!r}"
         table = scenarios.parameters(self.target.name)      # UnknownNameError lists the scenarios
+        if not table:
+            able = [n for n in scenarios.names() if scenarios.parameters(n)]
+            raise SpecError(spec.name, [f"scenario: {self.label} takes no parameters, seed or prebuilt FMUs, so "
+                                        f"it cannot be swept; scenarios that can: {', '.join(able)}"])
         problems = []
         _check_names(problems, spec, table, self.label)
         if problems:

@@ -83,6 +83,8 @@ def test_unknown_parameters_and_metrics_are_named_before_anything_runs():
         make_runner(spec)
     assert "vary.A9: scenario 'pam-ukf' has no parameter 'A9'" in str(err.value)
     assert "fixed.segmnt_s" in str(err.value) and "A1" in str(err.value)
+    with pytest.raises(SpecError, match="'kpid' takes no parameters.*pam-ukf, exo-lqi"):
+        make_runner(spec_from_dict({"scenario": "kpid", "samples": 2}))
     spec = spec_from_dict({"model": {"name": "mass-spring-damper", "stop_time": 1.0, "outputs": ["y"]},
                            "metrics": ["x.median"]})
     with pytest.raises(SpecError) as err:

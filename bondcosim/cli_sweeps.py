@@ -90,10 +90,10 @@ def _print_sweep(result) -> None:
 
 
 def _cmd_sweep(args) -> int:
-    from sweeps import load_spec, run_sweep
+    from sweeps import ModelTarget, load_spec, run_sweep
     spec = load_spec(args.spec)
     graph = None
-    if spec.target.__class__.__name__ == "ModelTarget" and spec.target.model.endswith(".py"):
+    if isinstance(spec.target, ModelTarget) and spec.target.model.endswith(".py"):   # the CLI's own loader
         from .models import load_model
         graph = load_model(spec.target.model)
     result = run_sweep(spec, args.out, resume=args.resume, workers=args.workers, scheduler=args.scheduler,

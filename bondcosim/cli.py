@@ -12,6 +12,9 @@ Examples
   bondcosim fmu-info pam.fmu
   bondcosim cosim pam-pi --json --plot figures
   bondcosim diagnose mass-spring-damper rec.csv --input F=force:N --output x=pos:mm --report out --json
+  bondcosim montecarlo pam-ukf --samples 200 --vary "A1=normal(1,0.1)*nominal" --quick --out mc/
+  bondcosim sweep examples/sweep_exo_grid.toml --out exo-grid/ --workers 2
+  bondcosim diagnose-batch pam 'recordings/*.csv' --input u1=u1 --input u2=u2 --output psi=psi --out fleet/
   bondcosim demo
 """
 from __future__ import annotations
@@ -130,6 +133,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--report", default=None, metavar="DIR",
                    help="write diagnosis.json, diagnosis.txt, plots and improved_model.json in DIR")
     p.add_argument("--json", action="store_true", help="print the result as JSON (issue 6 schema)")
+
+    from .cli_sweeps import add_parsers
+    add_parsers(sub)
 
     p = sub.add_parser("demo", help="the main job on built-in defaults: equations, drawings, a simulation")
     p.add_argument("--output-dir", default="demo-output", help="where figures and CSVs go (default demo-output)")
@@ -308,10 +314,17 @@ def _cmd_demo(args) -> int:
     return 0
 
 
+def _sweep_command(name):
+    def run(args):
+        from .cli_sweeps import COMMANDS
+        return COMMANDS[name](args)
+    return run
+
+
 _COMMANDS = {"list": _cmd_list, "equations": _cmd_equations, "draw": _cmd_draw,
              "simulate": _cmd_simulate, "compare": _cmd_compare, "export-fmu": _cmd_export_fmu,
              "fmu-info": _cmd_fmu_info, "cosim": _cmd_cosim, "diagnose": _cmd_diagnose,
-             "demo": _cmd_demo}
+             "demo": _cmd_demo, **{n: _sweep_command(n) for n in ("sweep", "montecarlo", "diagnose-batch")}}
 
 
 def _one_line(exc: BaseException) -> str:

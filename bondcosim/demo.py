@@ -5,7 +5,8 @@ to PNG, simulate the mass-spring-damper step response and the DC motor
 start-up and plot them, then compare the exoskeleton's and the PAM joint's
 bond graphs with the papers' block-diagram / state-space models, export the
 PAM joint as an FMU and close a PI angle loop around it in the co-simulation
-master, run the papers' closed-loop scenarios (``cosim.scenarios``), and end
+master, run the papers' closed-loop scenarios (``cosim.scenarios``), a small
+Monte-Carlo of the UKF scenario on a local Dask cluster (``sweeps``), and end
 with one diagnosis of a recording with a concealed effect (``diagnosis``).
 """
 from __future__ import annotations
@@ -104,6 +105,10 @@ def run_demo(output_dir="demo-output", *, quick: bool = False) -> dict:
     _step("the papers' closed loops: plant FMUs with estimators and controllers in the master")
     from .demo_scenarios import run_scenarios
     written.update(run_scenarios(out, quick=quick, step=_step))
+
+    _step("Monte-Carlo: the paper's UKF on rigs whose orifice areas and friction vary by +-20 % (local Dask cluster)")
+    from .demo_montecarlo import run_montecarlo
+    written.update(run_montecarlo(out, quick=quick))
 
     _step("diagnosis: a recording the nominal PAM model does not explain - where, what, and the fix")
     from .demo_diagnosis import run_diagnosis

@@ -18,3 +18,11 @@ def test_codegen_benchmark_runs(capsys, load_script):
     rows = bench.main({"chain2": mass_spring_chain(2)})
     assert rows[0]["model"] == "chain2" and rows[0]["assignments"][2] > 0
     assert "ratio" in capsys.readouterr().out
+
+
+def test_sweep_scaling_benchmark_runs(capsys, load_script):
+    bench = load_script("benchmarks/sweep_scaling.py")
+    result = bench.main(runs=2, segment=0.3, workers=1, external=False, null_tasks=5, model_runs=4)
+    assert [r["engine"] for r in result["rows"]] == ["serial", "local:1"] and result["rows"][1]["failed"] == 0
+    assert [c["chunk_size"] for c in result["chunking"]] == [1, 1]     # 4 runs, 1 worker: one each
+    assert "speed-up" in capsys.readouterr().out

@@ -7,6 +7,14 @@ FMU, co-simulates it with its estimators and controllers, saves its plots in
 shortened version for tests.  ``bondcosim cosim NAME [--json] [--plot DIR]``
 runs one.
 
+A scenario that can be varied (sweeps, Monte-Carlo) also has ``PARAMETERS``
+(name -> :class:`bondgraph.params.Param`: default value, unit, description)
+and ``export_fmus(directory)``, and its ``run`` takes ``params`` (values
+replacing the defaults), ``seed`` (its noise) and ``fmu_dir`` (FMUs exported
+once by ``export_fmus`` and reused, each run setting its parameters as FMU
+parameters before initialisation).  :func:`parameters`, :func:`export_fmus`
+and :func:`run` below are the registry's entry to them.
+
 =====================  =========================================================
 ``pam-pi``             the PAM joint under a plain PI angle loop
 ``pam-ukf``            UKF estimating angle and torque from the two pressures (seed 000)
@@ -19,9 +27,9 @@ from __future__ import annotations
 
 import importlib
 
-from cosim.errors import UnknownNameError
+from cosim.errors import ParameterError, UnknownNameError
 
-__all__ = ["names", "describe", "run", "SCENARIOS"]
+__all__ = ["names", "describe", "run", "parameters", "export_fmus", "headline_metrics", "SCENARIOS"]
 
 #: Scenario name -> module (in this package).
 SCENARIOS = {
@@ -49,12 +57,75 @@ def describe(name: str) -> str:
     return _module(name).DESCRIPTION
 
 
-def run(name: str, plot_dir=None, *, quick: bool = False) -> dict:
-    """Run scenario `name`; returns its numbers (see the module docstring).
+def parameters(name: str) -> dict:
+    """The parameters a run of scenario `name` may vary: name -> ``Param`` (default value, SI unit,
+    description); empty if the scenario takes none.
 
     Raises
     ------
     UnknownNameError
-        No scenario has that name (the message lists them).
+        No scenario has that name.
     """
-    return _module(name).run(plot_dir, quick=quick)
+    return dict(getattr(_module(name), "PARAMETERS", {}))
+
+
+def headline_metrics(name: str) -> tuple:
+    """The scenario's main numbers, as flattened result keys (``"ukf.angle.I"``), for sweep plots;
+    empty if it names none (``SWEEP_METRICS`` of its module)."""
+    return tuple(getattr(_module(name), "SWEEP_METRICS", ()))
+
+
+def export_fmus(name: str, directory) -> dict:
+    """Export scenario `name`'s FMUs into `directory` for ``run(..., fmu_dir=directory)``.
+
+    Returns
+    -------
+    dict str -> pathlib.Path
+        The FMUs by role; empty if the scenario builds none ahead.
+    """
+    module = _module(name)
+    return dict(module.export_fmus(directory)) if hasattr(module, "export_fmus") else {}
+
+
+def run(name: str, plot_dir=None, *, quick: bool = False, params=None, seed=None, fmu_dir=None) -> dict:
+    """Run scenario `name`; returns its numbers (see the module docstring).
+
+    Parameters
+    ----------
+    name : str
+    plot_dir : path-like, optional
+    quick : bool
+    params : mapping str -> float, optional
+        Values (SI) of :func:`parameters` replacing their defaults.
+    seed : int, optional
+        Seed of the scenario's noise (default: the scenario's own).
+    fmu_dir : path-like, optional
+        FMUs of :func:`export_fmus`, reused instead of exported for this run.
+
+    Raises
+    ------
+    UnknownNameError
+        No scenario has that name, or a parameter it does not have (the message lists them).
+    ParameterError
+        `params`, `seed` or `fmu_dir` given to a scenario that cannot take them.
+    """
+    module = _module(name)
+    extra = {}
+    if params:
+        known = getattr(module, "PARAMETERS", None)
+        if not known:
+            raise ParameterError(f"scenario {name!r} takes no parameters (scenarios that do: "
+                                 f"{', '.join(n for n in SCENARIOS if parameters(n)) or 'none'})",
+                                 name=next(iter(params)))
+        unknown = sorted(set(params) - set(known))
+        if unknown:
+            raise UnknownNameError("parameter", unknown[0], known, f"scenario {name}")
+        extra["params"] = dict(params)
+    if seed is not None:
+        extra["seed"] = int(seed)
+    if fmu_dir is not None:
+        extra["fmu_dir"] = fmu_dir
+    if extra and not hasattr(module, "PARAMETERS"):
+        raise ParameterError(f"scenario {name!r} takes no seed, parameters or FMU directory",
+                             name=next(iter(extra)))
+    return module.run(plot_dir, quick=quick, **extra)

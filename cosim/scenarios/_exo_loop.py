@@ -126,7 +126,8 @@ class AddNoise(PythonBlock):
         self.y[:] = self.u + self.noise[k]
 
 
-def cosimulate(design: ExoDesign, fmu, *, t_end: float, noise, w_h: float, tau_ref: float, t_ref: float):
+def cosimulate(design: ExoDesign, fmu, *, t_end: float, noise, w_h: float, tau_ref: float, t_ref: float,
+               params=None):
     """The loop in the master: exoskeleton FMU, noise, observer + LQI.
 
     Parameters
@@ -141,6 +142,8 @@ def cosimulate(design: ExoDesign, fmu, *, t_end: float, noise, w_h: float, tau_r
         Constant trunk velocity (Sec. 5.2: 0.1).
     tau_ref, t_ref : float, N m and s
         Reference step (Sec. 5.2: 10 N m at 0.1 s).
+    params : mapping str -> float, optional
+        FMU parameter values (SI) set before initialisation (default: the FMU's own).
 
     Returns
     -------
@@ -152,7 +155,7 @@ def cosimulate(design: ExoDesign, fmu, *, t_end: float, noise, w_h: float, tau_r
     blocks = [Step("ref", t_ref, 0.0, tau_ref, "N m"), Constant("trunk", w_h, "rad/s"),
               AddNoise("act", ("tau_m", "w_h"), noise[:, :2], design.dt),
               AddNoise("sens", ("w_m", "tau_s"), noise[:, 2:], design.dt),
-              ObserverLQI("ctrl", design), FMUComponent(fmu, "plant")]
+              ObserverLQI("ctrl", design), FMUComponent(fmu, "plant", parameters=params)]
     sim = CoSimulation(blocks, [
         ("ref.y", "ctrl.tau_ref"), ("trunk.y", "ctrl.w_h"), ("trunk.y", "act.w_h"),
         ("ctrl.tau_m", "act.tau_m"), ("act.tau_m_out", "plant.tau_m"), ("act.w_h_out", "plant.w_h"),

@@ -60,13 +60,24 @@ RIG_PERTURBATION: Mapping[str, float] = MappingProxyType({
 })
 
 
-def rig_params() -> dict[str, float]:
+def rig_params(overrides: Mapping[str, float] | None = None) -> dict[str, float]:
     """All ``pam`` parameters of the rig (SI): Table II times :data:`RIG_PERTURBATION`.
+
+    Parameters
+    ----------
+    overrides : mapping str -> float, optional
+        Absolute values (SI) replacing those of the rig, e.g. a Monte-Carlo
+        draw ``{"A1": 6.1e-8}`` (m^2).
 
     Returns
     -------
     dict str -> float
         Every name of :data:`bondgraph.library.pam.PARAMETERS`, SI units.
+
+    Raises
+    ------
+    ParameterError
+        An override names no ``pam`` parameter (the message lists them) or is not finite.
 
     Examples
     --------
@@ -75,7 +86,8 @@ def rig_params() -> dict[str, float]:
     (1.1, 0.0004263)
     """
     nominal = parameter_values()
-    return parameter_values({name: nominal[name] * factor for name, factor in RIG_PERTURBATION.items()})
+    rig = {name: nominal[name] * factor for name, factor in RIG_PERTURBATION.items()}
+    return parameter_values({**rig, **dict(overrides or {})})
 
 
 def rig_graph(*, locked: bool = False):
@@ -139,7 +151,7 @@ def export_rig(path, *, locked: bool = False) -> Path:
                               f"{', locked at psi = 0' if locked else ''}")
 
 
-def rig_start_values(u0=(5.0, 5.0), *, locked: bool = False) -> dict[str, float]:
+def rig_start_values(u0=(5.0, 5.0), *, locked: bool = False, params=None) -> dict[str, float]:
     """FMU start values: the rig at rest under constant valve commands `u0`.
 
     The pressures are the rig's static pressures at `u0` and the angle the
@@ -153,6 +165,8 @@ def rig_start_values(u0=(5.0, 5.0), *, locked: bool = False) -> dict[str, float]
         Valve commands ``(u1, u2)`` held before t = 0, within [0, 10].
     locked : bool
         ``True``: for :func:`export_rig` with ``locked=True`` (no ``q_psi``, ``p_J``).
+    params : mapping str -> float, optional
+        The rig's parameter values (SI; default :func:`rig_params`).
 
     Returns
     -------
@@ -168,7 +182,8 @@ def rig_start_values(u0=(5.0, 5.0), *, locked: bool = False) -> dict[str, float]
     u = np.asarray(u0, dtype=float)
     if u.shape != (2,) or not np.all(np.isfinite(u)) or np.any((u < 0.0) | (u > 10.0)):
         raise ScenarioError(f"rig_start_values: u0 must be two voltages within [0, 10] V, got {u0!r}")
-    psi, _, P1, P2 = pam_bd.equilibrium(u, rig_params(), variant="locked" if locked else "full")
+    values = rig_params() if params is None else dict(params)
+    psi, _, P1, P2 = pam_bd.equilibrium(u, values, variant="locked" if locked else "full")
     start = {"u1": float(u[0]), "u2": float(u[1]), "P_1": float(P1), "P_2": float(P2)}
     if not locked:
         start.update(q_psi=float(psi), p_J=0.0)

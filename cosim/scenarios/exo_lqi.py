@@ -35,10 +35,13 @@ import dataclasses
 import sys
 import tempfile
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 
-from bondgraph.library.exoskeleton import exoskeleton
+from bondgraph.errors import UnknownNameError
+from bondgraph.library.exoskeleton import PARAMETERS as EXO_PARAMETERS, exoskeleton
+from bondgraph.params import Param
 from estimators.lqi import lqi
 from estimators.observer import continuous_kalman_gain
 from fmus import export
@@ -47,6 +50,9 @@ from ._exo_analysis import band_limits, margins
 from ._exo_design import NOISE_BOUNDS, PAPER_GAINS, PAPER_SIMULATION_PARAMS, Q_PRIME_C, R_PRIME_C, design, \
     disturbance_to_estimate, loop_at_plant_input, sampled_loop_at_plant_input
 from ._exo_loop import NOISE_COLUMNS, cosimulate, monolithic
+
+__all__ = ["NAME", "DESCRIPTION", "PARAMETERS", "SWEEP_METRICS", "FMU_FILES", "run", "simulate", "export_plant",
+           "export_fmus", "noise"]
 
 NAME = "exo-lqi"
 DESCRIPTION = "exoskeleton (seed 004 Sec. 5.2) as FMU: Kalman observer + LQI with double integral action"
@@ -72,6 +78,20 @@ READING = ("relative angles (theta_h removed, theta_h_dot a known observer input
            "parameters from docs/exo-parameters.md (k_g, k_s, J_sint, J_sext assumed)")
 
 
+#: What a run may vary (``run(params=...)``): every exoskeleton parameter (SI), defaults the
+#: library's with the paper's simulation setting :data:`._exo_design.PAPER_SIMULATION_PARAMS`
+#: (``b_f = 0``).  Plant FMU and controller design (LQI, Kalman gains) both take them: the design
+#: follows the plant, as it would for a redesigned exoskeleton.
+PARAMETERS = MappingProxyType({n: Param(n, PAPER_SIMULATION_PARAMS.get(n, p.value), p.unit, p.description)
+                               for n, p in EXO_PARAMETERS.items()})
+#: The main numbers, for sweep plots: margins (dB, deg, s), bandwidth (Hz), motor torque and
+#: body-torque estimation error (N m).
+SWEEP_METRICS = ("margins.gain_db", "margins.phase_deg", "margins.delay_s", "bandwidth_hz", "max_motor_torque",
+                 "estimation_rms_Nm")
+#: File name of the plant FMU in a ``fmu_dir`` (:func:`export_fmus`).
+FMU_FILES = MappingProxyType({"plant": "exoskeleton.fmu"})
+
+
 def noise(n: int, *, seed: int = SEED) -> np.ndarray:
     """Uniform noise within the bounds of Sec. 4 of [1]_, shape (n, 4), columns
     :data:`._exo_loop.NOISE_COLUMNS` (N m, rad/s, rad/s, N m)."""
@@ -86,8 +106,28 @@ def export_plant(path) -> Path:
     return export(exoskeleton(params=dict(PAPER_SIMULATION_PARAMS)), path, solver_step=SOLVER_STEP)
 
 
-def simulate(*, quick: bool = False, dt: float = DT, seed: int = SEED):
+def export_fmus(directory) -> dict:
+    """Export the plant FMU into `directory` (``run(fmu_dir=directory)`` reuses it); returns
+    ``{"plant": path}``."""
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    return {"plant": export_plant(directory / FMU_FILES["plant"])}
+
+
+def simulate(*, quick: bool = False, dt: float = DT, seed: int = SEED, params=None, fmu_dir=None):
     """Design, export and co-simulate the step test.
+
+    Parameters
+    ----------
+    quick : bool
+        Horizon :data:`T_END_QUICK` instead of :data:`T_END`.
+    dt : float, s
+    seed : int
+        Seed of the noise draw.
+    params : mapping str -> float, optional
+        Values (SI) of :data:`PARAMETERS` for plant and design.
+    fmu_dir : path-like, optional
+        Directory with the plant FMU of :func:`export_fmus` (exported there if missing).
 
     Returns
     -------
@@ -95,13 +135,20 @@ def simulate(*, quick: bool = False, dt: float = DT, seed: int = SEED):
     result : CosimResult
     noise : ndarray, shape (n + 1, 4)
     """
-    d = design(dt=dt)
+    params = dict(params or {})
+    unknown = sorted(set(params) - set(PARAMETERS))
+    if unknown:
+        raise UnknownNameError("parameter", unknown[0], PARAMETERS, f"scenario {NAME}")
+    d = design(dt=dt, params=params)
     t_end = T_END_QUICK if quick else T_END
     n = int(round(t_end / dt))
     w = noise(n + 1, seed=seed)
     with tempfile.TemporaryDirectory() as tmp:
-        fmu = export_plant(Path(tmp) / "exoskeleton.fmu")
-        res = cosimulate(d, fmu, t_end=n * dt, noise=w, w_h=W_H, tau_ref=TAU_REF, t_ref=T_REF)
+        fmu = Path(fmu_dir if fmu_dir is not None else tmp) / FMU_FILES["plant"]
+        if not fmu.exists():
+            fmu = export_fmus(fmu.parent)["plant"]
+        res = cosimulate(d, fmu, t_end=n * dt, noise=w, w_h=W_H, tau_ref=TAU_REF, t_ref=T_REF,
+                         params={k: float(v) for k, v in params.items()} or None)
     return d, res, w
 
 
@@ -149,8 +196,11 @@ def _other_margins(d) -> dict:
             "printed_gains": _as_dict(paper)}
 
 
-def run(plot_dir=None, *, quick: bool = False) -> dict:
+def run(plot_dir=None, *, quick: bool = False, params=None, seed: int = SEED, fmu_dir=None) -> dict:
     """The scenario's numbers (JSON-ready); Figs. 13-20 in `plot_dir` if given.
+
+    `params` (values of :data:`PARAMETERS`, SI), `seed` (noise) and `fmu_dir`
+    (reused plant FMU) as for :func:`simulate`.
 
     ``gains`` (eq. (15) design; ``single_integral`` the eq. (14) one;
     ``single_integral_qz_1e13`` the reading that gives eq. (17)'s F'_iz),
@@ -162,7 +212,7 @@ def run(plot_dir=None, *, quick: bool = False) -> dict:
     (mean of ``(y_b - y_b_hat)^2``, N^2 m^2, over the run), ``paper`` the
     published values, ``reading`` how the paper was read.
     """
-    d, res, w = simulate(quick=quick)
+    d, res, w = simulate(quick=quick, params=params, seed=seed, fmu_dir=fmu_dir)
     loop = loop_at_plant_input(d)
     mg = margins(*loop)
     dist = disturbance_to_estimate(d)
@@ -192,7 +242,8 @@ def run(plot_dir=None, *, quick: bool = False) -> dict:
                                         "y_b": float(np.max(np.abs(yb - mono["y_b"])))},
         "observer_poles_continuous": [float(np.min(d.observer_c.poles.real)),
                                       float(np.max(d.observer_c.poles.real))],
-        "dt_s": d.dt, "t_end_s": float(res.t[-1]), "seed": SEED, "paper": PAPER, "reading": READING,
+        "dt_s": d.dt, "t_end_s": float(res.t[-1]), "seed": int(seed),
+        "params": {k: float(v) for k, v in dict(params or {}).items()}, "paper": PAPER, "reading": READING,
     }
     if plot_dir is not None:
         from ._exo_plots import plot_all

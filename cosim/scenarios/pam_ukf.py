@@ -52,11 +52,14 @@ import sys
 import tempfile
 from functools import lru_cache
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 
 from bondgraph.blockdiagram import pam as pam_bd
-from bondgraph.library.pam import FRICTION_STEP, parameter_values
+from bondgraph.library.pam import FRICTION_STEP, PARAMETERS as PAM_PARAMETERS, parameter_values
+from bondgraph.errors import ParameterError, UnknownNameError
+from bondgraph.params import Param
 from bondgraph.simulation import simulate
 from estimators import JulierSigmaPoints, UnscentedKalmanFilter
 from estimators.ukf_model import StateMap
@@ -65,12 +68,14 @@ from ..blocks import Table
 from ..fmu_component import FMUComponent
 from ..master import CoSimulation
 from ._pam_paper_ukf import KAPPA, PAPER_P0, PAPER_Q, PAPER_R, paper_state_map
-from ._pam_rig import RIG_PERTURBATION, add_pressure_noise, export_rig, nominal_equations, rig_start_values
+from ._pam_rig import RIG_PERTURBATION, add_pressure_noise, export_rig, nominal_equations, rig_params, \
+    rig_start_values
 from ._pam_ukf_metrics import indices
 from cosim.errors import ScenarioError
 
-__all__ = ["NAME", "DESCRIPTION", "run", "inputs", "record_rig", "make_ukf", "ukf_estimates",
-           "model_alone", "estimator_start", "experiment", "PAPER_OFFLINE"]
+__all__ = ["NAME", "DESCRIPTION", "PARAMETERS", "SWEEP_METRICS", "FMU_FILES", "run", "export_fmus", "inputs",
+           "record_rig", "make_ukf", "ukf_estimates", "model_alone", "estimator_start", "experiment",
+           "PAPER_OFFLINE"]
 
 NAME = "pam-ukf"
 DESCRIPTION = "UKF estimating PAM joint angle and torque from P1, P2 on a perturbed rig FMU (seed 000)"
@@ -81,6 +86,26 @@ U_PRE = (5.0, 5.0)                    # V, valve commands the rig rests under be
 SIGMA_P = 1e4                         # Pa, pressure-sensor noise (std) = sqrt(R_ii)
 SEED = 5                              # numpy.random.default_rng seed of the noise
 T_CONVERGE = 1.0                      # s, indices from here on (after the shared initial error)
+
+
+def _parameters():
+    rig = rig_params()
+    table = {n: Param(n, rig[n], p.unit, f"rig: {p.description}"
+                      + (f" x{RIG_PERTURBATION[n]:g}" if n in RIG_PERTURBATION else ""))
+             for n, p in PAM_PARAMETERS.items()}
+    table["segment_s"] = Param("segment_s", SEGMENT, "s", "length of each of the 13 input-profile segments "
+                               f"(quick: {QUICK_SEGMENT})")
+    table["sigma_p"] = Param("sigma_p", SIGMA_P, "Pa", "pressure-sensor noise (std)")
+    return MappingProxyType(table)
+
+
+#: What a run may vary (``run(params=...)``): every ``pam`` parameter of the rig (SI; the
+#: default is the rig's value, Table II times :data:`RIG_PERTURBATION`), ``segment_s`` and
+#: ``sigma_p``.  The estimators keep the nominal Table II model whatever the rig.
+PARAMETERS = _parameters()
+
+#: The main numbers, for sweep plots: angle and torque RMSE (index I; deg, N m), UKF and model alone.
+SWEEP_METRICS = ("ukf.angle.I", "model_only.angle.I", "ukf.torque.I", "model_only.torque.I")
 
 #: Section IV-A of [1]: offline estimation (Figs. 9, 10), angle in deg, torque in N m.
 PAPER_OFFLINE = {
@@ -106,7 +131,7 @@ def inputs(*, quick: bool = False):
     return pam_bd.fig8_profile(segment=QUICK_SEGMENT if quick else SEGMENT)
 
 
-def record_rig(fmu, t, u, *, locked: bool = False, u_pre=U_PRE) -> dict:
+def record_rig(fmu, t, u, *, locked: bool = False, u_pre=U_PRE, params=None) -> dict:
     """Co-simulate the rig FMU in the master under the commands `u`.
 
     Parameters
@@ -120,6 +145,9 @@ def record_rig(fmu, t, u, *, locked: bool = False, u_pre=U_PRE) -> dict:
     locked : bool
     u_pre : (float, float), V
         Commands the rig rests under before t = 0 (:func:`._pam_rig.rig_start_values`).
+    params : mapping str -> float, optional
+        Rig parameter values (SI) set on the FMU before initialisation (default:
+        its own start values, :func:`._pam_rig.rig_params`).
 
     Returns
     -------
@@ -132,7 +160,9 @@ def record_rig(fmu, t, u, *, locked: bool = False, u_pre=U_PRE) -> dict:
         `t` not 0, 1 ms, 2 ms, ...; `u` not of shape (len(t), 2) or not finite.
     """
     t, u = _profile(t, u, "record_rig")
-    plant = FMUComponent(fmu, "rig", start_values=rig_start_values(u_pre, locked=locked))
+    values = rig_params(params)
+    plant = FMUComponent(fmu, "rig", start_values=rig_start_values(u_pre, locked=locked, params=values),
+                         parameters={n: values[n] for n in nominal_equations(locked=locked).param_names})
     tables = [Table(f"u{i}", t, u[:, i - 1], unit="V", interpolation="hold") for i in (1, 2)]
     sim = CoSimulation(tables + [plant], [("u1.y", "rig.u1"), ("u2.y", "rig.u2")], step=SAMPLE_TIME)
     result = sim.run(float(t[-1]))
@@ -255,7 +285,7 @@ def model_alone(t, u, x0, *, locked: bool = False) -> dict:
     return {s: np.array(res[s]) for s in ("psi", "P1", "P2", "tau")}
 
 
-def experiment(fmu, t, u, rng, *, locked: bool = False) -> dict:
+def experiment(fmu, t, u, rng, *, locked: bool = False, params=None, sigma_p: float = SIGMA_P) -> dict:
     """Recording, noisy pressures, model alone and UKF for one rig variant.
 
     Parameters
@@ -265,8 +295,12 @@ def experiment(fmu, t, u, rng, *, locked: bool = False) -> dict:
     t : ndarray, shape (n,), s
     u : ndarray, shape (n, 2), V
     rng : numpy.random.Generator
-        Draws the pressure noise (:data:`SIGMA_P`).
+        Draws the pressure noise.
     locked : bool
+    params : mapping str -> float, optional
+        Rig parameter values (SI) overriding :func:`._pam_rig.rig_params`.
+    sigma_p : float, Pa
+        Pressure-noise standard deviation (default :data:`SIGMA_P`).
 
     Returns
     -------
@@ -274,8 +308,8 @@ def experiment(fmu, t, u, rng, *, locked: bool = False) -> dict:
         ``t``, ``u``, ``truth``, ``model``, ``ukf`` (dicts of signals, see
         :func:`record_rig`) and ``z`` (shape (n, 2), Pa: the noisy readings).
     """
-    truth = record_rig(fmu, t, u, locked=locked)
-    z = add_pressure_noise(np.column_stack([truth["P1"], truth["P2"]]), rng, SIGMA_P)
+    truth = record_rig(fmu, t, u, locked=locked, params=params)
+    z = add_pressure_noise(np.column_stack([truth["P1"], truth["P2"]]), rng, sigma_p)
     x0 = estimator_start(u[0], locked=locked)
     return {"t": t, "u": u, "truth": truth, "z": z, "model": model_alone(t, u, x0, locked=locked),
             "ukf": ukf_estimates(z, u, x0, locked=locked)}
@@ -287,8 +321,58 @@ def _scores(runs: dict, start: int) -> dict:
                      for q, (v, s) in keys.items()} for method in ("model", "ukf")}
 
 
-def run(plot_dir=None, *, quick: bool = False) -> dict:
+#: File names of the rig FMUs in a ``fmu_dir`` (:func:`export_fmus`).
+FMU_FILES = MappingProxyType({"free": "pam_rig.fmu", "locked": "pam_rig_locked.fmu"})
+
+
+def export_fmus(directory) -> dict:
+    """Export the two rig FMUs (free joint, locked joint) into `directory`.
+
+    ``run(fmu_dir=directory)`` then reuses them: a sweep builds them once and
+    ships the files to its workers; each run sets its own rig parameters as
+    FMU parameters before initialisation.
+
+    Returns
+    -------
+    dict str -> pathlib.Path
+        ``{"free": ..., "locked": ...}``, the names of :data:`FMU_FILES`.
+    """
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    return {v: export_rig(directory / name, locked=v == "locked") for v, name in FMU_FILES.items()}
+
+
+def _split(params, quick: bool):
+    """(rig overrides, segment s, sigma Pa) from `params`, every name checked."""
+    params = dict(params or {})
+    unknown = sorted(set(params) - set(PARAMETERS))
+    if unknown:
+        raise UnknownNameError("parameter", unknown[0], PARAMETERS, f"scenario {NAME}")
+    segment = float(params.pop("segment_s", QUICK_SEGMENT if quick else SEGMENT))
+    sigma = float(params.pop("sigma_p", SIGMA_P))
+    if not np.isfinite(segment) or 13 * segment < 2 * T_CONVERGE:
+        raise ParameterError(f"scenario {NAME}: segment_s = {segment!r} s is too short; the 13 segments must "
+                             f"last at least 2 T_CONVERGE = {2 * T_CONVERGE} s", name="segment_s")
+    return params, segment, sigma
+
+
+def run(plot_dir=None, *, quick: bool = False, params=None, seed: int = SEED, fmu_dir=None) -> dict:
     """The scenario's numbers (JSON-ready); plots in `plot_dir` if given.
+
+    Parameters
+    ----------
+    plot_dir : path-like, optional
+    quick : bool
+        Segments of :data:`QUICK_SEGMENT` instead of :data:`SEGMENT` (unless
+        ``params`` sets ``segment_s``).
+    params : mapping str -> float, optional
+        Values (SI) of :data:`PARAMETERS` replacing their defaults: the rig's
+        parameters (the estimators keep the nominal model), ``segment_s``, ``sigma_p``.
+    seed : int
+        Seed of the pressure noise (``numpy.random.default_rng``).
+    fmu_dir : path-like, optional
+        Directory holding the rig FMUs of :func:`export_fmus` (exported there if
+        missing); default: exported into a temporary directory for this run.
 
     Returns
     -------
@@ -299,15 +383,27 @@ def run(plot_dir=None, *, quick: bool = False) -> dict:
         ``second_half`` (over the second half of the record, long after the
         initial error: what model mismatch and filter alone give),
         ``paper`` (:data:`PAPER_OFFLINE`), ``ranges``, ``units``, ``window_s``,
-        ``perturbation``, ``noise_sigma_pa``, ``seed``, ``quick``.
+        ``perturbation``, ``params`` (the overrides), ``noise_sigma_pa``, ``seed``, ``quick``.
+
+    Raises
+    ------
+    UnknownNameError
+        A parameter not in :data:`PARAMETERS` (the message lists them).
+    ParameterError
+        A value that is not a finite number, or ``segment_s`` too short.
     """
-    t, u = inputs(quick=quick)
-    rng = np.random.default_rng(SEED)
+    rig, segment, sigma = _split(params, quick)
+    t, u = pam_bd.fig8_profile(segment=segment)
+    rng = np.random.default_rng(seed)
     runs = {}
     with tempfile.TemporaryDirectory() as tmp:
+        where = Path(fmu_dir) if fmu_dir is not None else Path(tmp)
+        fmus = {v: where / name for v, name in FMU_FILES.items()}
+        if not all(f.exists() for f in fmus.values()):
+            fmus = export_fmus(where)
         for variant in ("free", "locked"):
-            fmu = export_rig(Path(tmp) / f"rig_{variant}.fmu", locked=variant == "locked")
-            runs[variant] = experiment(fmu, t, u, rng, locked=variant == "locked")
+            runs[variant] = experiment(fmus[variant], t, u, rng, locked=variant == "locked", params=rig,
+                                       sigma_p=sigma)
     start = int(round(T_CONVERGE / SAMPLE_TIME))
     half = (t.size - 1) // 2
     late, full, second = _scores(runs, start), _scores(runs, 0), _scores(runs, half)
@@ -322,7 +418,8 @@ def run(plot_dir=None, *, quick: bool = False) -> dict:
                                     float(runs["locked"]["truth"]["tau"][start:].max())]},
            "units": {"angle": "deg", "torque": "N m", "Q": "1"},
            "window_s": [T_CONVERGE, float(t[-1])], "perturbation": dict(RIG_PERTURBATION),
-           "noise_sigma_pa": SIGMA_P, "seed": SEED, "quick": quick}
+           "params": {k: float(v) for k, v in dict(params or {}).items()},
+           "noise_sigma_pa": sigma, "seed": int(seed), "quick": quick}
     if plot_dir is not None:
         from ._pam_ukf_plots import save_plots
         save_plots(runs, Path(plot_dir), t_converge=T_CONVERGE)

@@ -1,0 +1,24 @@
+"""The sweep progress line: done, failed, running, ETA."""
+import io
+
+from sweeps.progress import ProgressBar
+
+
+def test_progress_line_counts_and_prints_once_per_decile():
+    stream = io.StringIO()
+    bar = ProgressBar(20, stream=stream)
+    bar.update(running=4)
+    assert "0/20 runs  0 failed  4 running" in bar.line() and bar.line().endswith("ETA --")
+    for _ in range(20):
+        bar.update(done=1, failed=1 if bar.done % 5 == 0 else 0, running=2)
+    line = bar.line()
+    assert "[" + "#" * 30 + "] 20/20 runs  4 failed  2 running" in line and line.endswith("ETA 0s")
+    # not a terminal: one line per 10 % (and the first), not one per update
+    assert len(stream.getvalue().splitlines()) == 11
+
+
+def test_progress_can_be_silent():
+    bar = ProgressBar(3, stream=None)
+    bar.update(done=3)
+    bar.close()
+    assert bar.done == 3 and bar.eta_s() == 0.0

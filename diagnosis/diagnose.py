@@ -284,7 +284,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     from .locate import locate_regime, regime_variables, significant_windows
     from .recording import bind
     from .residuals import OutputSimulator, nrmse, residuals
-    from bondgraph.errors import SimulationError
+    from .errors import SimulationError
 
     if int(top) < 1:
         raise DiagnosisError(f"top must be a positive number of places; found {top!r}")

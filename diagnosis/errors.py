@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from bondgraph.errors import BondcosimError, SimulationError, UnknownNameError
 
-__all__ = ["DiagnosisError", "UnitError", "RecordingError", "UnknownColumnError", "UnknownCaseError",
+__all__ = ["DiagnosisError", "BenchmarkError", "UnitError", "RecordingError", "UnknownColumnError", "UnknownCaseError",
            "BondcosimError", "SimulationError", "UnknownNameError"]
 
 
@@ -73,6 +73,11 @@ class UnknownColumnError(UnknownNameError, RecordingError):
         why = f" (wanted for {wanted_for})" if wanted_for else ""
         Exception.__init__(self, f"{source}: no column {name!r}{why}; columns are "
                                  f"{', '.join(self.known) or '(none)'}")
+
+
+class BenchmarkError(DiagnosisError):
+    """The generalisation benchmark could not make a case (an effect that cannot act at a
+    place, a truth run that leaves the finite numbers while sizing an effect)."""
 
 
 class UnknownCaseError(DiagnosisError, KeyError):

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from bondgraph.errors import BondcosimError
+from .errors import BondcosimError
 
 __all__ = ["InitialState", "estimate_initial_state", "window_length", "PULL", "MIN_GAIN"]
 

@@ -39,7 +39,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from bondgraph.errors import UnknownNameError
+from cosim.errors import UnknownNameError
 from bondgraph.library.exoskeleton import PARAMETERS as EXO_PARAMETERS, exoskeleton
 from bondgraph.params import Param
 from estimators.lqi import lqi

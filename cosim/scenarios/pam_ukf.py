@@ -58,7 +58,7 @@ import numpy as np
 
 from bondgraph.blockdiagram import pam as pam_bd
 from bondgraph.library.pam import FRICTION_STEP, PARAMETERS as PAM_PARAMETERS, parameter_values
-from bondgraph.errors import ParameterError, UnknownNameError
+from cosim.errors import ParameterError, UnknownNameError
 from bondgraph.params import Param
 from bondgraph.simulation import simulate
 from estimators import JulierSigmaPoints, UnscentedKalmanFilter

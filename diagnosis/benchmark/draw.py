@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import BenchmarkError
 from .effects import KIND_PLACES, make_effect, places_for
 from .plant import TruthPlant
 from .simulate import simulate_truth
@@ -182,7 +183,7 @@ def realise(spec: CaseSpec, plant: TruthPlant) -> Realised:
     u = excitation(plant, t, rng, spec.excitation)
     nominal = simulate_truth(plant, t, u, signals=True)
     if not nominal["_finite"]:
-        raise RuntimeError(f"{spec.label}: the plant's own simulation is not finite")
+        raise BenchmarkError(f"{spec.label}: the plant's own simulation is not finite")
     rec = Realised(spec, plant, t, u, nominal, nominal)
     if spec.kind == "none":
         rec.sigma = {o.name: spec.noise_share * float(np.std(nominal[o.name])) for o in plant.outputs}
@@ -324,7 +325,7 @@ def _calibrate(rec: Realised, rng) -> None:
         prev = (log_m, g)
         log_m -= g / slope
     if best is None:
-        raise RuntimeError(f"{spec.label}: no finite truth run while sizing the effect")
+        raise BenchmarkError(f"{spec.label}: no finite truth run while sizing the effect")
     eff, out, name, c, m = best
     rec.effect, rec.truth, rec.affected, rec.change = eff, out, name, c
     rec.calibration_runs = runs + 0

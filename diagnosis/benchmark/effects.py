@@ -32,6 +32,7 @@ import math
 
 import numpy as np
 
+from ..errors import BenchmarkError
 from .plant import TruthPlant
 from .simulate import NoEffect
 
@@ -185,7 +186,7 @@ class TruthEffect(NoEffect):
             p = sum(sig[name] for name in self.plant.junction(j).pressures) - sh["p_ref"]
             level = m * (sh["c0"] + max(p, 0.0))
             return {j: -level * math.tanh(x / eps)}, np.zeros(0)
-        raise ValueError(f"effect {k} cannot act at {self.door} {self.name}")
+        raise BenchmarkError(f"effect {k} cannot act at {self.door} {self.name}")
 
     def sensed(self, y):
         if self.door != "output":

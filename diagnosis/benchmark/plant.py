@@ -29,7 +29,20 @@ from typing import Callable
 
 import numpy as np
 
-__all__ = ["InputSpec", "OutputSpec", "JunctionSpec", "StorageSpec", "TruthPlant"]
+__all__ = ["InputSpec", "OutputSpec", "JunctionSpec", "StorageSpec", "TruthPlant", "TruthPlantError",
+           "UnknownTruthName"]
+
+
+class TruthPlantError(ValueError):
+    """A truth plant used wrongly (an unknown integration method).  The truth plants stand
+    apart from the project's code, its error classes included."""
+
+
+class UnknownTruthName(TruthPlantError, KeyError):
+    """A junction, storage or plant name a truth plant does not have."""
+
+    def __str__(self) -> str:   # KeyError would quote the message
+        return Exception.__str__(self)
 
 
 @dataclass(frozen=True)
@@ -183,10 +196,10 @@ class TruthPlant:
         for j in self.junctions:
             if j.name == name:
                 return j
-        raise KeyError(f"plant {self.name}: no junction {name!r}; it has {[j.name for j in self.junctions]}")
+        raise UnknownTruthName(f"plant {self.name}: no junction {name!r}; it has {[j.name for j in self.junctions]}")
 
     def storage(self, name: str) -> StorageSpec:
         for s in self.storages:
             if s.name == name:
                 return s
-        raise KeyError(f"plant {self.name}: no storage {name!r}; it has {[s.name for s in self.storages]}")
+        raise UnknownTruthName(f"plant {self.name}: no storage {name!r}; it has {[s.name for s in self.storages]}")

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from typing import Callable
 
-from .plant import TruthPlant
+from .plant import TruthPlant, UnknownTruthName
 from .plants_cylinder import pneumatic_cylinder
 from .plants_drivetrain import carriage, drivetrain
 from .plants_exo import exoskeleton
@@ -35,4 +35,4 @@ def plant(name: str) -> TruthPlant:
     try:
         return PLANTS[name]()
     except KeyError:
-        raise KeyError(f"no benchmark plant {name!r}; available: {', '.join(PLANTS)}") from None
+        raise UnknownTruthName(f"no benchmark plant {name!r}; available: {', '.join(PLANTS)}") from None

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .plant import TruthPlant
+from .plant import TruthPlant, TruthPlantError
 
 __all__ = ["simulate_truth", "NoEffect"]
 
@@ -117,7 +117,7 @@ def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None, *, x0
             states[k + 1] = s
     elif plant.method == "lsoda":
         if plant.hold is not None:
-            raise ValueError(f"plant {plant.name}: held variables need method 'rk4'")
+            raise TruthPlantError(f"plant {plant.name}: held variables need method 'rk4'")
         from scipy.integrate import solve_ivp
         s = s0.copy()
         for k in range(n - 1):
@@ -130,7 +130,7 @@ def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None, *, x0
                 break
             states[k + 1] = s
     else:
-        raise ValueError(f"plant {plant.name}: unknown method {plant.method!r} (rk4 or lsoda)")
+        raise TruthPlantError(f"plant {plant.name}: unknown method {plant.method!r} (rk4 or lsoda)")
 
     out = {o.name: np.full(n, np.nan) for o in plant.outputs}
     local = {}

@@ -15,10 +15,11 @@ Which kinds at which place (:func:`candidates`):
 
 * 1-junction: ``coulomb_friction``, ``viscous_friction``, ``stribeck_friction``,
   ``pressure_dependent_friction`` (one per pressure variable of the model),
-  ``hysteresis``, and for each C on it ``backlash``, ``nonlinear_stiffness``
+  ``hysteresis``, and for each C on it ``backlash``, ``nonlinear_stiffness``,
+  ``saturation`` (end stops)
   (:mod:`diagnosis.catalogue_friction`, :mod:`diagnosis.catalogue_storage`);
 * 0-junction: ``leak``, ``heat_transfer`` (pneumatic / thermal only),
-  ``nonlinear_stiffness`` for each C on it;
+  ``nonlinear_stiffness`` and ``saturation`` (an overflow) for each C on it;
 * 0- and 1-junction: ``constant_load`` (:mod:`diagnosis.catalogue_loads`);
 * input: ``valve_lag``, ``transport_delay``, ``saturation``;
 * output: ``saturation`` (the sensor's range), ``sensor_offset``, ``sensor_gain``
@@ -54,6 +55,14 @@ _FAMILIES = {**{k: (build_friction, explain_friction) for k in FRICTION_KINDS},
              **{k: (build_storage, explain_storage) for k in STORAGE_KINDS},
              **{k: (build_signal, explain_signal) for k in INPUT_KINDS + OUTPUT_KINDS}}   # saturation: both
 assert set(_FAMILIES) == set(KINDS)
+
+
+def _family(cand):
+    """(build, explain) of a candidate: by kind, and for ``saturation`` by place (a junction's
+    storage content, an input, an output)."""
+    if cand.kind == "saturation" and cand.place.kind == "junction":
+        return build_storage, explain_storage
+    return _FAMILIES[cand.kind]
 
 
 @dataclass(frozen=True)
@@ -165,7 +174,7 @@ class Candidate:
             add_parameter(data, spec.name, values[spec.name], spec.unit, spec.description)
         for name, value, unit, description in self.constants:
             add_parameter(data, name, value, unit, description)
-        build, _ = _FAMILIES[self.kind]
+        build, _ = _family(self)
         build(data, model_graph, self, values)
         return graph_from_dict(data, source=f"candidate {self.kind} at {self.place}")
 
@@ -178,7 +187,7 @@ class Candidate:
             unit = units.get(name, "")
             return f"{values[name]:.3g} {unit if unit != '1' else ''}".strip()
 
-        _, explain = _FAMILIES[self.kind]
+        _, explain = _family(self)
         return explain(self, values, show)
 
     def __str__(self) -> str:

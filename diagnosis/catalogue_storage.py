@@ -20,6 +20,14 @@ and backlash of a C element at a junction.
 * ``backlash``: the C's law acts on the displacement beyond a play of
   :math:`\\pm b`: :math:`e = \\Phi(q - \\mathrm{clip}(q, -b, b))` (a compliant
   transmission with a dead zone of total width 2b).
+* ``saturation`` of a C's content :math:`q` (the storage is full, an axis is at
+  its end): at a 1-junction, end stops, an R whose effort
+  :math:`k_{stop} (\\max(q - q_{max}, 0) + \\min(q - q_{min}, 0))` pushes back
+  beyond either limit; at a 0-junction, an overflow, an R whose flow
+  :math:`k_{of} \\max(q - q_{max}, 0)` spills what exceeds the limit.  The
+  stiffnesses are fixed, not fitted: :math:`k_{stop}` 30 times the spring's
+  stiffness scale, :math:`k_{of}` one fifth of a sample's worth per second, so
+  the content stays within a few per cent of the limit.
 """
 from __future__ import annotations
 
@@ -32,7 +40,7 @@ from .errors import DiagnosisError
 
 __all__ = ["STORAGE_KINDS", "make_storage", "build_storage", "explain_storage"]
 
-STORAGE_KINDS = ("leak", "heat_transfer", "backlash", "nonlinear_stiffness")
+STORAGE_KINDS = ("leak", "heat_transfer", "backlash", "nonlinear_stiffness")   # + saturation at a C
 P_AMBIENT = 101325.0  # Pa
 
 
@@ -81,7 +89,33 @@ def make_storage(graph, place, scales, taken, values=None) -> list[dict]:
             protos.append(dict(kind="backlash", target=c, params=[
                 ParamSpec(fresh_name(taken, f"b_play_{c}"), 0.1 * X, 0.0, 3 * X, q_unit,
                           f"half-width of the play in front of {c}")]))
+        q = values.get(f"state:{element.state}")
+        if q is not None and np.ptp(q) > 0 and element.state:
+            protos.append(_content_limit(graph, j, element, q, k_lin, scales, taken, q_unit))
     return protos
+
+
+def _content_limit(graph, j, element, q, k_lin, scales, taken, q_unit) -> dict:
+    """The ``saturation`` prototype of C `element` at junction `j` (its content trajectory `q`)."""
+    c = element.name
+    lo, hi = float(np.min(q)), float(np.max(q))
+    width = hi - lo
+    q_max = fresh_name(taken, f"q_max_{c}")
+    if graph.elements[j].kind == "0":
+        k = fresh_name(taken, f"k_of_{c}")
+        return dict(kind="saturation", target=c, regime=element.state,
+                    constants=[(k, 1.0 / (5.0 * scales.dt), "1/s", f"overflow rate of {c} beyond its limit")],
+                    starts=[{q_max: lo + f * width} for f in (0.95, 0.8, 0.6)],
+                    params=[ParamSpec(q_max, hi + 1e-3 * width, lo, hi + width, q_unit,
+                                      f"content of {c} beyond which it overflows")])
+    q_min, k = fresh_name(taken, f"q_min_{c}"), fresh_name(taken, f"k_stop_{c}")
+    return dict(kind="saturation", target=c, regime=element.state,
+                constants=[(k, 30.0 * k_lin, DOMAINS[element.domain].stiffness if element.domain in DOMAINS else "",
+                            f"stiffness of the end stops of {c}")],
+                starts=([{q_min: lo - 1e-3 * width, q_max: lo + f * width} for f in (0.9, 0.7)]
+                        + [{q_min: lo + f * width, q_max: hi + 1e-3 * width} for f in (0.1, 0.3)]),
+                params=[ParamSpec(q_min, lo - 1e-3 * width, lo - width, hi, q_unit, f"lower end stop of {c}"),
+                        ParamSpec(q_max, hi + 1e-3 * width, lo, hi + width, q_unit, f"upper end stop of {c}")])
 
 
 def _displacement_scale(q, scales) -> float:
@@ -100,6 +134,16 @@ def build_storage(data: dict, graph, cand, values: dict) -> None:
         name = f"leak_{j}"
         data["elements"].append({"kind": "R", "name": name, "domain": dom, "flow": f"{p[0]}*(e - {c[0]})",
                                  "description": f"leak from {j} to the ambient"})
+        data["bonds"].append({"name": f"b_{name}", "tail": [j, ""], "head": [name, ""]})
+        return
+    if cand.kind == "saturation":
+        name, q = f"limit_{cand.target}", cand.regime
+        if graph.elements[j].kind == "0":
+            law = {"flow": f"{c[0]}*Max({q} - {p[0]}, 0)"}
+        else:
+            law = {"effort": f"{c[0]}*(Max({q} - {p[1]}, 0) + Min({q} - {p[0]}, 0))"}
+        data["elements"].append({"kind": "R", "name": name, "domain": dom, **law,
+                                 "description": f"limits of the content of {cand.target}"})
         data["bonds"].append({"name": f"b_{name}", "tail": [j, ""], "head": [name, ""]})
         return
     if cand.kind == "heat_transfer":
@@ -147,6 +191,12 @@ def explain_storage(cand, values: dict, show) -> str:
     if cand.kind == "heat_transfer":
         return (f"the pressure at {j} relaxes with a time constant of {show(p[1])} after each change as the "
                 f"gas exchanges heat with its walls (thermal compliance {show(p[0])}): heat transfer at {j}")
+    if cand.kind == "saturation" and len(p) == 1:
+        return (f"the storage {cand.target} at {j} holds no more than {show(p[0])}: what exceeds it "
+                f"overflows (saturation of {cand.target})")
+    if cand.kind == "saturation":
+        return (f"the content of {cand.target} at {j} stays within {show(p[0])} .. {show(p[1])}: end stops "
+                f"(saturation of {cand.target})")
     if cand.kind == "nonlinear_stiffness":
         k3 = values.get(p[0], 0.0)
         word = "stiffens" if k3 > 0 else ("softens" if k3 < 0 else "changes its stiffness")

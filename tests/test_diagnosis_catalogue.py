@@ -280,3 +280,23 @@ def test_sensor_range_clips_the_output():
     built = cand.build(msd, {"y_min_x": -0.1, "y_max_x": 0.25})
     assert sp.simplify(_outputs(built)["x"] - sp.Min(sp.Max(S("q_k"), S("y_min_x")), S("y_max_x"))) == 0
     assert "the range of the x sensor" in cand.explain({"y_min_x": -0.1, "y_max_x": 0.25})
+
+
+def test_storage_saturation_is_an_end_stop_at_a_one_junction_and_an_overflow_at_a_zero_junction():
+    from diagnosis.recording import Experiment
+    t = np.linspace(0.0, 50.0, 501)
+    msd = library.build("mass-spring-damper")
+    exp = Experiment(t, {"F": np.sin(t)}, {"x": np.sin(t)}, {"F": "N", "x": "m"})
+    stop = _one(msd, Place("junction", "v_mass"), "saturation", experiment=exp)
+    built = stop.build(msd, {"q_min_k": -0.2, "q_max_k": 0.3})
+    q = S("q_k")
+    pushback = S("k_stop_k") * (sp.Max(q - S("q_max_k"), 0) + sp.Min(q - S("q_min_k"), 0))
+    _differs_by(built, msd, "p_m", -pushback)
+    assert built.parameters()["k_stop_k"].value == pytest.approx(30 * 4.0, rel=0.5)   # 30 x the spring
+    tanks = library.build("coupled-tanks")
+    exp = Experiment(t, {"Q_in": np.full(t.size, 2e-4)}, {"h1": np.full(t.size, 0.5)},
+                     {"Q_in": "m^3/s", "h1": "m"})
+    overflow = _one(tanks, Place("junction", "P1"), "saturation", experiment=exp)
+    built = overflow.build(tanks, {"q_max_tank1": 0.012})
+    _differs_by(built, tanks, "V1", -S("k_of_tank1") * sp.Max(S("V1") - S("q_max_tank1"), 0))
+    assert "overflows" in overflow.explain({"q_max_tank1": 0.012})

@@ -12,14 +12,16 @@ the inputs before the plant (clipping, delay, lag) or the outputs after it
 The kinds and where they may sit (:data:`KIND_PLACES`):
 
 ============================  ================================================
-junction (1: common flow)     coulomb_friction, viscous_friction,
-                              stribeck_friction, hysteresis (Dahl),
-                              constant_load, pressure_dependent_friction
+junction (1: common flow)     viscous_friction, constant_load (any domain);
+                              coulomb_friction (mechanical, or an electrical
+                              brush drop); stribeck_friction, hysteresis
+                              (Dahl) (mechanical); pressure_dependent_friction
                               (where the plant has pressures there)
 junction (0: common effort)   leak (laminar, towards the ambient effort),
                               constant_load (a constant flow)
 storage (a C element)         nonlinear_stiffness (cubic hardening),
-                              backlash (a dead band in a linear spring),
+                              backlash (a dead band in a linear mechanical
+                              spring),
                               saturation (an end stop / overflow at the
                               content's range)
 input                         saturation, transport_delay, valve_lag
@@ -41,9 +43,13 @@ __all__ = ["KIND_PLACES", "TruthEffect", "make_effect", "places_for"]
 #: Sharpness of the truth's sign laws: tanh(v / (SHARP * v_rms)).
 SHARP = 0.01
 
+MECHANICAL = ("translation", "rotation")
+
+#: Where each kind makes physical sense: stiction, Dahl hysteresis and play are mechanical;
+#: a sign-law drop is a Coulomb friction or an electrical brush drop; a resistance anywhere.
 KIND_PLACES = {
-    "coulomb_friction": ("junction1",), "viscous_friction": ("junction1",),
-    "stribeck_friction": ("junction1",), "hysteresis": ("junction1",),
+    "coulomb_friction": ("junction1_dry",), "viscous_friction": ("junction1",),
+    "stribeck_friction": ("junction1_mech",), "hysteresis": ("junction1_mech",),
     "pressure_dependent_friction": ("junction1p",), "constant_load": ("junction1", "junction0"),
     "leak": ("junction0",), "nonlinear_stiffness": ("storage_linear",), "backlash": ("storage_linear1",),
     "saturation": ("input", "output", "storage_range"), "transport_delay": ("input",),
@@ -57,6 +63,11 @@ def places_for(plant: TruthPlant, kind: str) -> list[tuple[str, str]]:
     for door in KIND_PLACES[kind]:
         if door == "junction1":
             out += [("junction", j.name) for j in plant.junctions if j.kind == "1"]
+        elif door == "junction1_mech":
+            out += [("junction", j.name) for j in plant.junctions if j.kind == "1" and j.domain in MECHANICAL]
+        elif door == "junction1_dry":
+            out += [("junction", j.name) for j in plant.junctions
+                    if j.kind == "1" and j.domain in MECHANICAL + ("electrical",)]
         elif door == "junction1p":
             out += [("junction", j.name) for j in plant.junctions if j.kind == "1" and j.pressures]
         elif door == "junction0":
@@ -65,7 +76,8 @@ def places_for(plant: TruthPlant, kind: str) -> list[tuple[str, str]]:
             out += [("storage", s.name) for s in plant.storages if s.stiffness is not None]
         elif door == "storage_linear1":
             out += [("storage", s.name) for s in plant.storages if s.stiffness   # a play needs a spring
-                    and plant.junction(s.junction).kind == "1"]
+                    and plant.junction(s.junction).kind == "1"
+                    and plant.junction(s.junction).domain in MECHANICAL]
         elif door == "storage_range":
             out += [("storage", s.name) for s in plant.storages if s.content_range is not None]
         elif door == "input":

@@ -81,7 +81,9 @@ def resting_input(graph, u: str, recorded) -> float:
     nominal initial state is closest to rest: the rates :math:`|f_i(x_0, u)|` (other
     inputs at their defaults) are normalised per state by their largest value over
     the three, summed, and the smallest sum wins (ties: in that order).  The first
-    recorded value when the model cannot be evaluated.
+    recorded value when the model cannot be evaluated, or when the rates do not depend
+    on the input at all (nothing says where it rested: the actuator is taken to have
+    followed its first command).
     """
     from bondgraph.evaluate import compile_model
     decl = next(d for d in graph.inputs() if d.name == u)
@@ -101,6 +103,8 @@ def resting_input(graph, u: str, recorded) -> float:
         return first
     peak = rates.max(axis=0)
     score = (rates[:, peak > 0] / peak[peak > 0]).sum(axis=1)
+    if np.allclose(rates, rates[0], rtol=1e-12, atol=0.0):
+        return first
     return options[int(np.argmin(score))]
 
 

@@ -226,6 +226,10 @@ def test_added_actuator_states_start_where_the_input_rested():
     preloaded = library.build("mass-spring-damper")
     preloaded.elements["k"].initial = 0.25                             # k x0 = 1 N: rests under F = 1 N
     assert resting_input(preloaded, "F", np.array([3.0])) == 1.0
+    # the cylinder's state (the rod follower) does not feel the pressure: nothing says where the
+    # pressure rested, so the lag starts at the first recorded pressure, not at 0 Pa
+    cylinder = library.build("pneumatic-cylinder")
+    assert resting_input(cylinder, "p", np.array([5.55e5, 5.55e5])) == 5.55e5
 
 
 def test_real_seal_friction_grows_with_pressure():

@@ -213,8 +213,12 @@ def _shape(spec, plant, rec, rng, scales):
     if k == "hysteresis":
         sh["delta"] = float(rng.uniform(0.01, 0.1)) * v_rms * hold
     if k == "pressure_dependent_friction":
-        p = sum(scales["rms"][name] for name in plant.junction(j).pressures)
-        sh["c0"], sh["p_ref"] = float(rng.uniform(0.1, 0.5)) * p, 0.0
+        # seal friction grows with the gauge pressure: absolute pressures (above 50 kPa on
+        # average) are taken relative to the atmosphere
+        names = plant.junction(j).pressures
+        p_ref = sum(101325.0 if scales["rms"][name] > 5e4 else 0.0 for name in names)
+        p = sum(scales["rms"][name] for name in names) - p_ref
+        sh["c0"], sh["p_ref"] = float(rng.uniform(0.1, 0.5)) * p, p_ref
     if k == "valve_lag":
         sh["u0"] = float(rec.u[spec.name][0])
     if spec.door == "input" and k == "saturation":
@@ -249,7 +253,7 @@ def _initial_magnitude(spec, plant, rec, scales, sh, probe_gain):
     if k == "leak":
         return base / (scales["rms"][j] - plant.junction(j).ambient or 1.0)
     if k == "pressure_dependent_friction":
-        return base / (sh["c0"] + sum(scales["rms"][p] for p in plant.junction(j).pressures))
+        return base / (sh["c0"] + sum(scales["rms"][p] for p in plant.junction(j).pressures) - sh["p_ref"])
     if k == "nonlinear_stiffness":
         return base / max(scales["rms"][spec.name], 1e-300) ** 3
     if k == "backlash":
@@ -302,6 +306,8 @@ def _calibrate(rec: Realised, rng) -> None:
 
     bounded = spec.kind == "saturation"
     m = _initial_magnitude(spec, plant, rec, scales, sh, probe_gain)
+    if not (np.isfinite(m) and m > 0):
+        m = 1e-3          # a guess without a sign or size; the secant steps find the size
     target = spec.target_change
     best = None
     log_m, prev = math.log(m), None

@@ -116,6 +116,11 @@ class StateEquations:
         ``inputs`` so a user may override them.
     report : CausalityReport
         Derivative causality and algebraic loops found.
+    guards : tuple of DerivedGuard
+        Physical-domain conditions (:mod:`bondgraph.guards`), expressions in
+        ``t``, states, inputs, params and held symbols.
+    param_bounds : mapping str -> (float or None, float or None)
+        Physical range ``(min, max)`` of each bounded parameter (inclusive).
     """
 
     name: str
@@ -141,13 +146,15 @@ class StateEquations:
     owners: Mapping = field(default_factory=dict)
     input_functions: Mapping = field(default_factory=dict)
     report: CausalityReport = field(default_factory=CausalityReport)
+    guards: tuple = ()
+    param_bounds: Mapping = field(default_factory=dict)
 
     def __post_init__(self):
         for name in ("states", "inputs", "params", "outputs", "f", "h",
-                     "algebraic", "residuals", "held", "held_update"):
+                     "algebraic", "residuals", "held", "held_update", "guards"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
         for name in ("param_values", "initial_state", "input_defaults", "held_initial",
-                     "units", "descriptions", "owners", "input_functions"):
+                     "units", "descriptions", "owners", "input_functions", "param_bounds"):
             object.__setattr__(self, name, _frozen(getattr(self, name)))
         if len(self.f) != len(self.states):
             raise ValueError(f"{len(self.f)} right-hand sides for {len(self.states)} states")

@@ -33,12 +33,13 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
-from bondgraph.codegen_c import generate_source
-from bondgraph.errors import FMUError
+from bondgraph.codegen_c import generate_source, guard_source
+from bondgraph.errors import FMUError, ParameterError
+from bondgraph.guards import check_param_bounds
 
 from .build import compile_fmu_binary
 from .c_header import model_header
-from .layout import model_identifier, variable_layout
+from .layout import DEFAULT_MAX_SUBSTEPS, model_identifier, variable_layout
 from .model_description import model_description_xml
 
 __all__ = ["export", "default_solver_step", "fmu_equations", "binary_platform"]
@@ -80,7 +81,8 @@ def fmu_equations(eqs):
     return dataclasses.replace(
         eqs, inputs=tuple(s for s in eqs.inputs if s not in sub),
         f=rep(eqs.f), h=rep(eqs.h), residuals=rep(eqs.residuals),
-        held_update=rep(eqs.held_update), input_functions={})
+        held_update=rep(eqs.held_update), input_functions={},
+        guards=tuple(dataclasses.replace(g, expr=sp.sympify(g.expr).xreplace(sub)) for g in eqs.guards))
 
 
 def default_solver_step(eqs) -> float:
@@ -112,6 +114,7 @@ def _equations_of(model):
 
 
 def export(model, path, *, fmi_version: int = 2, solver_step: float | None = None,
+           max_substeps: float = DEFAULT_MAX_SUBSTEPS,
            params=None, identifier: str | None = None, description: str | None = None):
     """Write `model` as a binary FMU.
 
@@ -124,8 +127,13 @@ def export(model, path, *, fmi_version: int = 2, solver_step: float | None = Non
     solver_step : float, optional
         Start value of the ``solver_step`` parameter (largest internal RK4
         sub-step of Co-Simulation), s.  Default :func:`default_solver_step`.
+    max_substeps : float
+        Start value of the ``max_substeps`` parameter: a doStep that needs
+        more internal sub-steps returns Discard instead of blocking
+        (default 1e6).
     params : mapping str -> float, optional
-        Parameter start values replacing the model's defaults.
+        Parameter start values replacing the model's defaults (each inside
+        its declared range).
     identifier : str, optional
         ``modelIdentifier`` (name of the shared library); default from the
         model name.
@@ -154,14 +162,20 @@ def export(model, path, *, fmi_version: int = 2, solver_step: float | None = Non
                            f"parameters are {', '.join(eqs.param_names)}")
         eqs = dataclasses.replace(eqs, param_values={**eqs.param_values,
                                                      **{k: float(v) for k, v in params.items()}})
+        try:
+            check_param_bounds(eqs, np.array([[eqs.param_values[s.name] for s in eqs.params]]))
+        except ParameterError as exc:
+            raise FMUError(str(exc)) from None
     step = default_solver_step(eqs) if solver_step is None else float(solver_step)
     if not (step > 0.0 and math.isfinite(step)):
         raise FMUError(f"solver_step must be a positive number of seconds, got {solver_step!r}")
+    if not (isinstance(max_substeps, (int, float)) and max_substeps >= 1 and math.isfinite(max_substeps)):
+        raise FMUError(f"max_substeps must be a finite number >= 1, got {max_substeps!r}")
     folder = binary_platform(fmi_version)
     ident = identifier or model_identifier(eqs.name)
     model_exchange = eqs.is_smooth
-    variables = variable_layout(eqs, step, fmi_version=fmi_version)
-    kernels = generate_source(eqs, part="main")
+    variables = variable_layout(eqs, step, fmi_version=fmi_version, max_substeps=float(max_substeps))
+    kernels = generate_source(eqs, part="main") + "\n" + guard_source(eqs)
     description = description or (f"{eqs.name}: {len(eqs.states)} states, {len(eqs.inputs)} inputs, "
                                   f"{len(eqs.outputs)} outputs (bond graph exported by bondcosim)")
     token = "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, "bondcosim:" + hashlib.sha256(

@@ -8,7 +8,7 @@ the list of :class:`FmuVariable` that both the model description
 Value references are positions in the C array ``v[]`` (see
 ``fmus/c/bc_fmu_core.h``)::
 
-    states x | derivatives der(x) | inputs u | parameters p | held d | outputs y | solver_step
+    states x | derivatives der(x) | inputs u | parameters p | held d | outputs y | solver_step | max_substeps
 
 FMI 3.0 adds ``time`` (causality ``independent``) after them.  An output that
 is one of the states under the same name (e.g. every output of ``chain``) is
@@ -16,6 +16,7 @@ not a separate variable: the state itself gets causality ``output``.
 """
 from __future__ import annotations
 
+import dataclasses
 import re
 from dataclasses import dataclass
 
@@ -23,10 +24,16 @@ import sympy as sp
 
 from bondgraph.errors import FMUError
 
-__all__ = ["FmuVariable", "variable_layout", "derivative_unit", "model_identifier", "SOLVER_STEP"]
+__all__ = ["FmuVariable", "variable_layout", "derivative_unit", "model_identifier", "SOLVER_STEP",
+           "MAX_SUBSTEPS", "DEFAULT_MAX_SUBSTEPS"]
 
 #: Name of the parameter holding the internal fixed solver step of Co-Simulation.
 SOLVER_STEP = "solver_step"
+#: Name of the parameter bounding the internal sub-steps of one doStep.
+MAX_SUBSTEPS = "max_substeps"
+#: Its default: 1e6 sub-steps (about 0.05 s of CPU for a 2-state model, 1-2 s for ``pam``);
+#: a longer doStep returns Discard instead of blocking.
+DEFAULT_MAX_SUBSTEPS = 1e6
 
 
 @dataclass(frozen=True)
@@ -52,6 +59,10 @@ class FmuVariable:
         For a derivative, the value reference of its state.
     dependencies : tuple of int or None
         For an output, value references of the states and inputs it depends on.
+    min, max : float or None
+        Physical range (parameter bounds, single-variable guards), in `unit`.
+    nominal : float or None
+        Magnitude of the variable (states, parameters), in `unit`.
     """
 
     name: str
@@ -65,6 +76,9 @@ class FmuVariable:
     description: str = ""
     state_vr: int | None = None
     dependencies: tuple | None = None
+    min: float | None = None
+    max: float | None = None
+    nominal: float | None = None
 
 
 def derivative_unit(unit: str) -> str:
@@ -88,7 +102,27 @@ def _output_dependencies(eqs, expr) -> set:
     return syms & (set(eqs.states) | set(eqs.inputs))
 
 
-def variable_layout(eqs, solver_step: float, *, fmi_version: int = 2) -> list[FmuVariable]:
+def _with_ranges(eqs, variables) -> list[FmuVariable]:
+    """Parameter bounds and single-variable guards (``P_1 >= 0``) as min/max."""
+    ranges = {name: lo_hi for name, lo_hi in eqs.param_bounds.items()}
+    for g in eqs.guards:
+        if isinstance(g.expr, sp.Symbol):
+            lo, hi = ranges.get(g.expr.name, (None, None))
+            lo = g.guard.min if lo is None else (lo if g.guard.min is None else max(lo, g.guard.min))
+            hi = g.guard.max if hi is None else (hi if g.guard.max is None else min(hi, g.guard.max))
+            ranges[g.expr.name] = (lo, hi)
+    out = []
+    for v in variables:
+        if v.name in ranges and v.kind in ("state", "input", "parameter", "held", "output"):
+            lo, hi = ranges[v.name]
+            v = dataclasses.replace(v, min=lo if lo is not None else v.min,
+                                    max=hi if hi is not None else v.max)
+        out.append(v)
+    return out
+
+
+def variable_layout(eqs, solver_step: float, *, fmi_version: int = 2,
+                    max_substeps: float = DEFAULT_MAX_SUBSTEPS) -> list[FmuVariable]:
     """Every variable of the FMU of `eqs`, in value-reference order.
 
     Parameters
@@ -97,6 +131,8 @@ def variable_layout(eqs, solver_step: float, *, fmi_version: int = 2) -> list[Fm
         With no inputs given as functions of time (see :func:`fmus.export.export`).
     solver_step : float
         Start value of the ``solver_step`` parameter, s.
+    max_substeps : float
+        Start value of the ``max_substeps`` parameter (dimensionless).
     fmi_version : {2, 3}
         3 appends the ``time`` variable.
 
@@ -159,7 +195,13 @@ def variable_layout(eqs, solver_step: float, *, fmi_version: int = 2) -> list[Fm
             units.get(name, ""), desc.get(name, ""), dependencies=deps))
     out.append(FmuVariable(
         SOLVER_STEP, vr_y + len(eqs.outputs), "solver_step", "parameter", "fixed", "exact",
-        float(solver_step), "s", "largest internal RK4 sub-step of Co-Simulation doStep"))
+        float(solver_step), "s", "largest internal RK4 sub-step of Co-Simulation doStep",
+        min=0.0))
+    out.append(FmuVariable(
+        MAX_SUBSTEPS, vr_y + len(eqs.outputs) + 1, "max_substeps", "parameter", "fixed", "exact",
+        float(max_substeps), "1", "most internal sub-steps one doStep may take; a longer step "
+        "returns Discard (never a silent hang)", min=1.0))
+    out = _with_ranges(eqs, out)
     if fmi_version == 3:
         out.append(FmuVariable("time", out[-1].vr + 1, "time", "independent", "continuous",
                                None, None, "s", "simulation time"))

@@ -50,7 +50,7 @@ def _units_and_categories(root, variables) -> None:
         for u in units:
             ET.SubElement(defs, "Unit", {"name": u})
     cats = ET.SubElement(root, "LogCategories")
-    for c in ("logStatusWarning", "logStatusError"):
+    for c in ("logStatusWarning", "logStatusDiscard", "logStatusError"):
         ET.SubElement(cats, "Category", {"name": c})
     ET.SubElement(root, "DefaultExperiment", {"startTime": "0.0"})
 
@@ -66,6 +66,15 @@ def _common_attrs(v) -> dict:
     return attrs
 
 
+def _range(v) -> dict:
+    """``min``, ``max``, ``nominal`` attributes of a variable that has them."""
+    out = {}
+    for key in ("min", "max", "nominal"):
+        if getattr(v, key) is not None:
+            out[key] = _num(getattr(v, key))
+    return out
+
+
 def _fmi2_variables(root, variables) -> dict[int, int]:
     """Write the ScalarVariables; return value reference -> 1-based index."""
     mv = ET.SubElement(root, "ModelVariables")
@@ -78,6 +87,7 @@ def _fmi2_variables(root, variables) -> dict[int, int]:
             real["derivative"] = str(index[v.state_vr])
         if v.unit:
             real["unit"] = v.unit
+        real.update(_range(v))
         if v.start is not None:
             real["start"] = _num(v.start)
         ET.SubElement(sv, "Real", real)
@@ -114,6 +124,7 @@ def _fmi3_variables(root, variables) -> None:
             attrs["derivative"] = str(v.state_vr)
         if v.unit:
             attrs["unit"] = v.unit
+        attrs.update(_range(v))
         if v.start is not None:
             attrs["start"] = _num(v.start)
         ET.SubElement(mv, "Float64", attrs)

@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 
 from ..errors import DerivationError
+from ..guards import Guard, guard_from_dict
 from ..symbols import sym
 from .base import EFFORT, FLOW, Contribution, Element, HeldDecl, RoleConflict, StateDecl, param_dict
 
@@ -57,13 +58,16 @@ class EquationElement(Element):
         `held` is given.
     params : mapping or list of Param, optional
         Parameters the expressions use.
+    guards : sequence of Guard, optional
+        Physical-domain conditions (:mod:`bondgraph.guards`) over the
+        graph's names, e.g. a chamber volume that must stay positive.
     """
 
     kind = "Eq"
 
     def __init__(self, name: str, *, ports, outputs, states=None, initial=None, units=None,
                  held=None, fixed_step: float | None = None, params=None, descriptions=None,
-                 description: str = ""):
+                 guards=None, description: str = ""):
         super().__init__(name, description=description)
         ports = dict(ports)
         bad = {p: d for p, d in ports.items() if d not in ("in", "out") or not str(p).isidentifier()}
@@ -102,6 +106,9 @@ class EquationElement(Element):
         self.descriptions = dict(descriptions or {})
         self._fixed_step = None if fixed_step is None else float(fixed_step)
         self.params = param_dict(params, f"Eq {name!r}")
+        self._guards = [g if isinstance(g, Guard) else guard_from_dict(k, g)
+                        for k, g in (guards.items() if isinstance(guards, dict) else
+                                     ((None, g) for g in (guards or ())))]
         unknown = [k for k in list(self.initial) + list(self.units) + list(self.descriptions)
                    if k not in self.states and k not in self.held]
         if unknown:
@@ -115,6 +122,9 @@ class EquationElement(Element):
 
     def parameters(self):
         return list(self.params.values())
+
+    def guards(self):
+        return list(self._guards)
 
     def declared_states(self):
         return [(s, self.units.get(s, ""), self.initial.get(s, 0.0),
@@ -184,4 +194,6 @@ class EquationElement(Element):
                 spec[key] = dict(getattr(self, key))
         if self.params:
             spec["params"] = {k: p.to_dict() for k, p in self.params.items()}
+        if self._guards:
+            spec["guards"] = {g.name: g.to_dict() for g in self._guards}
         return spec

@@ -23,6 +23,7 @@ __all__ = [
     "SimulationError",
     "UnknownNameError",
     "FMUError",
+    "UnitError",
     "DomainError",
     "FMUStepDiscarded",
     "CosimError",
@@ -201,6 +202,21 @@ class FMUError(BondcosimError, RuntimeError):
 
     def __init__(self, message: str, path: str = ""):
         self.path = str(path)
+        super().__init__(message)
+
+
+class UnitError(BondcosimError, ValueError):
+    """A unit that is unknown, or two units that cannot be converted into each other.
+
+    Attributes
+    ----------
+    unit_from, unit_to : str
+        The two units concerned (``unit_to`` is "" when only one unit was parsed).
+    """
+
+    def __init__(self, message: str, unit_from: str = "", unit_to: str = ""):
+        self.unit_from = unit_from
+        self.unit_to = unit_to
         super().__init__(message)
 
 

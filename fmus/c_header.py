@@ -75,6 +75,7 @@ def model_header(eqs, variables, *, token: str, model_exchange: bool) -> str:
                 lo[v.vr] = repr(float(v.min))
             if v.max is not None:
                 hi[v.vr] = repr(float(v.max))
+    nominal = {v.name: v.nominal for v in variables if v.kind == "state"}
     for i, name in enumerate(eqs.outputs):   # outputs that are states keep a slot in v[]
         names[vr_y + i] = names[vr_y + i] or name
     zinit = [float(eqs.initial_state.get(s.name, 0.0)) for s in eqs.algebraic] or [0.0]
@@ -87,7 +88,7 @@ def model_header(eqs, variables, *, token: str, model_exchange: bool) -> str:
         f"#define BC_HAS_ME {1 if model_exchange else 0}",
         f"#define BC_NX {nx}", f"#define BC_NU {nu}", f"#define BC_NP {np_}",
         f"#define BC_NZ {nz}", f"#define BC_ND {nd}", f"#define BC_NY {ny}",
-        f"#define BC_NZA {max(nz, 1)}",
+        f"#define BC_NZA {max(nz, 1)}", f"#define BC_NXA {max(nx, 1)}",
         "#define BC_VR_X 0", f"#define BC_VR_DX {nx}", f"#define BC_VR_U {vr_u}",
         f"#define BC_VR_P {vr_p}", f"#define BC_VR_D {vr_d}", f"#define BC_VR_Y {vr_y}",
         f"#define BC_VR_STEP {nv - 2}", f"#define BC_VR_MAXSUB {nv - 1}", f"#define BC_NV {nv}",
@@ -96,6 +97,8 @@ def model_header(eqs, variables, *, token: str, model_exchange: bool) -> str:
         "static const double bc_zinit[BC_NZA] = {" + ", ".join(map(repr, zinit)) + "};",
         "static const char *const bc_names[BC_NV] = {" + ", ".join(map(_c_string, names)) + "};",
         "static const char *const bc_newton_messages[4] = {" + ", ".join(map(_c_string, messages)) + "};",
+        "static const double bc_nominal[BC_NXA] = {" + ", ".join(
+            repr(float(nominal.get(s.name) or 1.0)) for s in eqs.states) + ("" if nx else "1.0") + "};",
         "/* physical range of each variable (parameter bounds, single-variable guards) */",
         "static const double bc_min[BC_NV] = {" + ", ".join(lo) + "};",
         "static const double bc_max[BC_NV] = {" + ", ".join(hi) + "};",

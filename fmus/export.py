@@ -42,7 +42,7 @@ from .c_header import model_header
 from .layout import DEFAULT_MAX_SUBSTEPS, model_identifier, variable_layout
 from .model_description import model_description_xml
 
-__all__ = ["export", "default_solver_step", "fmu_equations", "binary_platform"]
+__all__ = ["export", "default_solver_step", "default_experiment", "fmu_equations", "binary_platform"]
 
 #: Fixed date stamped into exported files, so the same model gives the same bytes.
 _EPOCH = (1980, 1, 1, 0, 0, 0)
@@ -105,6 +105,39 @@ def default_solver_step(eqs) -> float:
     return min(1e-3, mantissa * decade)
 
 
+def _round_125(x: float, *, up: bool) -> float:
+    """`x` rounded to 1, 2 or 5 times a power of ten (up or down)."""
+    decade = 10.0 ** math.floor(math.log10(x))
+    steps = [m * decade for m in (1.0, 2.0, 5.0, 10.0)]
+    return min(v for v in steps if v >= x * (1 - 1e-12)) if up else \
+        max(v for v in steps if v <= x * (1 + 1e-12))
+
+
+def default_experiment(eqs, solver_step: float) -> dict:
+    """``DefaultExperiment`` of the FMU of `eqs`: start 0, stop and communication step, s.
+
+    ``stopTime`` is five times the slowest time constant of the linearisation
+    at the default operating point (:math:`5 / \\min |\\mathrm{Re}\\,\\lambda|`
+    over the stable non-zero eigenvalues) rounded up to 1-2-5 and kept in
+    [1 ms, 100 s]; 1 s when there is none.  ``stepSize`` is stopTime/1000
+    rounded up to 1-2-5, at most 1 ms for a model with a ``fixed_step`` (the
+    sample of its scheme), never below `solver_step`.
+    """
+    stop = 1.0
+    try:
+        lam = np.linalg.eigvals(np.asarray(eqs.linearize().A, dtype=float)) if eqs.states else []
+        rates = [-r for r in np.real(lam) if r < -1e-12 and math.isfinite(r)]
+        if rates:
+            stop = min(100.0, max(1e-3, _round_125(5.0 / min(rates), up=True)))
+    except Exception:   # noqa: BLE001 -- no linearisation: the 1 s default
+        pass
+    step = _round_125(stop / 1000.0, up=True)
+    if eqs.fixed_step:
+        step = min(step, 1e-3)
+    step = max(step, solver_step)
+    return {"startTime": 0.0, "stopTime": stop, "stepSize": step}
+
+
 def _equations_of(model):
     if hasattr(model, "equations") and callable(model.equations):
         return model.equations()
@@ -115,7 +148,10 @@ def _equations_of(model):
 
 def export(model, path, *, fmi_version: int = 2, solver_step: float | None = None,
            max_substeps: float = DEFAULT_MAX_SUBSTEPS,
-           params=None, identifier: str | None = None, description: str | None = None):
+           params=None, identifier: str | None = None, description: str | None = None,
+           stop_time: float | None = None, step_size: float | None = None,
+           author: str = "bondcosim", version: str = "1.0", license: str = "MIT",
+           copyright: str = ""):
     """Write `model` as a binary FMU.
 
     Parameters
@@ -139,6 +175,12 @@ def export(model, path, *, fmi_version: int = 2, solver_step: float | None = Non
         model name.
     description : str, optional
         Model description text; default names the model and its sizes.
+    stop_time, step_size : float, optional
+        ``DefaultExperiment`` stop time and communication step, s; default
+        :func:`default_experiment`.
+    author, version, license, copyright : str
+        Written into ``modelDescription.xml`` (empty ones are left out);
+        ``generationTool`` is ``bondcosim <version>``.
 
     Returns
     -------
@@ -182,9 +224,18 @@ def export(model, path, *, fmi_version: int = 2, solver_step: float | None = Non
         "\0".join([kernels, repr(variables), str(fmi_version), ident, str(model_exchange)]).encode()
     ).hexdigest())) + "}"
     header = model_header(eqs, variables, token=token, model_exchange=model_exchange)
+    experiment = default_experiment(eqs, step)
+    for key, value in (("stopTime", stop_time), ("stepSize", step_size)):
+        if value is not None:
+            if not (isinstance(value, (int, float)) and value > 0 and math.isfinite(value)):
+                raise FMUError(f"{'stop_time' if key == 'stopTime' else 'step_size'} must be a "
+                               f"positive number of seconds, got {value!r}")
+            experiment[key] = float(value)
+    meta = {"author": author, "version": version, "license": license, "copyright": copyright}
     xml = model_description_xml(variables, version=fmi_version, name=eqs.name, identifier=ident,
                                 token=token, description=description,
-                                model_exchange=model_exchange, date="2000-01-01T00:00:00Z")
+                                model_exchange=model_exchange, date="2000-01-01T00:00:00Z",
+                                experiment=experiment, meta=meta)
     binary = compile_fmu_binary({"model.h": header, "model_kernels.c": kernels},
                                 fmi_version=fmi_version, identifier=ident)
     path = Path(path)

@@ -17,6 +17,7 @@ not a separate variable: the state itself gets causality ``output``.
 from __future__ import annotations
 
 import dataclasses
+import math
 import re
 from dataclasses import dataclass
 
@@ -100,6 +101,23 @@ def _output_dependencies(eqs, expr) -> set:
         for r in eqs.residuals:
             syms |= sp.sympify(r).free_symbols
     return syms & (set(eqs.states) | set(eqs.inputs))
+
+
+_KIND_WORDS = {"state": "state", "input": "input", "parameter": "parameter", "held": "held variable",
+               "output": "output"}
+
+
+def _completed(eqs, v: FmuVariable) -> FmuVariable:
+    """Every variable with a unit (``"1"`` when dimensionless), a description and,
+    for states, inputs and parameters, a nominal value (magnitude of its start value or
+    of the model's operating point; none when that is 0, so FMI's default 1 applies)."""
+    unit = v.unit or "1"
+    desc = v.description or f"{_KIND_WORDS.get(v.kind, v.kind)} {v.name} of {eqs.name}"
+    nominal = None
+    if v.kind in ("state", "input", "parameter"):
+        scale = abs(v.start or 0.0) or abs(float(eqs.initial_state.get(v.name, 0.0)))
+        nominal = scale if scale > 0.0 and math.isfinite(scale) else None
+    return dataclasses.replace(v, unit=unit, description=desc, nominal=nominal)
 
 
 def _with_ranges(eqs, variables) -> list[FmuVariable]:
@@ -202,6 +220,7 @@ def variable_layout(eqs, solver_step: float, *, fmi_version: int = 2,
         float(max_substeps), "1", "most internal sub-steps one doStep may take; a longer step "
         "returns Discard (never a silent hang)", min=1.0))
     out = _with_ranges(eqs, out)
+    out = [_completed(eqs, v) for v in out]
     if fmi_version == 3:
         out.append(FmuVariable("time", out[-1].vr + 1, "time", "independent", "continuous",
                                None, None, "s", "simulation time"))

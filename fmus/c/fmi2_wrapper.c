@@ -306,7 +306,7 @@ fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real indicators[], size_t
 fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real nominals[], size_t nx) {
   INSTANCE;
   (void)m;
-  for (size_t i = 0; i < nx; ++i) nominals[i] = 1.0;
+  for (size_t i = 0; i < nx && i < BC_NX; ++i) nominals[i] = bc_nominal[i];
   return fmi2OK;
 }
 

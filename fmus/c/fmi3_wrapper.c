@@ -508,7 +508,7 @@ fmi3Status fmi3GetEventIndicators(fmi3Instance c, fmi3Float64 indicators[], size
 fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance c, fmi3Float64 nominals[], size_t nx) {
   INSTANCE;
   (void)m;
-  for (size_t i = 0; i < nx; ++i) nominals[i] = 1.0;
+  for (size_t i = 0; i < nx && i < BC_NX; ++i) nominals[i] = bc_nominal[i];
   return fmi3OK;
 }
 

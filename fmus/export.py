@@ -10,7 +10,9 @@ The FMU's C is generated in three parts:
   version-independent ``bc_fmu_core.h``,
 
 compiled by the system C compiler with hidden visibility, so the shared
-library exports only the ``fmi2*`` / ``fmi3*`` functions.
+library exports only the ``fmi2*`` / ``fmi3*`` functions.  The FMU ships the
+same files under ``sources/`` (:mod:`fmus.sources`) so that it can be rebuilt
+from them alone.
 
 Co-Simulation integrates with classic RK4 in equal sub-steps no longer than
 the ``solver_step`` parameter, inputs held over the communication step and
@@ -40,6 +42,7 @@ from bondgraph.guards import check_param_bounds
 from .build import compile_fmu_binary
 from .c_header import model_header
 from .layout import DEFAULT_MAX_SUBSTEPS, model_identifier, variable_layout
+from .sources import compiled_sources, source_files
 from .model_description import model_description_xml
 
 __all__ = ["export", "default_solver_step", "default_experiment", "fmu_equations", "binary_platform"]
@@ -235,9 +238,10 @@ def export(model, path, *, fmi_version: int = 2, solver_step: float | None = Non
     xml = model_description_xml(variables, version=fmi_version, name=eqs.name, identifier=ident,
                                 token=token, description=description,
                                 model_exchange=model_exchange, date="2000-01-01T00:00:00Z",
-                                experiment=experiment, meta=meta)
-    binary = compile_fmu_binary({"model.h": header, "model_kernels.c": kernels},
-                                fmi_version=fmi_version, identifier=ident)
+                                experiment=experiment, meta=meta,
+                                sources=compiled_sources(fmi_version))
+    generated = {"model.h": header, "model_kernels.c": kernels}
+    binary = compile_fmu_binary(generated, fmi_version=fmi_version, identifier=ident)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
@@ -248,4 +252,6 @@ def export(model, path, *, fmi_version: int = 2, solver_step: float | None = Non
             z.writestr(info, data)
         add("modelDescription.xml", xml)
         add(f"binaries/{folder}/{ident}.so", binary)
+        for name, text in source_files(generated, fmi_version=fmi_version, identifier=ident).items():
+            add(name, text)
     return path

@@ -2,6 +2,7 @@
    generated model.  One file for every model; the model comes in through
    "model.h" and "model_kernels.c", the version-independent logic through
    "bc_fmu_core.h".  Model Exchange is compiled in only when BC_HAS_ME. */
+#include "bc_platform.h"   /* first: glibc symbol versions */
 #include <stdlib.h>
 
 #include "fmi2Functions.h"

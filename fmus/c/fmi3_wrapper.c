@@ -9,6 +9,7 @@
    Exchange has no event indicators.  Every function of fmi3Functions.h is
    defined (importers bind them all); those the FMU does not support return
    fmi3Error with a logged message. */
+#include "bc_platform.h"   /* first: glibc symbol versions */
 #include <stdlib.h>
 
 #include "fmi3Functions.h"

@@ -24,12 +24,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
 import sympy as sp
 
 from .errors import DomainError, GraphError
 
-__all__ = ["Guard", "DerivedGuard", "guard_from_dict", "first_violation"]
+__all__ = ["Guard", "DerivedGuard", "guard_from_dict", "first_violation", "raise_violation",
+           "check_param_bounds", "guard_function", "guard_values"]
 
 
 def _bound(value, what: str, name: str):
@@ -146,6 +146,7 @@ def first_violation(guards, values: np.ndarray, times: np.ndarray):
     (int, int) or None
         Row and guard index of the first violation.
     """
+    import numpy as np   # lazy: bondgraph imports fast
     if not guards:
         return None
     lo = np.array([-np.inf if g.guard.min is None else g.guard.min for g in guards])
@@ -173,6 +174,7 @@ def raise_violation(guards, values, times, model: str = "") -> None:
 def check_param_bounds(eqs, p: np.ndarray) -> None:
     """Raise :class:`~bondgraph.errors.ParameterError` for the first parameter of `eqs`
     (row vector `p`, SI) outside its declared range (``eqs.param_bounds``)."""
+    import numpy as np   # lazy: bondgraph imports fast
     from .errors import ParameterError
     if not eqs.param_bounds:
         return
@@ -195,6 +197,7 @@ def guard_function(eqs):
     """A numpy evaluator of every guard of `eqs`: ``fn(times, X, U, D, p)`` with
     times shape (n,), s; X, U, D shape (n, n_states), (n, n_inputs), (n, n_held);
     p shape (n_params,) -> ndarray, shape (n, n_guards), each in its guard's unit."""
+    import numpy as np   # lazy: bondgraph imports fast
     args = (eqs.t, *eqs.states, *eqs.inputs, *eqs.params, *eqs.held)
     raw = sp.lambdify(args, [g.expr for g in eqs.guards], modules="numpy") if eqs.guards else None
 

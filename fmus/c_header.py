@@ -63,7 +63,7 @@ def model_header(eqs, variables, *, token: str, model_exchange: bool) -> str:
     vr_u = 2 * nx
     vr_p, vr_d = vr_u + nu, vr_u + nu + np_
     vr_y = vr_d + nd
-    nv = vr_y + ny + 2
+    nv = vr_y + ny + 4
     start = [0.0] * nv
     names = [""] * nv
     lo, hi = ["-HUGE_VAL"] * nv, ["HUGE_VAL"] * nv
@@ -91,7 +91,8 @@ def model_header(eqs, variables, *, token: str, model_exchange: bool) -> str:
         f"#define BC_NZA {max(nz, 1)}", f"#define BC_NXA {max(nx, 1)}",
         "#define BC_VR_X 0", f"#define BC_VR_DX {nx}", f"#define BC_VR_U {vr_u}",
         f"#define BC_VR_P {vr_p}", f"#define BC_VR_D {vr_d}", f"#define BC_VR_Y {vr_y}",
-        f"#define BC_VR_STEP {nv - 2}", f"#define BC_VR_MAXSUB {nv - 1}", f"#define BC_NV {nv}",
+        f"#define BC_VR_STEP {nv - 4}", f"#define BC_VR_MAXSUB {nv - 3}",
+        f"#define BC_VR_SOLVER {nv - 2}", f"#define BC_VR_TOL {nv - 1}", f"#define BC_NV {nv}",
         f"#define BC_VR_TIME {nv}   /* FMI 3.0 only; not in v[] */",
         "static const double bc_start[BC_NV] = {" + ", ".join(map(repr, start)) + "};",
         "static const double bc_zinit[BC_NZA] = {" + ", ".join(map(repr, zinit)) + "};",

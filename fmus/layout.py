@@ -8,7 +8,7 @@ the list of :class:`FmuVariable` that both the model description
 Value references are positions in the C array ``v[]`` (see
 ``fmus/c/bc_fmu_core.h``)::
 
-    states x | derivatives der(x) | inputs u | parameters p | held d | outputs y | solver_step | max_substeps
+    states x | der(x) | inputs u | parameters p | held d | outputs y | solver_step | max_substeps | solver | tolerance
 
 FMI 3.0 adds ``time`` (causality ``independent``) after them.  An output that
 is one of the states under the same name (e.g. every output of ``chain``) is
@@ -26,12 +26,14 @@ import sympy as sp
 from bondgraph.errors import FMUError
 
 __all__ = ["FmuVariable", "variable_layout", "derivative_unit", "model_identifier", "SOLVER_STEP",
-           "MAX_SUBSTEPS", "DEFAULT_MAX_SUBSTEPS"]
+           "MAX_SUBSTEPS", "DEFAULT_MAX_SUBSTEPS", "SOLVER", "TOLERANCE"]
 
 #: Name of the parameter holding the internal fixed solver step of Co-Simulation.
 SOLVER_STEP = "solver_step"
 #: Name of the parameter bounding the internal sub-steps of one doStep.
 MAX_SUBSTEPS = "max_substeps"
+#: Names of the parameters choosing the Co-Simulation solver and its relative tolerance.
+SOLVER, TOLERANCE = "solver", "tolerance"
 #: Its default: 1e6 sub-steps (about 0.05 s of CPU for a 2-state model, 1-2 s for ``pam``);
 #: a longer doStep returns Discard instead of blocking.
 DEFAULT_MAX_SUBSTEPS = 1e6
@@ -140,7 +142,8 @@ def _with_ranges(eqs, variables) -> list[FmuVariable]:
 
 
 def variable_layout(eqs, solver_step: float, *, fmi_version: int = 2,
-                    max_substeps: float = DEFAULT_MAX_SUBSTEPS) -> list[FmuVariable]:
+                    max_substeps: float = DEFAULT_MAX_SUBSTEPS,
+                    tolerance: float = 1e-8) -> list[FmuVariable]:
     """Every variable of the FMU of `eqs`, in value-reference order.
 
     Parameters
@@ -151,6 +154,8 @@ def variable_layout(eqs, solver_step: float, *, fmi_version: int = 2,
         Start value of the ``solver_step`` parameter, s.
     max_substeps : float
         Start value of the ``max_substeps`` parameter (dimensionless).
+    tolerance : float
+        Start value of the ``tolerance`` parameter (variable-step solver).
     fmi_version : {2, 3}
         3 appends the ``time`` variable.
 
@@ -219,6 +224,16 @@ def variable_layout(eqs, solver_step: float, *, fmi_version: int = 2,
         MAX_SUBSTEPS, vr_y + len(eqs.outputs) + 1, "max_substeps", "parameter", "fixed", "exact",
         float(max_substeps), "1", "most internal sub-steps one doStep may take; a longer step "
         "returns Discard (never a silent hang)", min=1.0))
+    smooth = not eqs.held
+    out.append(FmuVariable(
+        SOLVER, vr_y + len(eqs.outputs) + 2, "solver", "parameter", "fixed", "exact", 0.0, "1",
+        "Co-Simulation solver: 0 fixed-step RK4 (solver_step), 1 variable-step Dormand-Prince 5(4)"
+        + ("" if smooth else " (not offered: held variables need the fixed step)"),
+        min=0.0, max=1.0 if smooth else 0.0))
+    out.append(FmuVariable(
+        TOLERANCE, vr_y + len(eqs.outputs) + 3, "tolerance", "parameter", "fixed", "exact",
+        float(tolerance), "1", "relative tolerance of the variable-step solver (absolute: "
+        "tolerance times each state's nominal)", min=0.0))
     out = _with_ranges(eqs, out)
     out = [_completed(eqs, v) for v in out]
     if fmi_version == 3:

@@ -30,6 +30,7 @@ typedef struct {
   double v[BC_NV];
   double z[BC_NZA];   /* algebraic unknowns (warm start of the Newton solver) */
   double time;        /* s */
+  double h_adapt;     /* last step size of the variable-step solver, s (0: none yet) */
   int phase;
   int dirty;          /* derivatives and outputs are stale */
 } bc_snapshot;
@@ -40,6 +41,7 @@ static void bc_reset(bc_snapshot *s, double time) {
   memcpy(s->v, bc_start, sizeof(s->v));
   memcpy(s->z, bc_zinit, sizeof(s->z));
   s->time = time;
+  s->h_adapt = 0.0;
   s->phase = BC_INSTANTIATED;
   s->dirty = 1;
 }
@@ -137,7 +139,10 @@ static int bc_check_outputs(const bc_snapshot *s, char *msg) {
   return 0;
 }
 
-/* Co-simulation step: classic RK4 in m equal sub-steps no longer than the
+#include "bc_adaptive.h"   /* bc_dopri: the variable-step solver */
+
+/* Co-simulation step.  solver = 1: bc_dopri (variable step).  solver = 0:
+   classic RK4 in m equal sub-steps no longer than the
    solver step, inputs held, held variables updated at each sub-step start
    (bc_rk4, one sub-step per call so that the domain is checked after each).
    m is computed in double and bounded by max_substeps: a step that needs
@@ -155,6 +160,14 @@ static int bc_do_step(bc_snapshot *s, double t, double H, char *msg) {
   if (fabs(t - s->time) > tol) {
     snprintf(msg, BC_MSG, "doStep from t = %.17g s, but the FMU is at t = %.17g s", t, s->time);
     return BC_ERROR;
+  }
+  if (s->v[BC_VR_SOLVER] != 0.0) {   /* variable-step Dormand-Prince (bc_adaptive.h) */
+    bc_snapshot old = *s;
+    if (bc_dopri(s, t, H, msg)) { *s = old; return BC_DISCARD; }
+    s->time = t + H;
+    s->dirty = 1;
+    if (bc_refresh(s, msg) || bc_check_outputs(s, msg)) { *s = old; return BC_DISCARD; }
+    return BC_OK;
   }
   double hmax = s->v[BC_VR_STEP], maxsub = s->v[BC_VR_MAXSUB];
   double md = ceil(H / hmax - 1e-9);   /* double: no overflow above 2^31 */
@@ -218,14 +231,21 @@ static int bc_set_real(bc_snapshot *s, const unsigned *vr, size_t n, const doubl
                name, value[i], name, s->v[vr[i]]);
       return 1;
     }
+    if ((vr[i] == BC_VR_STEP && !(value[i] > 0.0)) || (vr[i] == BC_VR_MAXSUB && !(value[i] >= 1.0))
+        || (vr[i] == BC_VR_TOL && !(value[i] > 0.0))) {
+      snprintf(msg, BC_MSG, "%s must be %s, got %g", name,
+               vr[i] == BC_VR_MAXSUB ? "at least 1" : "positive", value[i]);
+      return 1;
+    }
+    if (vr[i] == BC_VR_SOLVER && value[i] != 0.0 && !(value[i] == 1.0 && BC_ND == 0)) {
+      snprintf(msg, BC_MSG, "solver = %g rejected: 0 (fixed-step RK4) or 1 (variable-step "
+               "Dormand-Prince%s)", value[i], BC_ND ? "; not for this model, whose held "
+               "variables need the fixed step" : "");
+      return 1;
+    }
     if (value[i] < bc_min[vr[i]] || value[i] > bc_max[vr[i]]) {
       snprintf(msg, BC_MSG, "%s = %.17g rejected: outside its declared range [%g, %g]",
                name, value[i], bc_min[vr[i]], bc_max[vr[i]]);
-      return 1;
-    }
-    if ((vr[i] == BC_VR_STEP && !(value[i] > 0.0)) || (vr[i] == BC_VR_MAXSUB && !(value[i] >= 1.0))) {
-      snprintf(msg, BC_MSG, "%s must be %s, got %g", name,
-               vr[i] == BC_VR_STEP ? "positive" : "at least 1", value[i]);
       return 1;
     }
   }

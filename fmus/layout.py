@@ -85,15 +85,23 @@ class FmuVariable:
 
 
 def derivative_unit(unit: str) -> str:
-    """Unit of the time derivative of a quantity in `unit` (``"N s"`` -> ``"N"``)."""
+    """Unit of the time derivative of a quantity in `unit`, in a form
+    :func:`bondgraph.units.parse_unit` reads (one ``/``): ``"N s"`` -> ``"N"``,
+    ``"m"`` -> ``"m/s"``, ``"mm/s"`` -> ``"mm/(s s)"``, ``"J/(kg K)"`` -> ``"J/(kg K s)"``."""
     unit = unit.strip()
-    if not unit:
+    if not unit or unit == "1":
         return "1/s"
     if unit == "s":
-        return ""
-    if unit.endswith(" s"):
+        return "1"
+    if unit.endswith(" s") and "/" not in unit:
         return unit[:-2].strip()
-    return f"({unit})/s" if "/" in unit else f"{unit}/s"
+    num, slash, den = unit.partition("/")
+    if not slash:
+        return f"{unit}/s"
+    den = den.strip()
+    if den.startswith("(") and den.endswith(")"):
+        den = den[1:-1].strip()
+    return f"{num.strip()}/({den} s)"
 
 
 def _output_dependencies(eqs, expr) -> set:

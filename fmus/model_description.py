@@ -10,6 +10,7 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from datetime import datetime, timezone
 
+from bondgraph.errors import UnitError
 from bondgraph.units import BASE_UNITS, base_unit
 
 __all__ = ["model_description_xml", "generation_tool"]
@@ -77,7 +78,11 @@ def _units_and_categories(root, variables, experiment: dict) -> None:
     if units:
         defs = ET.SubElement(root, "UnitDefinitions")
         for u in units:
-            ET.SubElement(ET.SubElement(defs, "Unit", {"name": u}), "BaseUnit", _base_unit_attrs(u))
+            unit = ET.SubElement(defs, "Unit", {"name": u})
+            try:
+                ET.SubElement(unit, "BaseUnit", _base_unit_attrs(u))
+            except UnitError:   # a unit text the grammar does not know: declared, no BaseUnit
+                pass
     cats = ET.SubElement(root, "LogCategories")
     for c in ("logStatusWarning", "logStatusDiscard", "logStatusError"):
         ET.SubElement(cats, "Category", {"name": c})

@@ -114,3 +114,27 @@ def test_state_nominals_reach_model_exchange(fmus):
     t = res["time"]
     ref = 2.0 / k * (1 - np.exp(-zeta * wn * t) * (np.cos(wd * t) + zeta * wn / wd * np.sin(wd * t)))
     assert np.max(np.abs(res["q_k"] - ref)) < 1e-4
+
+
+@pytest.mark.parametrize("unit, expected", [
+    ("N s", "N"), ("m", "m/s"), ("mm/s", "mm/(s s)"), ("J/(kg K)", "J/(kg K s)"), ("", "1/s"),
+    ("s", "1"), ("Pa", "Pa/s")])
+def test_derivative_units_parse_and_mean_per_second(unit, expected):
+    from bondgraph.units import parse_unit
+    from fmus.layout import derivative_unit
+    assert derivative_unit(unit) == expected
+    if unit:   # d/dt divides by seconds: same scale, dimension s^-1 more
+        a, b = parse_unit(unit), parse_unit(expected)
+        assert b.scale == pytest.approx(a.scale)
+        assert [y - x for x, y in zip(a.dimension, b.dimension)] == [0, 0, -1, 0, 0, 0, 0, 0]
+
+
+def test_unknown_unit_text_is_declared_without_base_unit(tmp_path):
+    from bondgraph import Param
+    g = library.build("mass-spring-damper")
+    g.add_parameter(Param("gain", 2.0, "counts", "a unit the grammar does not know"))
+    g.add_output("counted", "gain*q_k", unit="counts", description="position in counts")
+    path = export(g, tmp_path / "c.fmu")
+    assert validate_fmu(str(path)) == []
+    unit = [u for u in _xml(path).find("UnitDefinitions") if u.get("name") == "counts"][0]
+    assert unit.find("BaseUnit") is None

@@ -2,22 +2,24 @@
 
 Build a :class:`BondGraph` from elements (``Se, Sf, MSe, MSf, I, C, R, TF,
 GY, MTF, MGY, Zero, One, CField, IField, EquationElement``), connect them with
-bonds, and derive explicit state equations with :meth:`BondGraph.equations`
+bonds, state physical-domain conditions with :class:`Guard`, and derive explicit state equations with :meth:`BondGraph.equations`
 (a :class:`StateEquations`).  ``simulate``, ``compile_model`` and
 ``linearize`` turn those into numbers.
 """
 from .elements import (C, CField, EquationElement, GY, I, IField, MGY, MSe, MSf, MTF, One, R, Se, Sf, TF,
                        Zero, Element, ELEMENT_KINDS)
 from .errors import (BondcosimError, CausalityError, DerivationError, DuplicateNameError, ExpressionError,
-                     GraphError, JunctionError, ParameterError, PortError, SchemaError, UnknownElementKindError, UnknownNameError)
+                     DomainError, GraphError, JunctionError, ParameterError, PortError, SchemaError,
+                     UnknownElementKindError, UnknownNameError)
 from .graph import Bond, BondGraph, Output, Port
+from .guards import Guard
 from .params import DOMAINS, Param
 from .system import CausalityReport, StateEquations
 
 __all__ = [
     "BondGraph", "Bond", "Port", "Output", "Param", "DOMAINS", "StateEquations", "CausalityReport",
     "Element", "ELEMENT_KINDS", "Se", "Sf", "MSe", "MSf", "I", "C", "R", "TF", "GY", "MTF", "MGY",
-    "Zero", "One", "CField", "IField", "EquationElement",
+    "Zero", "One", "CField", "IField", "EquationElement", "Guard", "DomainError",
     "BondcosimError", "GraphError", "CausalityError", "DerivationError", "DuplicateNameError",
     "ExpressionError", "JunctionError", "ParameterError", "PortError", "SchemaError",
     "UnknownElementKindError", "UnknownNameError", "simulate", "compile_model", "linearize", "LinearModel",

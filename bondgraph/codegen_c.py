@@ -84,7 +84,7 @@ from .derivatives import NotDifferentiable, diff_almost_everywhere
 from .errors import ArgumentError, CompilationError
 
 __all__ = ["generate_source", "jacobian_entries", "prepare_expression", "symbol_names",
-           "SPLIT_STATEMENTS", "PARTS", "GENERATOR_VERSION"]
+           "SPLIT_STATEMENTS", "PARTS", "GENERATOR_VERSION", "guard_source"]
 
 #: Statements above which a block is split into several functions.
 SPLIT_STATEMENTS = 400
@@ -335,3 +335,18 @@ def generate_source(eqs, *, part: str = "main") -> str:
         lines += newton_source(dims)
         lines += rk4_source(dims)
     return "\n".join(lines) + "\n"
+
+
+def guard_source(eqs) -> str:
+    """C text of ``static void guard_row(t, x, u, z, d, p, step, out)``: the value of
+    every guard of `eqs` (:attr:`StateEquations.guards`, in order) at one point, for
+    code that checks the physical domain (the FMU core).  Compiled together with
+    the ``main`` part (it uses the same helpers and ``math.h``).
+
+    Returns
+    -------
+    str
+    """
+    printer = _Printer(symbol_names(eqs))
+    targets = list(enumerate(g.expr for g in eqs.guards))
+    return "\n".join(_emit_block("guard_row", targets, printer, max(1, len(targets)))) + "\n"

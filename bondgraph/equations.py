@@ -30,8 +30,9 @@ from sympy.solvers.solveset import NonlinearError
 from .assignments import readable_form
 from .causality import assign_causality
 from .elements.base import PortVars
-from .errors import DerivationError
+from .errors import DerivationError, ExpressionError
 from .graph import BondGraph, _prepare_all
+from .guards import DerivedGuard
 from .symbols import STEP, TIME, as_expression, sym
 from .system import CausalityReport, StateEquations
 
@@ -114,6 +115,7 @@ def derive(graph: BondGraph) -> StateEquations:
         if i.function is not None:
             table = {"t": TIME, **{p: names[p] for p in params}}
             input_functions[i.name] = as_expression(i.function, table, owner=f"input {i.name} (function of t)")
+    guards = _derived_guards(graph, names, resolver, allowed - set(algebraic))
     steps = [e.fixed_step for e in graph.elements.values() if e.fixed_step is not None]
     op = graph.operating_point
     report = CausalityReport(
@@ -134,8 +136,26 @@ def derive(graph: BondGraph) -> StateEquations:
         held_initial={d.symbol.name: op.get(d.symbol.name, d.initial) for d in held_decls},
         units=units, descriptions=descriptions, owners=owners, input_functions=input_functions,
         report=report, assignments=readable.assignments, f_short=readable.f, h_short=readable.h,
-        held_update_short=readable.held_update,
+        held_update_short=readable.held_update, guards=guards,
+        param_bounds={p.name: (p.min, p.max) for p in params.values()
+                      if p.min is not None or p.max is not None},
     )
+
+
+def _derived_guards(graph, names, resolver, allowed) -> tuple:
+    """The graph's guards with their expressions in the model's symbols (bond
+    variables resolved); a guard on anything else is an ExpressionError naming it."""
+    out = []
+    for owner, g in graph.guards():
+        what = f"guard {g.name!r} of {owner}"
+        expr = resolver.substitute(as_expression(g.expression, names, owner=what))
+        extra = sorted(str(s) for s in expr.free_symbols - allowed)
+        if extra:
+            raise ExpressionError(f"{what}: {expr} depends on {', '.join(extra)}; a guard may use "
+                                  "only time, states, inputs, parameters and held variables",
+                                  owner=what, expression=str(g.expression), unknown=extra)
+        out.append(DerivedGuard(g, expr, owner))
+    return tuple(out)
 
 
 def _port_vars(graph, element, assignment, names) -> dict[str, PortVars]:

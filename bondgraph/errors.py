@@ -23,6 +23,9 @@ __all__ = [
     "SimulationError",
     "UnknownNameError",
     "FMUError",
+    "UnitError",
+    "DomainError",
+    "FMUStepDiscarded",
     "CosimError",
     "AlgebraicLoopError",
     "EstimatorError",
@@ -277,6 +280,64 @@ class FMUError(BondcosimError, RuntimeError):
     def __init__(self, message: str, path: str = ""):
         self.path = str(path)
         super().__init__(message)
+
+
+class UnitError(BondcosimError, ValueError):
+    """A unit that is unknown, or two units that cannot be converted into each other.
+
+    Attributes
+    ----------
+    unit_from, unit_to : str
+        The two units concerned (``unit_to`` is "" when only one unit was parsed).
+    """
+
+    def __init__(self, message: str, unit_from: str = "", unit_to: str = ""):
+        self.unit_from = unit_from
+        self.unit_to = unit_to
+        super().__init__(message)
+
+
+class DomainError(SimulationError):
+    """A model variable left its physical domain (a :class:`~bondgraph.guards.Guard`):
+    a chamber volume or an absolute pressure below zero, a non-finite value.
+
+    Attributes
+    ----------
+    variable : str
+        The guarded quantity (or state) named in the message.
+    value : float
+        Its value, in its unit.
+    time : float
+        When, s.
+    owner : str
+        The element (or ``"graph"``) that declared the guard.
+    """
+
+    def __init__(self, message: str, *, variable: str, value: float, time: float, owner: str = ""):
+        self.variable, self.value, self.owner = variable, value, owner
+        super().__init__(message, time=time)
+
+
+class FMUStepDiscarded(FMUError):
+    """An FMU's doStep returned Discard (the FMU stays at the step's start): a
+    physical-domain guard, a non-finite state or output, too many sub-steps.
+
+    Attributes
+    ----------
+    component : str
+        The co-simulation component (instance name).
+    time : float
+        Start of the discarded step, s.
+    step : float
+        Its length, s.
+    reason : str
+        The FMU's logged message ("" if it logged none).
+    """
+
+    def __init__(self, message: str, *, component: str, time: float, step: float, reason: str = "",
+                 path: str = ""):
+        self.component, self.time, self.step, self.reason = component, time, step, reason
+        super().__init__(message, path=path)
 
 
 class CosimError(BondcosimError, ValueError):

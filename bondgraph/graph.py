@@ -13,6 +13,7 @@ import sympy as sp
 from .elements import Element
 from .elements.base import InputDecl
 from .errors import DuplicateNameError, ExpressionError, GraphError, JunctionError, PortError
+from .guards import Guard
 from .params import Param
 from .symbols import STEP, TIME, sym
 
@@ -84,6 +85,7 @@ class BondGraph:
         self.extra_inputs: dict[str, InputDecl] = {}
         self.extra_params: dict[str, Param] = {}
         self.operating_point: dict[str, float] = {}
+        self.extra_guards: dict[str, Guard] = {}
         self._version = 0
         self._cache: tuple[int, object] | None = None
 
@@ -134,6 +136,27 @@ class BondGraph:
             raise DuplicateNameError(name, "output declared twice")
         self.outputs[name] = Output(name, expression, unit, description)
         self._changed()
+
+    def add_guard(self, guard: Guard):
+        """Declare a physical-domain condition over the graph's names (see
+        :mod:`bondgraph.guards`); simulation and FMU steps that leave it fail, naming it."""
+        if not isinstance(guard, Guard):
+            raise GraphError(f"expected a Guard, got {guard!r}")
+        if guard.name in self.extra_guards:
+            raise DuplicateNameError(guard.name, "guard declared twice")
+        self.extra_guards[guard.name] = guard
+        self._changed()
+
+    def guards(self) -> list[tuple[str, Guard]]:
+        """Every guard as (owner, guard): the elements' own, then the graph's."""
+        out = [(e.name, g) for e in self.elements.values() for g in e.guards()]
+        out += [("graph", g) for g in self.extra_guards.values()]
+        seen: dict[str, str] = {}
+        for owner, g in out:
+            if g.name in seen:
+                raise DuplicateNameError(g.name, f"guard of {seen[g.name]} and of {owner}")
+            seen[g.name] = owner
+        return out
 
     def connect(self, tail, head, *, name: str | None = None) -> Bond:
         """Add a bond with power positive from `tail` to `head`.

@@ -34,6 +34,7 @@ from typing import Any
 from .elements.base import ELEMENT_KINDS
 from .errors import BondcosimError, SchemaError, UnknownElementKindError
 from .graph import BondGraph
+from .guards import guard_from_dict
 from .params import DOMAINS, Param
 
 __all__ = ["ELEMENT_KEYS", "FORMAT", "VERSION", "dumps", "graph_from_dict", "graph_to_dict", "load", "save"]
@@ -56,6 +57,7 @@ _WHAT = {
     "portdirs": "an object of port name -> \"in\" or \"out\"",
     "end": "[element, port], two strings (port \"\" for one-port elements and junctions)",
     "list": "a list",
+    "guards": "an object of guard name -> {\"expression\", \"min\", \"max\", \"unit\", \"description\"}",
 }
 
 _SOURCE = {"value": "expr", "input": "id", "unit": "str", "domain": "domain", "description": "str"}
@@ -82,14 +84,16 @@ ELEMENT_KEYS: dict[str, dict[str, str]] = {
     "CField": _FIELD, "IField": _FIELD,
     "Eq": {"ports": "portdirs", "outputs": "map:expr", "states": "map:expr", "initial": "map:num",
            "units": "map:str", "held": "map:expr", "fixed_step": "pos", "params": "params",
-           "descriptions": "map:str", "locals": "map:expr", "description": "str"},
+           "descriptions": "map:str", "locals": "map:expr", "guards": "guards", "description": "str"},
 }
 
 # Top-level key -> type tag (None: checked by _check_header), and the keys a file must have.
 _TOP = {"format": None, "version": None, "name": "id", "description": "str", "elements": "list", "bonds": "list",
-        "inputs": "list", "parameters": "list", "outputs": "list", "operating_point": "map:num"}
+        "inputs": "list", "parameters": "list", "outputs": "list", "operating_point": "map:num",
+        "guards": "guards"}
 _TOP_REQUIRED = ["format", "version", "name", "elements", "bonds"]
-_PARAM_KEYS = {"name": "id", "value": "num", "unit": "str", "description": "str"}
+_PARAM_KEYS = {"name": "id", "value": "num", "unit": "str", "description": "str", "min": "num", "max": "num"}
+_GUARD_KEYS = {"expression": "expr", "min": "num", "max": "num", "unit": "str", "description": "str"}
 _INPUT_KEYS = {"name": "id", "default": "num", "unit": "str", "description": "str"}
 _OUTPUT_KEYS = {"name": "id", "expression": "expr", "unit": "str", "description": "str"}
 _BOND_KEYS = {"name": "id", "tail": "end", "head": "end"}
@@ -143,6 +147,8 @@ def graph_to_dict(graph: BondGraph) -> dict:
         "outputs": [{"name": o.name, "expression": str(o.expression), "unit": o.unit,
                      "description": o.description} for o in graph.outputs.values()],
         "operating_point": {k: _plain_number(v) for k, v in graph.operating_point.items()},
+        **({"guards": {g.name: g.to_dict() for g in graph.extra_guards.values()}}
+           if graph.extra_guards else {}),
     }
 
 
@@ -284,6 +290,12 @@ def _from_dict(data, source: str, problems: _Problems) -> BondGraph:
     _add_declarations(graph, data, problems)
     if _is("map:num", data.get("operating_point")):
         graph.operating_point.update(data["operating_point"])
+    if isinstance(data.get("guards"), dict):
+        for key, entry in data["guards"].items():
+            try:
+                graph.add_guard(guard_from_dict(key, entry))
+            except (BondcosimError, KeyError, TypeError) as exc:
+                problems.add(f"guards.{key}", str(exc))
     problems.raise_if_any(source)
     return graph
 
@@ -459,6 +471,13 @@ def _check_value(tag: str, value, path: str, problems: _Problems, *, owner: str 
                                owner=f"parameter {name!r}" + (f" of {owner}" if owner else ""))
             if ok and entry.get("name", name) != name:
                 problems.add(f"{where}.name", f"parameter {name!r} says its name is {entry['name']!r}")
+    elif tag == "guards" and isinstance(value, dict):
+        for name, entry in value.items():
+            where = f"{path}.{name}"
+            if not _is("id", name):
+                problems.add(where, f"guard name {name!r} is not {_WHAT['id']}")
+            _check_object(entry, where, _GUARD_KEYS, problems, what=f"guard {name!r}",
+                          required=["expression"], owner=f"guard {name!r}" + (f" of {owner}" if owner else ""))
     elif tag.startswith("map:") and isinstance(value, dict):
         for key, item in value.items():
             _check_value(tag[4:], item, f"{path}.{key}", problems, owner=owner)
@@ -483,7 +502,7 @@ def _is(tag: str, value) -> bool:
         return (isinstance(value, str) and bool(value.strip())) or _is("num", value)
     if tag == "domain":
         return isinstance(value, str) and value in DOMAINS
-    if tag in ("list", "params"):  # params entries are checked by _check_value
+    if tag in ("list", "params", "guards"):  # params/guards entries are checked by _check_value
         return isinstance(value, list if tag == "list" else dict)
     if tag == "portlist":
         return isinstance(value, list) and all(_is("id", p) for p in value)

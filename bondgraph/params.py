@@ -30,12 +30,18 @@ class Param:
         Unit of `value`, e.g. ``"N m s/rad"``; ``""`` for dimensionless.
     description : str
         One line saying what the parameter is (and its source).
+    min, max : float, optional
+        Physical range of `value` (inclusive, same unit), e.g. ``min=0`` for a
+        mass; a value outside it is a :class:`ParameterError` here, in
+        :func:`bondgraph.simulate` and when an FMU parameter is set.
     """
 
     name: str
     value: float
     unit: str = ""
     description: str = ""
+    min: float | None = None
+    max: float | None = None
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name.isidentifier():
@@ -50,10 +56,39 @@ class Param:
         if not math.isfinite(float(value)):
             raise ParameterError(f"parameter {self.name!r}: value {value!r} is not finite", name=self.name)
         object.__setattr__(self, "value", float(value))
+        for key in ("min", "max"):
+            bound = getattr(self, key)
+            if bound is not None:
+                if isinstance(bound, bool) or not isinstance(bound, (int, float)) or math.isnan(bound):
+                    raise ParameterError(f"parameter {self.name!r}: {key} {bound!r} is not a number",
+                                         name=self.name)
+                object.__setattr__(self, key, float(bound))
+        self.check(self.value)
+
+    def check(self, value: float, *, owner: str = "") -> float:
+        """`value` if it is finite and inside ``[min, max]``; else a :class:`ParameterError`
+        naming the parameter, the value and the range."""
+        value = float(value)
+        where = f"{owner}: " if owner else ""
+        if not math.isfinite(value):
+            raise ParameterError(f"{where}parameter {self.name!r}: value {value!r} is not finite",
+                                 name=self.name)
+        if (self.min is not None and value < self.min) or (self.max is not None and value > self.max):
+            unit = f" {self.unit}" if self.unit and self.unit != "1" else ""
+            raise ParameterError(f"{where}parameter {self.name!r} = {value!r}{unit} is outside its "
+                                 f"physical range [{_bound(self.min)}, {_bound(self.max)}]{unit}",
+                                 name=self.name)
+        return value
 
     def to_dict(self) -> dict:
-        return {"name": self.name, "value": self.value, "unit": self.unit,
+        data = {"name": self.name, "value": self.value, "unit": self.unit,
                 "description": self.description}
+        data.update({k: getattr(self, k) for k in ("min", "max") if getattr(self, k) is not None})
+        return data
+
+
+def _bound(x: float | None) -> str:
+    return "unbounded" if x is None else repr(x)
 
 
 @dataclass(frozen=True)
@@ -92,11 +127,11 @@ def domain(name: str) -> Domain:
             f"unknown domain {name!r}; expected one of {', '.join(DOMAINS)}", name=str(name)) from None
 
 
-def as_param(value, name: str, unit: str, description: str = "") -> Param:
-    """`value` as a :class:`Param`: a Param is kept, a number gets `name` and `unit`."""
+def as_param(value, name: str, unit: str, description: str = "", *, min: float | None = None) -> Param:
+    """`value` as a :class:`Param`: a Param is kept, a number gets `name`, `unit` and `min`."""
     if isinstance(value, Param):
         return value
-    return Param(name, value, unit, description)
+    return Param(name, value, unit, description, min=min)
 
 
 def values_with_overrides(params, overrides=None, *, owner: str) -> dict[str, float]:
@@ -114,5 +149,6 @@ def values_with_overrides(params, overrides=None, *, owner: str) -> dict[str, fl
     if unknown:
         raise ParameterError(f"{owner} has no parameter(s) {', '.join(unknown)}; "
                              f"expected one or more of {', '.join(values)}", name=unknown[0])
-    values.update({name: Param(name, value).value for name, value in overrides.items()})
+    values.update({name: params[name].check(Param(name, value).value, owner=owner)
+                   for name, value in overrides.items()})
     return values

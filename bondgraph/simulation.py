@@ -55,10 +55,11 @@ import numbers
 import numpy as np
 import sympy as sp
 
-from .errors import ArgumentError, ExpressionError, SimulationError, UnknownNameError
+from .errors import ArgumentError, DomainError, ExpressionError, SimulationError, UnknownNameError
 from .memory import check_result_size
 from .progress import Progress
 from .evaluate import compile_model
+from .guards import check_param_bounds, guard_function, guard_values, raise_violation
 from .results import SimulationResult
 from .symbols import as_expression
 from .system import StateEquations
@@ -133,7 +134,8 @@ def simulate(system, t_span, *, inputs=None, x0=None, params=None, method="auto"
         An input string that does not parse or uses names other than ``t``,
         or an input callable that fails at ``t0``.
     ParameterError
-        An unknown parameter name or a non-finite parameter value.
+        An unknown parameter name, a non-finite parameter value, or one
+        outside its declared range (a negative mass).
     ArgumentError
         A wrong shape, span, step or method (a ``ValueError``).
     OutputTooLargeError
@@ -141,6 +143,10 @@ def simulate(system, t_span, *, inputs=None, x0=None, params=None, method="auto"
         raised before any work.
     SimulationError
         Solver failure, non-finite state (named), or an unsolvable algebraic loop.
+    DomainError
+        (a SimulationError) a guard of the model (:mod:`bondgraph.guards`,
+        e.g. a chamber volume >= 0) is left at a recorded time point: names
+        the guard, its value and the time.
     """
     eqs = system if isinstance(system, StateEquations) else system.equations()
     t0, t1 = _span(t_span)
@@ -154,6 +160,7 @@ def simulate(system, t_span, *, inputs=None, x0=None, params=None, method="auto"
     plan = _InputPlan(eqs, inputs, t0)
     x_init = _initial_state(model, x0)
     p = model.param_vector(params)
+    check_param_bounds(eqs, p)
     d0 = _initial_held(model, held0).reshape(1, -1)
     fixed = (not eqs.is_smooth) or method == "RK4"
     if not eqs.is_smooth and method not in ("auto", "RK4"):
@@ -353,16 +360,23 @@ def _choose_method(model, plan, x, p, d, t0, span):
     return "LSODA", ratio
 
 
-def _give_up(model, method, max_nfev, t, x, dx):
+def _give_up(model, method, max_nfev, t, x, dx, u, d, p):
     """Raise the SimulationError of an exhausted evaluation budget, naming the states
     that change fastest relative to their size."""
     rate = np.abs(dx) / np.maximum(np.abs(x), 1e-12)
     worst = [model.state_names[i] for i in np.argsort(-rate)[:3] if rate[i] > 0]
+    eqs = model.equations
+    guards = ""
+    if eqs.guards:   # the values of the domain guards there often show the singularity
+        values = guard_function(eqs)(np.array([t]), np.reshape(x, (1, -1)), u, d, p)[0]
+        guards = "; domain guards there: " + ", ".join(
+            f"{g.name} = {v:.4g}{' ' + g.guard.unit if g.guard.unit not in ('', '1') else ''}"
+            for g, v in zip(eqs.guards, values))
     raise SimulationError(
-        f"model {model.equations.name!r}: {method} gave up after {max_nfev} right-hand-side "
-        f"evaluations at t = {t:.9g} s; fastest-changing states (relative): {', '.join(worst)}. "
-        "The model may be near a singularity there; check the initial state, or raise max_nfev "
-        "(or try method='Radau')", time=float(t))
+        f"model {eqs.name!r}: {method} gave up after {max_nfev} right-hand-side "
+        f"evaluations at t = {t:.9g} s; fastest-changing states (relative): {', '.join(worst)}"
+        f"{guards}. The model may be near a singularity there; check the initial state, or raise "
+        "max_nfev (or try method='Radau')", time=float(t))
 
 
 def _integrate_smooth(model, plan, x0, p, d, times, method, dt, rtol, atol, bar, max_nfev):
@@ -391,7 +405,8 @@ def _integrate_smooth(model, plan, x0, p, d, times, method, dt, rtol, atol, bar,
         _check_finite(model, dx, t, "time derivative")
         counts["nfev"] += 1
         if counts["nfev"] > max_nfev:
-            _give_up(model, info["method"], max_nfev, t, x, dx)
+            _give_up(model, info["method"], max_nfev, t, x, dx, plan.vector(t, hold[0]).reshape(1, -1),
+                     np.asarray(d).reshape(1, -1), p)
         return dx
 
     def jac(t, x):
@@ -399,6 +414,9 @@ def _integrate_smooth(model, plan, x0, p, d, times, method, dt, rtol, atol, bar,
         return model.jac_x(x, plan.vector(t, hold[0])[0], t=t, p=p, d=d)
 
     options = {"rtol": rtol, "atol": atol}
+    events = _guard_events(model.equations, plan, p, d, hold)
+    if events:
+        options["events"] = events
     if dt is not None:
         options["max_step"] = dt
     if info["method"] in _IMPLICIT:
@@ -412,6 +430,11 @@ def _integrate_smooth(model, plan, x0, p, d, times, method, dt, rtol, atol, bar,
         if not t_eval.size or t_eval[-1] != b:
             t_eval = np.append(t_eval, b)
         sol = solve_ivp(rhs, (a, b), x, method=method, t_eval=t_eval, **options)
+        if sol.status == 1:   # a guard's terminal event: the state left the physical domain
+            te = float(sol.t_events[[len(e) > 0 for e in sol.t_events].index(True)][0])
+            xe = np.concatenate([y for y in sol.y_events if len(y)])[:1]
+            _check_guards(model.equations, plan, np.array([te]), xe,
+                          np.asarray(d).reshape(1, -1), p, events=True)
         if sol.status < 0 or sol.y.shape[1] != t_eval.size:
             tf = float(sol.t[-1]) if sol.t.size else a
             raise SimulationError(f"model {model.equations.name!r}: {info['method']} failed at "
@@ -438,8 +461,10 @@ def _integrate_fixed(model, plan, x0, d0, p, times, h_max, bar):
         h = (tb - ta) / m
         model._rk4(ta, h, m, x, u, p, d)
         nfev += 4 * m
-        _check_finite(model, x, tb)
         X[k + 1], D[k + 1] = x[0], d[0]
+        if not np.isfinite(x).all():   # a guard left on the way names the cause better
+            _check_guards(model.equations, plan, times[:k + 2], X[:k + 2], D[:k + 2], p)
+            _check_finite(model, x, tb)
     return X, D, {"method": "RK4", "sub_step": float(h), "nfev": nfev}
 
 
@@ -461,8 +486,49 @@ def _algebraic_along(model, times, X, U, D, p):
     return Z
 
 
+def _check_guards(eqs, plan, times, X, D, p, *, events=False):
+    """Raise DomainError at the first recorded point where a guard of `eqs` is left
+    (`events`: the points are guard crossings found by the solver; the value may be the bound)."""
+    if not eqs.guards:
+        return
+    values = guard_values(eqs, times, X, plan.matrix(times), D, p)
+    if events:   # at a crossing the value is the bound to rounding: report the guard crossed
+        lo = np.array([-np.inf if g.guard.min is None else g.guard.min for g in eqs.guards])
+        hi = np.array([np.inf if g.guard.max is None else g.guard.max for g in eqs.guards])
+        j = int(np.argmin(np.minimum(np.abs(values[0] - lo), np.abs(values[0] - hi))))
+        g = eqs.guards[j]
+        raise DomainError(g.message(float(values[0, j]), float(times[0]), eqs.name),
+                          variable=g.name, value=float(values[0, j]), time=float(times[0]),
+                          owner=g.owner)
+    raise_violation(eqs.guards, values, times, eqs.name)
+
+
+def _guard_events(eqs, plan, p, d, hold):
+    """solve_ivp terminal events, one per guard bound (value - bound changes sign)."""
+    if not eqs.guards:
+        return []
+    fn = guard_function(eqs)
+    d2 = np.asarray(d, dtype=float).reshape(1, -1)
+
+    def make(j, bound, sign):
+        def event(t, x):
+            u = plan.vector(t, hold[0]).reshape(1, -1)
+            return sign * (fn(np.array([t]), x.reshape(1, -1), u, d2, p)[0, j] - bound)
+        event.terminal = True
+        event.direction = -1
+        return event
+    out = []
+    for j, g in enumerate(eqs.guards):
+        if g.guard.min is not None:
+            out.append(make(j, g.guard.min, 1.0))
+        if g.guard.max is not None:
+            out.append(make(j, g.guard.max, -1.0))
+    return out
+
+
 def _assemble(model, plan, times, X, D, p, info):
     eqs = model.equations
+    _check_guards(eqs, plan, times, X, D, p)
     U = plan.matrix(times)
     Z = _algebraic_along(model, times, X, U, D, p)
     Y = (model.h(X, U, t=times, p=p, d=D, z=Z) if model.output_names

@@ -127,6 +127,11 @@ class StateEquations:
         ``f``, ``h`` and ``held_update`` in terms of the assignments:
         substituting ``assignments`` in reverse order gives the flat forms.
         Empty tuples mean "same as the flat form".
+    guards : tuple of DerivedGuard
+        Physical-domain conditions (:mod:`bondgraph.guards`), expressions in
+        ``t``, states, inputs, params and held symbols.
+    param_bounds : mapping str -> (float or None, float or None)
+        Physical range ``(min, max)`` of each bounded parameter (inclusive).
     """
 
     name: str
@@ -156,10 +161,12 @@ class StateEquations:
     f_short: tuple = ()
     h_short: tuple = ()
     held_update_short: tuple = ()
+    guards: tuple = ()
+    param_bounds: Mapping = field(default_factory=dict)
 
     def __post_init__(self):
         for name in ("states", "inputs", "params", "outputs", "f", "h",
-                     "algebraic", "residuals", "held", "held_update"):
+                     "algebraic", "residuals", "held", "held_update", "guards"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
         object.__setattr__(self, "assignments", tuple((s, e) for s, e in self.assignments))
         for name, flat in (("f_short", "f"), ("h_short", "h"), ("held_update_short", "held_update")):
@@ -168,7 +175,7 @@ class StateEquations:
                 raise ArgumentError(f"{len(value)} {name} expressions for {len(getattr(self, flat))} {flat}")
             object.__setattr__(self, name, value)
         for name in ("param_values", "initial_state", "input_defaults", "held_initial",
-                     "units", "descriptions", "owners", "input_functions"):
+                     "units", "descriptions", "owners", "input_functions", "param_bounds"):
             object.__setattr__(self, name, _frozen(getattr(self, name)))
         if len(self.f) != len(self.states):
             raise ArgumentError(f"{len(self.f)} right-hand sides for {len(self.states)} states")

@@ -8,10 +8,11 @@ re-exported here; modules of this package import their errors from here.
 from __future__ import annotations
 
 from bondgraph.errors import (AlgebraicLoopError, BondcosimError, CompilationError, CosimError, FMUError,
-                              ParameterError, SimulationError, UnknownNameError)
+                              FMUStepDiscarded, ParameterError, SimulationError, UnitError, UnknownNameError)
 
 __all__ = ["BondcosimError", "CosimError", "AlgebraicLoopError", "ScenarioError", "PortTypeError",
-           "CompilationError", "FMUError", "ParameterError", "SimulationError", "UnknownNameError"]
+           "CompilationError", "FMUError", "FMUStepDiscarded", "ParameterError", "SimulationError", "UnitError",
+           "UnknownNameError"]
 
 
 class ScenarioError(CosimError):

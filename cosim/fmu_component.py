@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cosim.errors import CosimError, FMUError, UnknownNameError
+from cosim.errors import CosimError, FMUError, FMUStepDiscarded, UnknownNameError
 from fmus.loading import extract_fmu, find_variable, read_fmu, remove_extracted, variable_unit
 
 from .component import Port
@@ -303,7 +303,7 @@ class FMUComponent:
         if self._fast is not None:
             status = self._fast(t, dt)
             if status:
-                raise self._fast_error(t, status)
+                raise self._fast_error(t, status, dt)
             self._y_fresh = True
             return
         if self.inputs:
@@ -312,7 +312,7 @@ class FMUComponent:
                 raise self._status_error(self._set_name, t, status)
         status = self._do_step(t, dt, 0)
         if status > 1:
-            raise self._status_error(self._step_name, t, status)
+            raise self._status_error(self._step_name, t, status, dt)
 
     def stop(self) -> None:
         """Terminate and free the instance (no-op if not started or already stopped)."""
@@ -367,15 +367,21 @@ class FMUComponent:
     def _log_tail(self) -> str:
         return ("; the FMU logged: " + " | ".join(list(self.messages)[-3:])) if self.messages else ""
 
-    def _fast_error(self, t: float, status: int) -> FMUError:
+    def _fast_error(self, t: float, status: int, dt: float | None = None) -> FMUError:
         which = self._which.value
         if which == 3:
             return self._status_error(self._step_name, t, _TERMINATE)
         name = (self._set_name, self._step_name, self._get_name)[which]
-        return self._status_error(name, t, status)
+        return self._status_error(name, t, status, dt if which == 1 else None)
 
-    def _status_error(self, function: str, t: float, status: int) -> FMUError:
+    def _status_error(self, function: str, t: float, status: int, dt: float | None = None) -> FMUError:
         self._failed = True
+        if status == 2 and dt is not None:   # doStep Discard: the FMU could not take this step
+            reason = self.messages[-1] if self.messages else ""
+            return FMUStepDiscarded(
+                f"{self._who}: {function} discarded the step from t = {t:.12g} s to "
+                f"{t + dt:.12g} s{self._log_tail()}", component=self.name, time=t, step=dt,
+                reason=reason, path=self.path)
         if status == _TERMINATE:
             what = "asked to terminate the simulation"
         else:

@@ -22,8 +22,17 @@ feedthrough ports is an algebraic loop (:mod:`cosim.ordering` explains both).
 
 Units
 -----
-Connected ports must have the same unit string; ``""`` (unspecified) matches
-anything.  Units are compared as text (``"N.m"`` and ``"N m"`` differ).
+A connection carries the value from the source's unit into the destination's
+through :func:`bondgraph.units.convert` when the two differ but have the same
+dimension (``deg`` -> ``rad``, ``bar`` -> ``Pa``, ``N.m`` -> ``N m``):
+:math:`v_{dst} = (s_{src} v + o_{src} - o_{dst}) / s_{dst}` with each unit's
+scale and offset to SI, applied when the inputs are gathered (the log shows
+each input in its own unit).  ``""`` (unspecified) matches anything without
+conversion.  Different dimensions, or texts that do not parse and differ, are
+a :class:`CosimError`.  A third connection element overrides this for
+third-party FMUs that declare no or a wrong unit: ``("src.y", "dst.u",
+{"unit": "N"})`` states the source's unit (then converts if needed),
+``{"convert": False}`` passes the raw number.
 """
 from __future__ import annotations
 
@@ -32,9 +41,10 @@ import time as _time
 
 import numpy as np
 
-from cosim.errors import BondcosimError, CosimError, SimulationError
+from cosim.errors import BondcosimError, CosimError, SimulationError, UnitError
 from bondgraph.progress import Progress
 from bondgraph.results import SimulationResult
+from bondgraph.units import parse_unit
 
 from .component import Component, PythonBlock
 from .ordering import execution_plan
@@ -106,6 +116,9 @@ class CoSimulation:
     ----------
     components : dict str -> Component
     connections : tuple of (str, str)
+    conversions : dict str -> (str, str, float, float)
+        Destination input -> (source unit, destination unit, scale, shift):
+        the input receives ``scale * value + shift``.
     step : float
     order : tuple of str
         Component names in execution order (a group evaluated in several
@@ -137,6 +150,7 @@ class CoSimulation:
         if not (np.isfinite(self.step) and self.step > 0):
             raise CosimError(f"step must be positive and finite (s); found {step!r}")
         self.components = self._check_components(list(components))
+        self.conversions: dict[str, tuple] = {}
         self.connections = self._check_connections(list(connections))
         self._layout()
         self._order = [self.components[n] for n in execution_plan(
@@ -198,20 +212,26 @@ class CoSimulation:
         problems, culprits, driven = [], [], {}
         pairs = []
         for j, pair in enumerate(connections):
-            if isinstance(pair, str) or not hasattr(pair, "__len__") or len(pair) != 2:
+            if isinstance(pair, str) or not hasattr(pair, "__len__") or len(pair) not in (2, 3):
                 raise CosimError(f"connections[{j}] = {pair!r}: expected a (source, destination) "
-                                 "pair of 'component.port' names")
-            src, dst = pair
+                                 "pair of 'component.port' names, optionally with a dict of "
+                                 "options (unit, convert)")
+            src, dst = pair[0], pair[1]
+            options = _options(pair, j, problems)
             ps, pd = self._port(src, "source", problems), self._port(dst, "destination", problems)
-            if ps is None or pd is None:
+            if ps is None or pd is None or options is None:
                 culprits.append(src if ps is None else dst)
                 continue
             if dst in driven:
                 problems.append(f"input {dst!r} is driven twice: by {driven[dst]!r} and {src!r}")
                 culprits.append(dst)
-            elif ps.unit and pd.unit and ps.unit != pd.unit:
-                problems.append(f"unit mismatch: {src!r} [{ps.unit}] -> {dst!r} [{pd.unit}]")
-                culprits.extend((src, dst))
+            elif options.get("convert", True):
+                unit = options.get("unit", ps.unit)
+                conversion = _conversion(src, unit, dst, pd.unit, problems)
+                if conversion is False:
+                    culprits.extend((src, dst))
+                elif conversion is not None:
+                    self.conversions[dst] = conversion
             driven.setdefault(dst, src)
             pairs.append((src, dst))
         if problems:
@@ -232,6 +252,10 @@ class CoSimulation:
         self._source = dict((dst, src) for src, dst in self.connections)
         # gather index: an input reads its source output, an unconnected one itself
         self._gather = np.array([self._pos[self._source.get(s, s)] for s in ins], dtype=np.intp)
+        # unit conversions: positions among the inputs, scale and shift
+        conv = [(k, *self.conversions[s][2:]) for k, s in enumerate(ins) if s in self.conversions]
+        self._conv = (np.array([c[0] for c in conv], dtype=np.intp),
+                      np.array([c[1] for c in conv]), np.array([c[2] for c in conv]))
 
     # -- run ---------------------------------------------------------------------------------
     def run(self, t_end: float, t0: float = 0.0, *, progress=None) -> CosimResult:
@@ -277,7 +301,10 @@ class CoSimulation:
         kinds = {s: "output" if i < self._n_out else "input" for i, s in enumerate(self._signals)}
         info = {"step": self.step, "n_steps": n, "t0": t0, "t_end": t0 + n * self.step,
                 "wall_time": wall, "order": self.order,
-                "connections": tuple(f"{a} -> {b}" for a, b in self.connections)}
+                "connections": tuple(f"{a} -> {b}" + (f" [{self.conversions[b][0]} -> "
+                                                      f"{self.conversions[b][1]}]"
+                                                      if b in self.conversions else "")
+                                     for a, b in self.connections)}
         return CosimResult(t0 + np.arange(n + 1) * self.step,
                            {s: log[:, i] for i, s in enumerate(self._signals)},
                            units=units, kinds=kinds, info=info)
@@ -293,24 +320,33 @@ class CoSimulation:
                              gather[i - n_out:i - n_out + len(c.inputs)])
             o, i = o + len(c.outputs), i + len(c.inputs)
         calls = []
+        conv_pos, conv_a, conv_b = self._conv
+        first = 0
+        for c in comps:   # each component's converted inputs, as positions in its u
+            sel = (conv_pos >= first) & (conv_pos < first + len(c.inputs))
+            views[c.name] += ((conv_pos[sel] - first, conv_a[sel], conv_b[sel]),)
+            first += len(c.inputs)
         for c in self._order:
-            u, _, idx = views[c.name]
+            u, _, idx, cv = views[c.name]
             has_ft = bool(c.feedthrough) and any(self._source.get(f"{c.name}.{p.name}")
                                                   for p in c.inputs)
-            calls.append((c.output, idx if has_ft else None, u))
+            calls.append((c.output, idx if has_ft else None, u, cv if cv[0].size else None))
         # a Python block without state has nothing to advance
         advances = [c.advance for c in comps if getattr(type(c), "advance", None)
                     is not PythonBlock.advance]
         take = sig.take   # bound method: no per-call dispatch (np.take costs 3x more)
+        has_conv = bool(conv_pos.size)
         step, started, t = self.step, [], t0
         bar = Progress(max(n, 1), fmt="co-simulation [{bar:40}] {percentage:3.0f}%", enabled=show)
         try:
             for c in comps:
-                u, y, _ = views[c.name]
+                u, y, _, _ = views[c.name]
                 c.bind(u, y)
             for c in {c.name: c for c in self._order}.values():   # first pass, in order
-                u, _, idx = views[c.name]
+                u, _, idx, cv = views[c.name]
                 take(idx, out=u, mode="clip")   # u holds the inputs at t0
+                if cv[0].size:
+                    u[cv[0]] = cv[1] * u[cv[0]] + cv[2]
                 started.append(c)                # stop() is safe after a failed start
                 c.start(t0)
                 c.output(t0)
@@ -318,11 +354,15 @@ class CoSimulation:
             for k0 in range(0, n + 1, chunk):
                 for k in range(k0, min(k0 + chunk, n + 1)):
                     t = t0 + k * step
-                    for out, idx, u in calls:
+                    for out, idx, u, cv in calls:
                         if idx is not None:
                             take(idx, out=u, mode="clip")
+                            if cv is not None:   # unit conversion of this block's inputs
+                                u[cv[0]] = cv[1] * u[cv[0]] + cv[2]
                         out(t)
                     take(gather, out=sig_in, mode="clip")
+                    if has_conv:
+                        sig_in[conv_pos] = conv_a * sig_in[conv_pos] + conv_b
                     log[k] = sig
                     if k < n:   # the last point is only observed
                         for adv in advances:
@@ -359,6 +399,51 @@ def _stop_all(started, failing: bool) -> None:
             errors.append(exc)
     if errors and not failing:
         raise errors[0]
+
+
+_OPTIONS = ("unit", "convert")
+
+
+def _options(pair, j: int, problems: list) -> dict | None:
+    """The override dict of connection `j` (empty for a pair); None (and a problem) if bad."""
+    if len(pair) == 2:
+        return {}
+    options = pair[2]
+    if not isinstance(options, dict):
+        problems.append(f"connections[{j}]: the third element must be a dict of options "
+                        f"({', '.join(_OPTIONS)}); found {options!r}")
+        return None
+    unknown = sorted(set(options) - set(_OPTIONS))
+    if unknown:
+        problems.append(f"connections[{j}]: unknown option(s) {', '.join(map(repr, unknown))}; "
+                        f"expected {', '.join(_OPTIONS)}")
+        return None
+    if "unit" in options and not isinstance(options["unit"], str):
+        problems.append(f"connections[{j}]: unit must be a str; found {options['unit']!r}")
+        return None
+    return options
+
+
+def _conversion(src: str, unit_from: str, dst: str, unit_to: str, problems: list):
+    """(unit_from, unit_to, scale, shift) of a connection needing one; None when the value
+    passes unchanged; False (and a problem naming both ends) when the units do not match."""
+    if not unit_from or not unit_to or unit_from == unit_to:
+        return None
+    hint = (f"; if {src!r} is really in {unit_to}, say so: ({src!r}, {dst!r}, "
+            f"{{'unit': {unit_to!r}}}), or pass raw numbers with {{'convert': False}}")
+    try:
+        a, b = parse_unit(unit_from), parse_unit(unit_to)
+    except UnitError as exc:
+        problems.append(f"unit mismatch: {src!r} [{unit_from}] -> {dst!r} [{unit_to}] ({exc}){hint}")
+        return False
+    if a.dimension != b.dimension:
+        problems.append(f"unit mismatch: {src!r} [{unit_from}] -> {dst!r} [{unit_to}]: "
+                        f"dimensions {a.describe_dimension()} and {b.describe_dimension()}{hint}")
+        return False
+    if a.scale == b.scale and a.offset == b.offset:
+        return None
+    # v_dst = (s_a v + o_a - o_b) / s_b
+    return (unit_from, unit_to, a.scale / b.scale, (a.offset - b.offset) / b.scale)
 
 
 def _joined(problems: list[str]) -> str:

@@ -8,28 +8,25 @@ Other diagnosis modules append their own classes here.
 from __future__ import annotations
 
 from bondgraph.errors import BondcosimError, SimulationError, UnknownNameError
+from bondgraph.errors import UnitError as CoreUnitError
 
 __all__ = ["DiagnosisError", "BenchmarkError", "UnitError", "RecordingError", "UnknownColumnError", "UnknownCaseError",
-           "BondcosimError", "SimulationError", "UnknownNameError"]
+           "BondcosimError", "SimulationError", "UnknownNameError", "CoreUnitError"]
 
 
 class DiagnosisError(BondcosimError, ValueError):
     """A diagnosis cannot be set up or carried out (reason in the message)."""
 
 
-class UnitError(DiagnosisError):
-    """A unit that is unknown, or two units that cannot be converted into each other.
+class UnitError(DiagnosisError, CoreUnitError):
+    """A unit that is unknown, or two units that cannot be converted into each other
+    (the core's :class:`bondgraph.errors.UnitError`, raised by diagnosis as a DiagnosisError).
 
     Attributes
     ----------
     unit_from, unit_to : str
         The two units concerned (``unit_to`` is "" when only one unit was parsed).
     """
-
-    def __init__(self, message: str, unit_from: str = "", unit_to: str = ""):
-        self.unit_from = unit_from
-        self.unit_to = unit_to
-        super().__init__(message)
 
 
 class RecordingError(DiagnosisError):

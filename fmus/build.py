@@ -15,13 +15,34 @@ from pathlib import Path
 from bondgraph.c_build import cache_dir, find_compiler
 from fmus.errors import CompilationError
 
-__all__ = ["compile_fmu_binary", "fmi_headers", "WRAPPERS", "FMU_CFLAGS"]
+__all__ = ["compile_fmu_binary", "fmi_headers", "fixed_sources", "fmi_header_files", "WRAPPERS",
+           "FMU_CFLAGS", "FMI_HEADERS"]
 
 #: Directory of the fixed C sources (``bc_fmu_core.h``, ``fmi2_wrapper.c``, ``fmi3_wrapper.c``).
 C_DIR = Path(__file__).with_name("c")
 WRAPPERS = {2: "fmi2_wrapper.c", 3: "fmi3_wrapper.c"}
 #: Hidden visibility: only the FMI functions (marked ``FMI2_Export``/``FMI3_Export``) are exported.
-FMU_CFLAGS = ("-O2", "-fno-tree-slp-vectorize", "-shared", "-fPIC", "-fvisibility=hidden")
+#: -DBC_GLIBC_COMPAT: bind exp/log/pow to their GLIBC_2.2.5 versions (see ``c/bc_platform.h``).
+FMU_CFLAGS = ("-O2", "-fno-tree-slp-vectorize", "-shared", "-fPIC", "-fvisibility=hidden",
+              "-DBC_GLIBC_COMPAT")
+
+
+#: The official FMI headers a wrapper includes, per FMI version.
+FMI_HEADERS = {2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"),
+               3: ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")}
+
+
+def fixed_sources(fmi_version: int) -> dict[str, str]:
+    """The hand-written C files of an FMU of `fmi_version`: name -> text (the wrapper,
+    ``bc_fmu_core.h``, ``bc_adaptive.h``, ``bc_platform.h``)."""
+    return {name: (C_DIR / name).read_text()
+            for name in ("bc_platform.h", "bc_fmu_core.h", "bc_adaptive.h", WRAPPERS[fmi_version])}
+
+
+def fmi_header_files(fmi_version: int) -> dict[str, str]:
+    """The official FMI headers of `fmi_version` (from fmpy): name -> text."""
+    root = fmi_headers()
+    return {name: (root / name).read_text() for name in FMI_HEADERS[fmi_version]}
 
 
 def fmi_headers() -> Path:
@@ -57,7 +78,7 @@ def compile_fmu_binary(generated: dict[str, str], *, fmi_version: int, identifie
     if compiler is None:
         raise CompilationError("no C compiler found: set $CC or put cc/gcc/clang on PATH")
     wrapper = WRAPPERS[fmi_version]
-    fixed = {name: (C_DIR / name).read_text() for name in ("bc_fmu_core.h", wrapper)}
+    fixed = fixed_sources(fmi_version)
     files = {**fixed, **generated}
     key = hashlib.sha256("\0".join([compiler, *FMU_CFLAGS, *(f"{k}\0{files[k]}" for k in sorted(files))])
                          .encode()).hexdigest()[:40]

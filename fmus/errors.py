@@ -8,10 +8,11 @@ re-exported here; modules of this package import their errors from here.
 from __future__ import annotations
 
 from bondgraph.errors import (ArgumentError, ArgumentTypeError, BondcosimError, CompilationError, FMUError,
-                              MissingFileError, UnknownNameError)
+                              MissingFileError, ParameterError, UnitError, UnknownNameError)
 
 __all__ = ["BondcosimError", "FMUError", "CompilationError", "FMUFileNotFoundError", "FMUModelTypeError",
-           "ArgumentError", "ArgumentTypeError", "MissingFileError", "UnknownNameError"]
+           "ArgumentError", "ArgumentTypeError", "MissingFileError", "ParameterError", "UnitError",
+           "UnknownNameError"]
 
 
 class FMUFileNotFoundError(FMUError, FileNotFoundError):

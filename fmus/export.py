@@ -10,7 +10,9 @@ The FMU's C is generated in three parts:
   version-independent ``bc_fmu_core.h``,
 
 compiled by the system C compiler with hidden visibility, so the shared
-library exports only the ``fmi2*`` / ``fmi3*`` functions.
+library exports only the ``fmi2*`` / ``fmi3*`` functions.  The FMU ships the
+same files under ``sources/`` (:mod:`fmus.sources`) so that it can be rebuilt
+from them alone.
 
 Co-Simulation integrates with classic RK4 in equal sub-steps no longer than
 the ``solver_step`` parameter, inputs held over the communication step and
@@ -33,15 +35,17 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
-from bondgraph.codegen_c import generate_source
-from fmus.errors import FMUError, FMUModelTypeError
+from bondgraph.codegen_c import generate_source, guard_source
+from bondgraph.guards import check_param_bounds
+from fmus.errors import FMUError, FMUModelTypeError, ParameterError
 
 from .build import compile_fmu_binary
 from .c_header import model_header
-from .layout import model_identifier, variable_layout
+from .layout import DEFAULT_MAX_SUBSTEPS, model_identifier, variable_layout
+from .sources import compiled_sources, source_files
 from .model_description import model_description_xml
 
-__all__ = ["export", "default_solver_step", "fmu_equations", "binary_platform"]
+__all__ = ["export", "default_solver_step", "default_experiment", "fmu_equations", "binary_platform"]
 
 #: Fixed date stamped into exported files, so the same model gives the same bytes.
 _EPOCH = (1980, 1, 1, 0, 0, 0)
@@ -82,7 +86,8 @@ def fmu_equations(eqs):
         f=rep(eqs.f), h=rep(eqs.h), residuals=rep(eqs.residuals),
         held_update=rep(eqs.held_update), input_functions={},
         assignments=tuple((a, sp.sympify(e).xreplace(sub)) for a, e in eqs.assignments),
-        f_short=rep(eqs.f_short), h_short=rep(eqs.h_short), held_update_short=rep(eqs.held_update_short))
+        f_short=rep(eqs.f_short), h_short=rep(eqs.h_short), held_update_short=rep(eqs.held_update_short),
+        guards=tuple(dataclasses.replace(g, expr=sp.sympify(g.expr).xreplace(sub)) for g in eqs.guards))
 
 
 def default_solver_step(eqs) -> float:
@@ -105,6 +110,39 @@ def default_solver_step(eqs) -> float:
     return min(1e-3, mantissa * decade)
 
 
+def _round_125(x: float, *, up: bool) -> float:
+    """`x` rounded to 1, 2 or 5 times a power of ten (up or down)."""
+    decade = 10.0 ** math.floor(math.log10(x))
+    steps = [m * decade for m in (1.0, 2.0, 5.0, 10.0)]
+    return min(v for v in steps if v >= x * (1 - 1e-12)) if up else \
+        max(v for v in steps if v <= x * (1 + 1e-12))
+
+
+def default_experiment(eqs, solver_step: float) -> dict:
+    """``DefaultExperiment`` of the FMU of `eqs`: start 0, stop and communication step, s.
+
+    ``stopTime`` is five times the slowest time constant of the linearisation
+    at the default operating point (:math:`5 / \\min |\\mathrm{Re}\\,\\lambda|`
+    over the stable non-zero eigenvalues) rounded up to 1-2-5 and kept in
+    [1 ms, 100 s]; 1 s when there is none.  ``stepSize`` is stopTime/1000
+    rounded up to 1-2-5, at most 1 ms for a model with a ``fixed_step`` (the
+    sample of its scheme), never below `solver_step`.
+    """
+    stop = 1.0
+    try:
+        lam = np.linalg.eigvals(np.asarray(eqs.linearize().A, dtype=float)) if eqs.states else []
+        rates = [-r for r in np.real(lam) if r < -1e-12 and math.isfinite(r)]
+        if rates:
+            stop = min(100.0, max(1e-3, _round_125(5.0 / min(rates), up=True)))
+    except Exception:   # noqa: BLE001 -- no linearisation: the 1 s default
+        pass
+    step = _round_125(stop / 1000.0, up=True)
+    if eqs.fixed_step:
+        step = min(step, 1e-3)
+    step = max(step, solver_step)
+    return {"startTime": 0.0, "stopTime": stop, "stepSize": step}
+
+
 def _equations_of(model):
     if hasattr(model, "equations") and callable(model.equations):
         return model.equations()
@@ -114,7 +152,11 @@ def _equations_of(model):
 
 
 def export(model, path, *, fmi_version: int = 2, solver_step: float | None = None,
-           params=None, identifier: str | None = None, description: str | None = None):
+           max_substeps: float = DEFAULT_MAX_SUBSTEPS,
+           params=None, identifier: str | None = None, description: str | None = None,
+           stop_time: float | None = None, step_size: float | None = None,
+           author: str = "bondcosim", version: str = "1.0", license: str = "MIT",
+           copyright: str = ""):
     """Write `model` as a binary FMU.
 
     Parameters
@@ -126,13 +168,24 @@ def export(model, path, *, fmi_version: int = 2, solver_step: float | None = Non
     solver_step : float, optional
         Start value of the ``solver_step`` parameter (largest internal RK4
         sub-step of Co-Simulation), s.  Default :func:`default_solver_step`.
+    max_substeps : float
+        Start value of the ``max_substeps`` parameter: a doStep that needs
+        more internal sub-steps returns Discard instead of blocking
+        (default 1e6).
     params : mapping str -> float, optional
-        Parameter start values replacing the model's defaults.
+        Parameter start values replacing the model's defaults (each inside
+        its declared range).
     identifier : str, optional
         ``modelIdentifier`` (name of the shared library); default from the
         model name.
     description : str, optional
         Model description text; default names the model and its sizes.
+    stop_time, step_size : float, optional
+        ``DefaultExperiment`` stop time and communication step, s; default
+        :func:`default_experiment`.
+    author, version, license, copyright : str
+        Written into ``modelDescription.xml`` (empty ones are left out);
+        ``generationTool`` is ``bondcosim <version>``.
 
     Returns
     -------
@@ -156,25 +209,41 @@ def export(model, path, *, fmi_version: int = 2, solver_step: float | None = Non
                            f"parameters are {', '.join(eqs.param_names)}")
         eqs = dataclasses.replace(eqs, param_values={**eqs.param_values,
                                                      **{k: float(v) for k, v in params.items()}})
+        try:
+            check_param_bounds(eqs, np.array([[eqs.param_values[s.name] for s in eqs.params]]))
+        except ParameterError as exc:
+            raise FMUError(str(exc)) from None
     step = default_solver_step(eqs) if solver_step is None else float(solver_step)
     if not (step > 0.0 and math.isfinite(step)):
         raise FMUError(f"solver_step must be a positive number of seconds, got {solver_step!r}")
+    if not (isinstance(max_substeps, (int, float)) and max_substeps >= 1 and math.isfinite(max_substeps)):
+        raise FMUError(f"max_substeps must be a finite number >= 1, got {max_substeps!r}")
     folder = binary_platform(fmi_version)
     ident = identifier or model_identifier(eqs.name)
     model_exchange = eqs.is_smooth
-    variables = variable_layout(eqs, step, fmi_version=fmi_version)
-    kernels = generate_source(eqs, part="main")
+    variables = variable_layout(eqs, step, fmi_version=fmi_version, max_substeps=float(max_substeps))
+    kernels = generate_source(eqs, part="main") + "\n" + guard_source(eqs)
     description = description or (f"{eqs.name}: {len(eqs.states)} states, {len(eqs.inputs)} inputs, "
                                   f"{len(eqs.outputs)} outputs (bond graph exported by bondcosim)")
     token = "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, "bondcosim:" + hashlib.sha256(
         "\0".join([kernels, repr(variables), str(fmi_version), ident, str(model_exchange)]).encode()
     ).hexdigest())) + "}"
     header = model_header(eqs, variables, token=token, model_exchange=model_exchange)
+    experiment = default_experiment(eqs, step)
+    for key, value in (("stopTime", stop_time), ("stepSize", step_size)):
+        if value is not None:
+            if not (isinstance(value, (int, float)) and value > 0 and math.isfinite(value)):
+                raise FMUError(f"{'stop_time' if key == 'stopTime' else 'step_size'} must be a "
+                               f"positive number of seconds, got {value!r}")
+            experiment[key] = float(value)
+    meta = {"author": author, "version": version, "license": license, "copyright": copyright}
     xml = model_description_xml(variables, version=fmi_version, name=eqs.name, identifier=ident,
                                 token=token, description=description,
-                                model_exchange=model_exchange, date="2000-01-01T00:00:00Z")
-    binary = compile_fmu_binary({"model.h": header, "model_kernels.c": kernels},
-                                fmi_version=fmi_version, identifier=ident)
+                                model_exchange=model_exchange, date="2000-01-01T00:00:00Z",
+                                experiment=experiment, meta=meta,
+                                sources=compiled_sources(fmi_version))
+    generated = {"model.h": header, "model_kernels.c": kernels}
+    binary = compile_fmu_binary(generated, fmi_version=fmi_version, identifier=ident)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
@@ -185,4 +254,6 @@ def export(model, path, *, fmi_version: int = 2, solver_step: float | None = Non
             z.writestr(info, data)
         add("modelDescription.xml", xml)
         add(f"binaries/{folder}/{ident}.so", binary)
+        for name, text in source_files(generated, fmi_version=fmi_version, identifier=ident).items():
+            add(name, text)
     return path

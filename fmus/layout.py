@@ -8,7 +8,7 @@ the list of :class:`FmuVariable` that both the model description
 Value references are positions in the C array ``v[]`` (see
 ``fmus/c/bc_fmu_core.h``)::
 
-    states x | derivatives der(x) | inputs u | parameters p | held d | outputs y | solver_step
+    states x | der(x) | inputs u | parameters p | held d | outputs y | solver_step | max_substeps | solver | tolerance
 
 FMI 3.0 adds ``time`` (causality ``independent``) after them.  An output that
 is one of the states under the same name (e.g. every output of ``chain``) is
@@ -16,6 +16,8 @@ not a separate variable: the state itself gets causality ``output``.
 """
 from __future__ import annotations
 
+import dataclasses
+import math
 import re
 from dataclasses import dataclass
 
@@ -23,10 +25,18 @@ import sympy as sp
 
 from fmus.errors import FMUError
 
-__all__ = ["FmuVariable", "variable_layout", "derivative_unit", "model_identifier", "SOLVER_STEP"]
+__all__ = ["FmuVariable", "variable_layout", "derivative_unit", "model_identifier", "SOLVER_STEP",
+           "MAX_SUBSTEPS", "DEFAULT_MAX_SUBSTEPS", "SOLVER", "TOLERANCE"]
 
 #: Name of the parameter holding the internal fixed solver step of Co-Simulation.
 SOLVER_STEP = "solver_step"
+#: Name of the parameter bounding the internal sub-steps of one doStep.
+MAX_SUBSTEPS = "max_substeps"
+#: Names of the parameters choosing the Co-Simulation solver and its relative tolerance.
+SOLVER, TOLERANCE = "solver", "tolerance"
+#: Its default: 1e6 sub-steps (about 0.05 s of CPU for a 2-state model, 1-2 s for ``pam``);
+#: a longer doStep returns Discard instead of blocking.
+DEFAULT_MAX_SUBSTEPS = 1e6
 
 
 @dataclass(frozen=True)
@@ -52,6 +62,10 @@ class FmuVariable:
         For a derivative, the value reference of its state.
     dependencies : tuple of int or None
         For an output, value references of the states and inputs it depends on.
+    min, max : float or None
+        Physical range (parameter bounds, single-variable guards), in `unit`.
+    nominal : float or None
+        Magnitude of the variable (states, parameters), in `unit`.
     """
 
     name: str
@@ -65,18 +79,29 @@ class FmuVariable:
     description: str = ""
     state_vr: int | None = None
     dependencies: tuple | None = None
+    min: float | None = None
+    max: float | None = None
+    nominal: float | None = None
 
 
 def derivative_unit(unit: str) -> str:
-    """Unit of the time derivative of a quantity in `unit` (``"N s"`` -> ``"N"``)."""
+    """Unit of the time derivative of a quantity in `unit`, in a form
+    :func:`bondgraph.units.parse_unit` reads (one ``/``): ``"N s"`` -> ``"N"``,
+    ``"m"`` -> ``"m/s"``, ``"mm/s"`` -> ``"mm/(s s)"``, ``"J/(kg K)"`` -> ``"J/(kg K s)"``."""
     unit = unit.strip()
-    if not unit:
+    if not unit or unit == "1":
         return "1/s"
     if unit == "s":
-        return ""
-    if unit.endswith(" s"):
+        return "1"
+    if unit.endswith(" s") and "/" not in unit:
         return unit[:-2].strip()
-    return f"({unit})/s" if "/" in unit else f"{unit}/s"
+    num, slash, den = unit.partition("/")
+    if not slash:
+        return f"{unit}/s"
+    den = den.strip()
+    if den.startswith("(") and den.endswith(")"):
+        den = den[1:-1].strip()
+    return f"{num.strip()}/({den} s)"
 
 
 def _output_dependencies(eqs, expr) -> set:
@@ -88,7 +113,45 @@ def _output_dependencies(eqs, expr) -> set:
     return syms & (set(eqs.states) | set(eqs.inputs))
 
 
-def variable_layout(eqs, solver_step: float, *, fmi_version: int = 2) -> list[FmuVariable]:
+_KIND_WORDS = {"state": "state", "input": "input", "parameter": "parameter", "held": "held variable",
+               "output": "output"}
+
+
+def _completed(eqs, v: FmuVariable) -> FmuVariable:
+    """Every variable with a unit (``"1"`` when dimensionless), a description and,
+    for states, inputs and parameters, a nominal value (magnitude of its start value or
+    of the model's operating point; none when that is 0, so FMI's default 1 applies)."""
+    unit = v.unit or "1"
+    desc = v.description or f"{_KIND_WORDS.get(v.kind, v.kind)} {v.name} of {eqs.name}"
+    nominal = None
+    if v.kind in ("state", "input", "parameter"):
+        scale = abs(v.start or 0.0) or abs(float(eqs.initial_state.get(v.name, 0.0)))
+        nominal = scale if scale > 0.0 and math.isfinite(scale) else None
+    return dataclasses.replace(v, unit=unit, description=desc, nominal=nominal)
+
+
+def _with_ranges(eqs, variables) -> list[FmuVariable]:
+    """Parameter bounds and single-variable guards (``P_1 >= 0``) as min/max."""
+    ranges = {name: lo_hi for name, lo_hi in eqs.param_bounds.items()}
+    for g in eqs.guards:
+        if isinstance(g.expr, sp.Symbol):
+            lo, hi = ranges.get(g.expr.name, (None, None))
+            lo = g.guard.min if lo is None else (lo if g.guard.min is None else max(lo, g.guard.min))
+            hi = g.guard.max if hi is None else (hi if g.guard.max is None else min(hi, g.guard.max))
+            ranges[g.expr.name] = (lo, hi)
+    out = []
+    for v in variables:
+        if v.name in ranges and v.kind in ("state", "input", "parameter", "held", "output"):
+            lo, hi = ranges[v.name]
+            v = dataclasses.replace(v, min=lo if lo is not None else v.min,
+                                    max=hi if hi is not None else v.max)
+        out.append(v)
+    return out
+
+
+def variable_layout(eqs, solver_step: float, *, fmi_version: int = 2,
+                    max_substeps: float = DEFAULT_MAX_SUBSTEPS,
+                    tolerance: float = 1e-8) -> list[FmuVariable]:
     """Every variable of the FMU of `eqs`, in value-reference order.
 
     Parameters
@@ -97,6 +160,10 @@ def variable_layout(eqs, solver_step: float, *, fmi_version: int = 2) -> list[Fm
         With no inputs given as functions of time (see :func:`fmus.export.export`).
     solver_step : float
         Start value of the ``solver_step`` parameter, s.
+    max_substeps : float
+        Start value of the ``max_substeps`` parameter (dimensionless).
+    tolerance : float
+        Start value of the ``tolerance`` parameter (variable-step solver).
     fmi_version : {2, 3}
         3 appends the ``time`` variable.
 
@@ -159,7 +226,24 @@ def variable_layout(eqs, solver_step: float, *, fmi_version: int = 2) -> list[Fm
             units.get(name, ""), desc.get(name, ""), dependencies=deps))
     out.append(FmuVariable(
         SOLVER_STEP, vr_y + len(eqs.outputs), "solver_step", "parameter", "fixed", "exact",
-        float(solver_step), "s", "largest internal RK4 sub-step of Co-Simulation doStep"))
+        float(solver_step), "s", "largest internal RK4 sub-step of Co-Simulation doStep",
+        min=0.0))
+    out.append(FmuVariable(
+        MAX_SUBSTEPS, vr_y + len(eqs.outputs) + 1, "max_substeps", "parameter", "fixed", "exact",
+        float(max_substeps), "1", "most internal sub-steps one doStep may take; a longer step "
+        "returns Discard (never a silent hang)", min=1.0))
+    smooth = not eqs.held
+    out.append(FmuVariable(
+        SOLVER, vr_y + len(eqs.outputs) + 2, "solver", "parameter", "fixed", "exact", 0.0, "1",
+        "Co-Simulation solver: 0 fixed-step RK4 (solver_step), 1 variable-step Dormand-Prince 5(4)"
+        + ("" if smooth else " (not offered: held variables need the fixed step)"),
+        min=0.0, max=1.0 if smooth else 0.0))
+    out.append(FmuVariable(
+        TOLERANCE, vr_y + len(eqs.outputs) + 3, "tolerance", "parameter", "fixed", "exact",
+        float(tolerance), "1", "relative tolerance of the variable-step solver (absolute: "
+        "tolerance times each state's nominal)", min=0.0))
+    out = _with_ranges(eqs, out)
+    out = [_completed(eqs, v) for v in out]
     if fmi_version == 3:
         out.append(FmuVariable("time", out[-1].vr + 1, "time", "independent", "continuous",
                                None, None, "s", "simulation time"))

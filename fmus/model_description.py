@@ -10,19 +10,32 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from datetime import datetime, timezone
 
-__all__ = ["model_description_xml"]
+from fmus.errors import UnitError
+from bondgraph.units import BASE_UNITS, base_unit
 
-_GENERATOR = "bondcosim"
+__all__ = ["model_description_xml", "generation_tool"]
+
+
+def generation_tool() -> str:
+    """``"bondcosim <version>"`` (the installed distribution's version)."""
+    try:
+        from importlib.metadata import version
+        return f"bondcosim {version('bondcosim')}"
+    except Exception:   # noqa: BLE001 -- not installed: the name alone
+        return "bondcosim"
 
 
 def _num(x: float) -> str:
     return repr(float(x))
 
 
-def _common_root(version: int, name: str, token: str, description: str, date: str | None) -> ET.Element:
+def _common_root(version: int, name: str, token: str, description: str, date: str | None,
+                 meta: dict) -> ET.Element:
     attrs = {"fmiVersion": "2.0" if version == 2 else "3.0", "modelName": name}
     attrs["guid" if version == 2 else "instantiationToken"] = token
-    attrs.update({"description": description, "generationTool": _GENERATOR,
+    attrs["description"] = description
+    attrs.update({k: str(meta[k]) for k in ("author", "version", "copyright", "license") if meta.get(k)})
+    attrs.update({"generationTool": generation_tool(),
                   "generationDateAndTime": date or datetime.now(timezone.utc)
                   .replace(microsecond=0).isoformat().replace("+00:00", "Z"),
                   "variableNamingConvention": "flat"})
@@ -31,28 +44,50 @@ def _common_root(version: int, name: str, token: str, description: str, date: st
     return ET.Element("fmiModelDescription", attrs)
 
 
-def _interfaces(root, version: int, identifier: str, model_exchange: bool) -> None:
+def _interfaces(root, version: int, identifier: str, model_exchange: bool, sources: list) -> None:
     state = "canGetAndSetFMUstate" if version == 2 else "canGetAndSetFMUState"
     serial = "canSerializeFMUstate" if version == 2 else "canSerializeFMUState"
     flags = {state: "true", serial: "true"}
     if version == 2:
         flags["canNotUseMemoryManagementFunctions"] = "true"
+    elements = []
     if model_exchange:
-        ET.SubElement(root, "ModelExchange", {"modelIdentifier": identifier, **flags})
-    ET.SubElement(root, "CoSimulation", {"modelIdentifier": identifier,
-                                         "canHandleVariableCommunicationStepSize": "true", **flags})
+        elements.append(ET.SubElement(root, "ModelExchange", {"modelIdentifier": identifier, **flags}))
+    elements.append(ET.SubElement(root, "CoSimulation", {
+        "modelIdentifier": identifier, "canHandleVariableCommunicationStepSize": "true", **flags}))
+    if version == 2 and sources:   # FMI 3.0 lists them in sources/buildDescription.xml
+        for el in elements:
+            files = ET.SubElement(el, "SourceFiles")
+            for name in sources:
+                ET.SubElement(files, "File", {"name": name})
 
 
-def _units_and_categories(root, variables) -> None:
+def _base_unit_attrs(unit: str) -> dict:
+    """BaseUnit attributes of `unit`: SI exponents, then factor and offset (when not 1, 0)."""
+    exps, factor, offset = base_unit(unit)
+    attrs = {b: str(exps[b]) for b in BASE_UNITS if b in exps}
+    if factor != 1.0:
+        attrs["factor"] = _num(factor)
+    if offset != 0.0:
+        attrs["offset"] = _num(offset)
+    return attrs
+
+
+def _units_and_categories(root, variables, experiment: dict) -> None:
     units = sorted({v.unit for v in variables if v.unit})
     if units:
         defs = ET.SubElement(root, "UnitDefinitions")
         for u in units:
-            ET.SubElement(defs, "Unit", {"name": u})
+            unit = ET.SubElement(defs, "Unit", {"name": u})
+            try:
+                ET.SubElement(unit, "BaseUnit", _base_unit_attrs(u))
+            except UnitError:   # a unit text the grammar does not know: declared, no BaseUnit
+                pass
     cats = ET.SubElement(root, "LogCategories")
-    for c in ("logStatusWarning", "logStatusError"):
+    for c in ("logStatusWarning", "logStatusDiscard", "logStatusError"):
         ET.SubElement(cats, "Category", {"name": c})
-    ET.SubElement(root, "DefaultExperiment", {"startTime": "0.0"})
+    ET.SubElement(root, "DefaultExperiment", {k: _num(experiment[k]) for k in
+                                              ("startTime", "stopTime", "stepSize") if k in experiment})
 
 
 def _common_attrs(v) -> dict:
@@ -64,6 +99,15 @@ def _common_attrs(v) -> dict:
     if v.initial:
         attrs["initial"] = v.initial
     return attrs
+
+
+def _range(v) -> dict:
+    """``min``, ``max``, ``nominal`` attributes of a variable that has them."""
+    out = {}
+    for key in ("min", "max", "nominal"):
+        if getattr(v, key) is not None:
+            out[key] = _num(getattr(v, key))
+    return out
 
 
 def _fmi2_variables(root, variables) -> dict[int, int]:
@@ -78,6 +122,7 @@ def _fmi2_variables(root, variables) -> dict[int, int]:
             real["derivative"] = str(index[v.state_vr])
         if v.unit:
             real["unit"] = v.unit
+        real.update(_range(v))
         if v.start is not None:
             real["start"] = _num(v.start)
         ET.SubElement(sv, "Real", real)
@@ -114,6 +159,7 @@ def _fmi3_variables(root, variables) -> None:
             attrs["derivative"] = str(v.state_vr)
         if v.unit:
             attrs["unit"] = v.unit
+        attrs.update(_range(v))
         if v.start is not None:
             attrs["start"] = _num(v.start)
         ET.SubElement(mv, "Float64", attrs)
@@ -135,7 +181,8 @@ def _fmi3_structure(root, variables) -> None:
 
 def model_description_xml(variables, *, version: int, name: str, identifier: str, token: str,
                           description: str = "", model_exchange: bool = True,
-                          date: str | None = None) -> str:
+                          date: str | None = None, experiment: dict | None = None,
+                          meta: dict | None = None, sources: list | None = None) -> str:
     """The ``modelDescription.xml`` text.
 
     Parameters
@@ -153,14 +200,21 @@ def model_description_xml(variables, *, version: int, name: str, identifier: str
     date : str, optional
         ``generationDateAndTime`` (ISO 8601); default now.  Fix it for
         reproducible files.
+    experiment : dict, optional
+        ``DefaultExperiment`` attributes ``startTime``, ``stopTime``,
+        ``stepSize`` (s); default ``startTime`` 0 only.
+    meta : dict, optional
+        ``author``, ``version``, ``copyright``, ``license`` (written when not empty).
+    sources : list of str, optional
+        C files under ``sources/`` to list in FMI 2.0's ``<SourceFiles>``.
 
     Returns
     -------
     str
     """
-    root = _common_root(version, name, token, description, date)
-    _interfaces(root, version, identifier, model_exchange)
-    _units_and_categories(root, variables)
+    root = _common_root(version, name, token, description, date, meta or {})
+    _interfaces(root, version, identifier, model_exchange, sources or [])
+    _units_and_categories(root, variables, experiment or {"startTime": 0.0})
     if version == 2:
         _fmi2_structure(root, variables, _fmi2_variables(root, variables))
     else:

@@ -202,6 +202,11 @@ class Element(ABC):
         :class:`~bondgraph.errors.ExpressionError` naming the element.
         """
 
+    def guards(self) -> list:
+        """Physical-domain conditions of the element (:class:`~bondgraph.guards.Guard`), in
+        the graph's names; a simulation or FMU step that leaves them fails, naming them."""
+        return []
+
     # -- causality ---------------------------------------------------------
     def fixed_roles(self) -> dict[str, str] | None:
         """Roles the element imposes whatever the rest of the graph does."""
@@ -271,7 +276,8 @@ def param_dict(params, owner: str) -> dict[str, Param]:
     if isinstance(params, Mapping):
         for key, value in params.items():
             if isinstance(value, Mapping):
-                out[key] = Param(key, value.get("value"), value.get("unit", ""), value.get("description", ""))
+                out[key] = Param(key, value.get("value"), value.get("unit", ""), value.get("description", ""),
+                                 min=value.get("min"), max=value.get("max"))
             else:
                 out[key] = as_param(value, key, "")
         return out
@@ -282,16 +288,20 @@ def param_dict(params, owner: str) -> dict[str, Param]:
     return out
 
 
-def element_param(value, name: str, unit: str | None, default_unit: str, description: str) -> Param:
+def element_param(value, name: str, unit: str | None, default_unit: str, description: str,
+                  *, min: float | None = None) -> Param:
     """The parameter an element owns under its own name.
 
-    `value` is a number or a :class:`Param`, whose unit and description are
-    kept (an explicit `unit` wins, then the Param's, then `default_unit`).
+    `value` is a number or a :class:`Param`, whose unit, description and
+    range are kept (an explicit `unit` wins, then the Param's, then
+    `default_unit`); `min` is the element's physical lower bound (0 for a
+    mass, a compliance, a resistance), used where the Param gives none.
     """
     if isinstance(value, Param):
         return Param(name, value.value, unit if unit is not None else (value.unit or default_unit),
-                     value.description or description)
-    return Param(name, value, unit if unit is not None else default_unit, description)
+                     value.description or description,
+                     min=value.min if value.min is not None else min, max=value.max)
+    return Param(name, value, unit if unit is not None else default_unit, description, min=min)
 
 
 def unit_of(domain_name: str, quantity: str) -> str:

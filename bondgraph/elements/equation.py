@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 
 from ..errors import DerivationError
+from ..guards import Guard, guard_from_dict
 from ..symbols import sym
 from .base import EFFORT, FLOW, Contribution, Element, HeldDecl, RoleConflict, StateDecl, param_dict
 
@@ -63,13 +64,16 @@ class EquationElement(Element):
         and the earlier locals, and every other expression may use them.
         They appear as ``<element>.<name>`` in the equations' ordered
         assignments (:attr:`StateEquations.assignments`).
+    guards : sequence of Guard, optional
+        Physical-domain conditions (:mod:`bondgraph.guards`) over the
+        graph's names, e.g. a chamber volume that must stay positive.
     """
 
     kind = "Eq"
 
     def __init__(self, name: str, *, ports, outputs, states=None, initial=None, units=None,
                  held=None, fixed_step: float | None = None, params=None, descriptions=None,
-                 locals=None, description: str = ""):
+                 locals=None, guards=None, description: str = ""):
         super().__init__(name, description=description)
         self._set_locals(locals)
         ports = dict(ports)
@@ -109,6 +113,9 @@ class EquationElement(Element):
         self.descriptions = dict(descriptions or {})
         self._fixed_step = None if fixed_step is None else float(fixed_step)
         self.params = param_dict(params, f"Eq {name!r}")
+        self._guards = [g if isinstance(g, Guard) else guard_from_dict(k, g)
+                        for k, g in (guards.items() if isinstance(guards, dict) else
+                                     ((None, g) for g in (guards or ())))]
         unknown = [k for k in list(self.initial) + list(self.units) + list(self.descriptions)
                    if k not in self.states and k not in self.held]
         if unknown:
@@ -122,6 +129,9 @@ class EquationElement(Element):
 
     def parameters(self):
         return list(self.params.values())
+
+    def guards(self):
+        return list(self._guards)
 
     def declared_states(self):
         return [(s, self.units.get(s, ""), self.initial.get(s, 0.0),
@@ -194,4 +204,6 @@ class EquationElement(Element):
             spec["params"] = {k: p.to_dict() for k, p in self.params.items()}
         if self.locals:
             spec["locals"] = {k: str(v) for k, v in self.locals.items()}
+        if self._guards:
+            spec["guards"] = {g.name: g.to_dict() for g in self._guards}
         return spec

@@ -45,7 +45,7 @@ class R(Element):
         self.domain = domain
         self.params = param_dict(params, f"R {name!r}")
         self.value = None if value is None else element_param(
-            value, name, unit, unit_of(domain, "resistance"), f"resistance of {name}")
+            value, name, unit, unit_of(domain, "resistance"), f"resistance of {name}", min=0.0)
         if self.value is not None:
             self.params[name] = self.value
         self.effort_law, self.flow_law = effort, flow

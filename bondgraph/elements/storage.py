@@ -28,7 +28,7 @@ class _Storage(Element):
         self.initial = float(initial)
         self.params = param_dict(params, f"{self.kind} {name!r}")
         self.value = None if value is None else element_param(
-            value, name, unit, unit_of(domain, self._param_quantity), f"{self._param_quantity} of {name}")
+            value, name, unit, unit_of(domain, self._param_quantity), f"{self._param_quantity} of {name}", min=0.0)
         if self.value is not None:
             self.params[name] = self.value
         self.law = law

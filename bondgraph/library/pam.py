@@ -62,6 +62,7 @@ from typing import Literal, Mapping
 
 from ..elements import C, EquationElement, I, MSf, MTF, One
 from ..graph import BondGraph
+from ..guards import Guard
 from ..params import Param, values_with_overrides
 from ..errors import ArgumentError
 
@@ -232,6 +233,12 @@ def _torque(psi: str) -> str:
 
 
 def _muscle(i: int, psi: str) -> EquationElement:
+    l = _length(i, psi)
+    volume = f"(D1*{l}**2 + D2*{l} + D3)"   # the guards see graph names, not the element's locals
+    guards = [Guard(f"V_{i}", volume, min=0.0, unit="m^3",
+                    description=f"chamber volume of muscle {i}, eq. (3)"),
+              Guard(f"P_{i}_abs", f"P_{i}", min=0.0, unit="Pa",
+                    description=f"absolute pressure in muscle {i}")]
     return EquationElement(
         f"muscle{i}", ports={"pn": "in", "mech": "in"},
         # length eq. (2), volume eq. (3), contraction force eqs. (6)-(7)
@@ -241,7 +248,7 @@ def _muscle(i: int, psi: str) -> EquationElement:
         # eq. (4), with dV/dt = (2 D1 l + D2) dl/dt and dl/dt = f_mech (elongation rate)
         states={f"P_{i}": f"k1*R*T*f_pn/V - k2*(2*D1*l + D2)*f_mech*P_{i}/V"},
         initial={f"P_{i}": PARAMETERS["P_out"].value}, units={f"P_{i}": "Pa"},
-        descriptions={f"P_{i}": f"absolute pressure in muscle {i}"},
+        descriptions={f"P_{i}": f"absolute pressure in muscle {i}"}, guards=guards,
         description=f"muscle {i}: chamber eq. (4), volume eq. (3), contraction force eqs. (6)-(7); "
                     "port pn: pressure / mass flow in, port mech: force / elongation rate")
 

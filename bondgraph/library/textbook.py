@@ -52,7 +52,7 @@ def dc_motor(*, Ra: float = 1.0, La: float = 0.5e-3, km: float = 0.05, Jm: float
     g.add(One("w_motor"))
     g.connect("km", "w_motor")
     _join(g, "w_motor", I("Jm", Jm, domain="rotation"), R("bm", bm, domain="rotation"))
-    g.add(TF("n", n, description="gear ratio w_load / w_motor"))
+    g.add(TF("n", n, unit="1", description="gear ratio w_load / w_motor"))
     g.connect("w_motor", "n")
     g.add(One("w_load"))
     g.connect("n", "w_load")
@@ -123,7 +123,7 @@ def geared_inertias(*, J1: float = 0.01, J2: float = 0.5, n: float = 0.2, b: flo
     g.add(One("w1"))
     g.connect("tau", "w1")
     _join(g, "w1", I("J1", J1, domain="rotation"), R("b", b, domain="rotation"))
-    g.add(TF("n", n, description="w2 / w1"))
+    g.add(TF("n", n, unit="1", description="gear ratio w2 / w1"))
     g.connect("w1", "n")
     g.add(One("w2"))
     g.connect("n", "w2")
@@ -154,8 +154,8 @@ def resistor_loop(*, R1: float = 1.0, R2: float = 2.0, R3: float = 3.0, Cv: floa
     _join(g, "v_mid", R("R2", R2, domain="electrical"))
     g.add(One("i3"))
     g.connect("v_mid", "i3")
-    r3 = (R("R3", effort="R3v*f + a3*f**3", params={"R3v": Param("R3v", R3, "Ohm"),
-                                                   "a3": Param("a3", a3, "V/A^3")}, domain="electrical")
+    r3 = (R("R3", effort="R3v*f + a3*f**3", params={"R3v": Param("R3v", R3, "Ohm", "linear part of R3's law", min=0.0),
+                                                   "a3": Param("a3", a3, "V/A^3", "cubic coefficient of R3's law")}, domain="electrical")
           if nonlinear else R("R3", R3, domain="electrical"))
     _join(g, "i3", r3, C("Cc", Cv, domain="electrical"))
     g.add_output("v_C", "e_Cc", unit="V", description="capacitor voltage")

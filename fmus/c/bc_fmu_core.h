@@ -30,6 +30,7 @@ typedef struct {
   double v[BC_NV];
   double z[BC_NZA];   /* algebraic unknowns (warm start of the Newton solver) */
   double time;        /* s */
+  double h_adapt;     /* last step size of the variable-step solver, s (0: none yet) */
   int phase;
   int dirty;          /* derivatives and outputs are stale */
 } bc_snapshot;
@@ -40,6 +41,7 @@ static void bc_reset(bc_snapshot *s, double time) {
   memcpy(s->v, bc_start, sizeof(s->v));
   memcpy(s->z, bc_zinit, sizeof(s->z));
   s->time = time;
+  s->h_adapt = 0.0;
   s->phase = BC_INSTANTIATED;
   s->dirty = 1;
 }
@@ -78,6 +80,10 @@ static int bc_refresh(bc_snapshot *s, char *msg) {
   return 0;
 }
 
+/* Return codes of the core: OK, an error the FMU cannot recover from (or a
+   caller's mistake), and a step discarded with the FMU left at its start. */
+enum { BC_OK = 0, BC_ERROR = 1, BC_DISCARD = 2 };
+
 static int bc_check_states(const bc_snapshot *s, char *msg) {
   for (int i = 0; i < BC_NX; ++i) {
     if (!isfinite(s->v[BC_VR_X + i])) {
@@ -89,38 +95,110 @@ static int bc_check_states(const bc_snapshot *s, char *msg) {
   return 0;
 }
 
-/* Co-simulation step: classic RK4 in m equal sub-steps no longer than the
+/* States finite and every physical-domain guard (guard_row, declared by the
+   model's elements) inside [bc_guard_min, bc_guard_max] at time t.  A NaN
+   guard value fails too.  0 when all hold; else msg names the first failure. */
+static int bc_check_domain(bc_snapshot *s, double t, char *msg) {
+  double *v = s->v;
+  for (int i = 0; i < BC_NX; ++i) {
+    if (!isfinite(v[BC_VR_X + i])) {
+      snprintf(msg, BC_MSG, "state %s = %g is not finite at t = %.17g s",
+               bc_names[BC_VR_X + i], v[BC_VR_X + i], t);
+      return 1;
+    }
+  }
+#if BC_NG > 0
+  double g[BC_NGA];
+  guard_row(t, v + BC_VR_X, v + BC_VR_U, s->z, v + BC_VR_D, v + BC_VR_P, 0.0, g);
+  for (int k = 0; k < BC_NG; ++k) {
+    if (!(g[k] >= bc_guard_min[k] && g[k] <= bc_guard_max[k])) {
+      snprintf(msg, BC_MSG, "%s = %.6g%s%s left its physical domain (%s) at t = %.17g s",
+               bc_guard_names[k], g[k], bc_guard_units[k][0] ? " " : "", bc_guard_units[k],
+               bc_guard_text[k], t);
+      return 1;
+    }
+  }
+#endif
+  return 0;
+}
+
+/* Derivatives and outputs finite (after bc_refresh). */
+static int bc_check_outputs(const bc_snapshot *s, char *msg) {
+  for (int i = BC_VR_DX; i < BC_VR_DX + BC_NX; ++i) {
+    if (!isfinite(s->v[i])) {
+      snprintf(msg, BC_MSG, "%s = %g is not finite at t = %.17g s", bc_names[i], s->v[i], s->time);
+      return 1;
+    }
+  }
+  for (int i = BC_VR_Y; i < BC_VR_Y + BC_NY; ++i) {
+    if (!isfinite(s->v[i])) {
+      snprintf(msg, BC_MSG, "output %s = %g is not finite at t = %.17g s", bc_names[i], s->v[i], s->time);
+      return 1;
+    }
+  }
+  return 0;
+}
+
+#include "bc_adaptive.h"   /* bc_dopri: the variable-step solver */
+
+/* Co-simulation step.  solver = 1: bc_dopri (variable step).  solver = 0:
+   classic RK4 in m equal sub-steps no longer than the
    solver step, inputs held, held variables updated at each sub-step start
-   (bc_rk4).  On failure the state is left unchanged. */
+   (bc_rk4, one sub-step per call so that the domain is checked after each).
+   m is computed in double and bounded by max_substeps: a step that needs
+   more is discarded before any work, never an int overflow or a hang.
+   BC_DISCARD (the state restored to the step's start, msg naming the cause):
+   too many sub-steps, a failed algebraic loop, a non-finite state or output,
+   a guard left.  BC_ERROR: a step that does not start where the FMU is, or
+   a non-positive H. */
 static int bc_do_step(bc_snapshot *s, double t, double H, char *msg) {
   if (!(H > 0.0) || !isfinite(H)) {
     snprintf(msg, BC_MSG, "communication step %g s is not positive", H);
-    return 1;
+    return BC_ERROR;
   }
   double tol = 1e-9 * (fabs(s->time) > 1.0 ? fabs(s->time) : 1.0);
   if (fabs(t - s->time) > tol) {
     snprintf(msg, BC_MSG, "doStep from t = %.17g s, but the FMU is at t = %.17g s", t, s->time);
-    return 1;
+    return BC_ERROR;
   }
-  double hmax = s->v[BC_VR_STEP];
-  int m = (int)ceil(H / hmax - 1e-9);
-  if (m < 1) m = 1;
-  double v_old[BC_NV];
-  memcpy(v_old, s->v, sizeof(v_old));
-  int status = 0;
+  if (s->v[BC_VR_SOLVER] != 0.0) {   /* variable-step Dormand-Prince (bc_adaptive.h) */
+    bc_snapshot old = *s;
+    if (bc_dopri(s, t, H, msg)) { *s = old; return BC_DISCARD; }
+    s->time = t + H;
+    s->dirty = 1;
+    if (bc_refresh(s, msg) || bc_check_outputs(s, msg)) { *s = old; return BC_DISCARD; }
+    return BC_OK;
+  }
+  double hmax = s->v[BC_VR_STEP], maxsub = s->v[BC_VR_MAXSUB];
+  double md = ceil(H / hmax - 1e-9);   /* double: no overflow above 2^31 */
+  if (!(md >= 1.0)) md = 1.0;
+  if (!(md <= maxsub)) {
+    snprintf(msg, BC_MSG, "doStep of H = %g s from t = %.17g s needs %.4g sub-steps of at most "
+             "solver_step = %g s, more than max_substeps = %.4g; take shorter communication "
+             "steps, or set solver_step / max_substeps before initialisation", H, t, md, hmax, maxsub);
+    return BC_DISCARD;
+  }
+  long long m = (long long)md;
+  double h = H / m;
+  bc_snapshot old = *s;
   double *v = s->v;
-  int bad = bc_rk4(1, t, H / m, m, v + BC_VR_X, v + BC_VR_U, 0, s->z, bc_zinit, v + BC_VR_D,
-                   v + BC_VR_P, 0, &status);
-  s->dirty = 1;
-  if (bad) {
-    memcpy(s->v, v_old, sizeof(v_old));
-    snprintf(msg, BC_MSG, "step from t = %.17g s failed: %s", t,
-             bad < 0 ? "out of memory" : bc_newton_messages[status > 0 && status < 4 ? status : 0]);
-    return 1;
+  for (long long j = 0; j < m; ++j) {
+    int status = 0;
+    /* t + j h as bc_rk4(.., m, ..) computes it: the same numbers as bondgraph.simulate */
+    int bad = bc_rk4(1, t + j * h, h, 1, v + BC_VR_X, v + BC_VR_U, 0, s->z, bc_zinit, v + BC_VR_D,
+                     v + BC_VR_P, 0, &status);
+    if (bad) {
+      *s = old;
+      snprintf(msg, BC_MSG, "step from t = %.17g s failed at t = %.17g s: %s", t, t + j * h,
+               bad < 0 ? "out of memory" : bc_newton_messages[status > 0 && status < 4 ? status : 0]);
+      return bad < 0 ? BC_ERROR : BC_DISCARD;
+    }
+    if (bc_check_domain(s, t + (j + 1) * h, msg)) { *s = old; return BC_DISCARD; }
   }
-  if (bc_check_states(s, msg)) { memcpy(s->v, v_old, sizeof(v_old)); return 1; }
   s->time = t + H;
-  return 0;
+  s->dirty = 1;
+  if (bc_refresh(s, msg) || bc_check_outputs(s, msg)) { *s = old; return BC_DISCARD; }
+  return BC_OK;
 }
 
 static int bc_settable(const bc_snapshot *s, unsigned vr, char *msg) {
@@ -141,11 +219,33 @@ static int bc_settable(const bc_snapshot *s, unsigned vr, char *msg) {
   return 1;
 }
 
+/* Set values: every one finite and inside the variable's declared [min, max]
+   (a NaN input, a negative mass), the solver step > 0, max_substeps >= 1;
+   otherwise nothing is set and msg names the variable and the value. */
 static int bc_set_real(bc_snapshot *s, const unsigned *vr, size_t n, const double *value, char *msg) {
   for (size_t i = 0; i < n; ++i) {
     if (!bc_settable(s, vr[i], msg)) return 1;
-    if (vr[i] == BC_VR_STEP && !(value[i] > 0.0 && isfinite(value[i]))) {
-      snprintf(msg, BC_MSG, "%s must be positive, got %g", bc_names[vr[i]], value[i]);
+    const char *name = bc_names[vr[i]];
+    if (!isfinite(value[i])) {
+      snprintf(msg, BC_MSG, "%s = %g rejected: not a finite number (%s keeps %.17g)",
+               name, value[i], name, s->v[vr[i]]);
+      return 1;
+    }
+    if ((vr[i] == BC_VR_STEP && !(value[i] > 0.0)) || (vr[i] == BC_VR_MAXSUB && !(value[i] >= 1.0))
+        || (vr[i] == BC_VR_TOL && !(value[i] > 0.0))) {
+      snprintf(msg, BC_MSG, "%s must be %s, got %g", name,
+               vr[i] == BC_VR_MAXSUB ? "at least 1" : "positive", value[i]);
+      return 1;
+    }
+    if (vr[i] == BC_VR_SOLVER && value[i] != 0.0 && !(value[i] == 1.0 && BC_ND == 0)) {
+      snprintf(msg, BC_MSG, "solver = %g rejected: 0 (fixed-step RK4) or 1 (variable-step "
+               "Dormand-Prince%s)", value[i], BC_ND ? "; not for this model, whose held "
+               "variables need the fixed step" : "");
+      return 1;
+    }
+    if (value[i] < bc_min[vr[i]] || value[i] > bc_max[vr[i]]) {
+      snprintf(msg, BC_MSG, "%s = %.17g rejected: outside its declared range [%g, %g]",
+               name, value[i], bc_min[vr[i]], bc_max[vr[i]]);
       return 1;
     }
   }

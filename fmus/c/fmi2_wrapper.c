@@ -2,6 +2,7 @@
    generated model.  One file for every model; the model comes in through
    "model.h" and "model_kernels.c", the version-independent logic through
    "bc_fmu_core.h".  Model Exchange is compiled in only when BC_HAS_ME. */
+#include "bc_platform.h"   /* first: glibc symbol versions */
 #include <stdlib.h>
 
 #include "fmi2Functions.h"
@@ -33,7 +34,8 @@ static void log_text(fmi2CallbackLogger logger, fmi2ComponentEnvironment env, co
   }
   escaped[k] = '\0';
   if (logger)
-    logger(env, name, status, status == fmi2Warning ? "logStatusWarning" : "logStatusError", escaped);
+    logger(env, name, status, status == fmi2Warning ? "logStatusWarning"
+           : status == fmi2Discard ? "logStatusDiscard" : "logStatusError", escaped);
 }
 
 static fmi2Status fail(Instance *m, fmi2Status status, const char *function) {
@@ -126,7 +128,8 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
   INSTANCE;
   REQUIRE(m->s.phase == BC_INIT, "fmi2ExitInitializationMode");
-  if (bc_check_states(&m->s, m->msg) || bc_refresh(&m->s, m->msg)) {
+  if (bc_check_domain(&m->s, m->s.time, m->msg) || bc_refresh(&m->s, m->msg)
+      || bc_check_outputs(&m->s, m->msg)) {
     m->s.phase = BC_FAILED;
     return fail(m, fmi2Error, "fmi2ExitInitializationMode");
   }
@@ -256,7 +259,10 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
   (void)noSetFMUStatePriorToCurrentPoint;
   *enterEventMode = fmi2False;
   *terminateSimulation = fmi2False;
-  CHECK(bc_check_states(&m->s, m->msg), "fmi2CompletedIntegratorStep");
+  if (bc_check_domain(&m->s, m->s.time, m->msg)) {   /* the integrator left the physical domain */
+    *terminateSimulation = fmi2True;
+    return fail(m, fmi2Error, "fmi2CompletedIntegratorStep");
+  }
   return fmi2OK;
 }
 
@@ -301,7 +307,7 @@ fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real indicators[], size_t
 fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real nominals[], size_t nx) {
   INSTANCE;
   (void)m;
-  for (size_t i = 0; i < nx; ++i) nominals[i] = 1.0;
+  for (size_t i = 0; i < nx && i < BC_NX; ++i) nominals[i] = bc_nominal[i];
   return fmi2OK;
 }
 
@@ -324,15 +330,21 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
   INSTANCE;
   (void)noSetFMUStatePriorToCurrentPoint;
   REQUIRE(m->s.phase == BC_RUNNING, "fmi2DoStep");
-  CHECK(bc_do_step(&m->s, currentCommunicationPoint, communicationStepSize, m->msg), "fmi2DoStep");
+  int r = bc_do_step(&m->s, currentCommunicationPoint, communicationStepSize, m->msg);
+  /* Discard: the FMU is still at the step's start (fmi2LastSuccessfulTime) and may go on */
+  if (r == BC_DISCARD) return fail(m, fmi2Discard, "fmi2DoStep");
+  if (r) return fail(m, fmi2Error, "fmi2DoStep");
   return fmi2OK;
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c) { return unsupported(c, "fmi2CancelStep"); }
 
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
-  (void)s; (void)value;
-  return unsupported(c, "fmi2GetStatus");
+  INSTANCE;
+  (void)m;
+  if (s != fmi2DoStepStatus) return unsupported(c, "fmi2GetStatus (only fmi2DoStepStatus)");
+  *value = fmi2OK;   /* doStep is synchronous: nothing is ever pending */
+  return fmi2OK;
 }
 
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
@@ -348,8 +360,11 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Int
 }
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
-  (void)s; (void)value;
-  return unsupported(c, "fmi2GetBooleanStatus");
+  INSTANCE;
+  (void)m;
+  if (s != fmi2Terminated) return unsupported(c, "fmi2GetBooleanStatus (only fmi2Terminated)");
+  *value = fmi2False;   /* after a Discard the FMU is at the step's start and may go on */
+  return fmi2OK;
 }
 
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {

@@ -9,6 +9,7 @@
    Exchange has no event indicators.  Every function of fmi3Functions.h is
    defined (importers bind them all); those the FMU does not support return
    fmi3Error with a logged message. */
+#include "bc_platform.h"   /* first: glibc symbol versions */
 #include <stdlib.h>
 
 #include "fmi3Functions.h"
@@ -36,7 +37,8 @@ static void log_text(fmi3LogMessageCallback logger, fmi3InstanceEnvironment env,
   char line[BC_MSG + 256];
   if (!logger) return;
   snprintf(line, sizeof(line), "%s%s%s: %s", name, *name ? ": " : "", function, text);
-  logger(env, status, status == fmi3Warning ? "logStatusWarning" : "logStatusError", line);
+  logger(env, status, status == fmi3Warning ? "logStatusWarning"
+         : status == fmi3Discard ? "logStatusDiscard" : "logStatusError", line);
 }
 
 static fmi3Status fail(Instance *m, fmi3Status status, const char *function) {
@@ -161,7 +163,8 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance c, fmi3Boolean toleranceDefi
 fmi3Status fmi3ExitInitializationMode(fmi3Instance c) {
   INSTANCE;
   REQUIRE(m->s.phase == BC_INIT, "fmi3ExitInitializationMode");
-  if (bc_check_states(&m->s, m->msg) || bc_refresh(&m->s, m->msg)) {
+  if (bc_check_domain(&m->s, m->s.time, m->msg) || bc_refresh(&m->s, m->msg)
+      || bc_check_outputs(&m->s, m->msg)) {
     m->s.phase = BC_FAILED;
     return fail(m, fmi3Error, "fmi3ExitInitializationMode");
   }
@@ -458,7 +461,10 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance c, fmi3Boolean noSetFMUState
   (void)noSetFMUStatePriorToCurrentPoint;
   *enterEventMode = fmi3False;
   *terminateSimulation = fmi3False;
-  CHECK(bc_check_states(&m->s, m->msg), "fmi3CompletedIntegratorStep");
+  if (bc_check_domain(&m->s, m->s.time, m->msg)) {   /* the integrator left the physical domain */
+    *terminateSimulation = fmi3True;
+    return fail(m, fmi3Error, "fmi3CompletedIntegratorStep");
+  }
   return fmi3OK;
 }
 
@@ -503,7 +509,7 @@ fmi3Status fmi3GetEventIndicators(fmi3Instance c, fmi3Float64 indicators[], size
 fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance c, fmi3Float64 nominals[], size_t nx) {
   INSTANCE;
   (void)m;
-  for (size_t i = 0; i < nx; ++i) nominals[i] = 1.0;
+  for (size_t i = 0; i < nx && i < BC_NX; ++i) nominals[i] = bc_nominal[i];
   return fmi3OK;
 }
 
@@ -542,7 +548,10 @@ fmi3Status fmi3DoStep(fmi3Instance c, fmi3Float64 currentCommunicationPoint,
   if (earlyReturn) *earlyReturn = fmi3False;
   if (lastSuccessfulTime) *lastSuccessfulTime = m->s.time;
   REQUIRE(m->s.phase == BC_RUNNING, "fmi3DoStep");
-  CHECK(bc_do_step(&m->s, currentCommunicationPoint, communicationStepSize, m->msg), "fmi3DoStep");
+  int r = bc_do_step(&m->s, currentCommunicationPoint, communicationStepSize, m->msg);
   if (lastSuccessfulTime) *lastSuccessfulTime = m->s.time;
+  /* Discard: the FMU is still at the step's start (lastSuccessfulTime) and may go on */
+  if (r == BC_DISCARD) return fail(m, fmi3Discard, "fmi3DoStep");
+  if (r) return fail(m, fmi3Error, "fmi3DoStep");
   return fmi3OK;
 }

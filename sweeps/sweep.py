@@ -72,8 +72,10 @@ def montecarlo_spec(scenario: str, *, samples: int, vary, fixed=None, seed: int 
     DistributionError
         A law that does not parse, or a grid (a Monte-Carlo draws).
     SpecError
-        ``NAME=LAW`` text without ``=``.
+        ``NAME=LAW`` text without ``=``, or a number of samples that is not a whole number >= 1.
     """
+    if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
+        raise SpecError("--samples", [f"the number of runs must be a whole number >= 1; found {samples!r}"])
     if not isinstance(vary, dict):
         pairs = {}
         for item in vary:

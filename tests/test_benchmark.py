@@ -129,3 +129,23 @@ def test_two_seeded_cases_end_to_end(tmp_path):
         assert r["answer_kind"] == kind, r
         assert r["kind_ok"] and r["place_ok"]
     assert r["improvement"] != r["improvement"]     # NaN on a null case
+
+
+def test_the_benchmark_command_on_a_small_seeded_subset(tmp_path, capsys):
+    """What CI runs of the benchmark: four msd cases (three effects, one null) end to end,
+    with the report's files; the full run is ``python -m diagnosis.benchmark`` (80 cases)."""
+    import json
+
+    from diagnosis.benchmark.__main__ import main
+    assert main(["--cases", "4", "--seed", "7", "--plants", "msd", "--report", str(tmp_path),
+                 "--max-effects", "1"]) == 0
+    results = json.loads((tmp_path / "results.json").read_text())
+    head = results["summary"]["headline"]
+    assert (head["scored"], head["null_cases"], head["generator_errors"]) == (4, 1, 0)
+    assert head["false_alarms"] == 0.0
+    assert (tmp_path / "results.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "| kind right (effect cases) |" in (tmp_path / "results.md").read_text()
+    assert len(list((tmp_path / "cases").glob("*.json"))) == 4
+    # a rerun finds every case done and diagnoses nothing again
+    assert main(["--cases", "4", "--seed", "7", "--plants", "msd", "--report", str(tmp_path)]) == 0
+    assert "4 cases (4 done before)" in capsys.readouterr().err

@@ -24,11 +24,28 @@ def files(tmp_path):
     taken.write_text("a file where a directory is wanted")
     return {"rec": str(rec), "bad": str(bad), "taken": str(taken), "out": str(tmp_path / "o.csv"),
             "missing": str(tmp_path / "missing.json"), "png": str(tmp_path / "g.png"),
-            "fmu": str(tmp_path / "x.fmu"), "nodir": str(tmp_path / "no" / "such" / "o.csv")}
+            "fmu": str(tmp_path / "x.fmu"), "nodir": str(tmp_path / "no" / "such" / "o.csv"),
+            "dir": str(tmp_path / "sweep-out"), "nomatch": str(tmp_path / "none*.csv")}
 
 
 # (argv with {placeholders}, exit status, text the one-line message must contain)
 CASES = {
+    "sweep": [(["sweep", "{missing}", "--out", "{dir}"], 1, "cannot read the file"),
+              (["sweep", "{rec}", "--out", "{dir}"], 1, "unknown spec format '.csv'"),
+              (["sweep"], 2, "the following arguments are required: spec, --out")],
+    "montecarlo": [(["montecarlo", "nope", "--samples", "2", "--vary", "A1=normal(1,0.1)", "--out", "{dir}"], 1,
+                    "unknown scenario 'nope'"),
+                   (["montecarlo", "pam-ukf", "--samples", "-1", "--vary", "A1=normal(1,0.1)", "--out", "{dir}"],
+                    1, "whole number >= 1; found -1"),
+                   (["montecarlo", "pam-ukf", "--samples", "2", "--vary", "A1=weird(1)", "--out", "{dir}"], 1,
+                    "unknown law 'weird'"),
+                   (["montecarlo", "pam-ukf", "--samples", "2", "--vary", "NOPE=normal(1,0.1)", "--out", "{dir}"],
+                    1, "has no parameter 'NOPE'")],
+    "diagnose-batch": [(["diagnose-batch", "nope", "{rec}", "--output", "x=pos", "--out", "{dir}"], 1,
+                        "unknown model 'nope'"),
+                       (["diagnose-batch", "mass-spring-damper", "{nomatch}", "--output", "x=pos", "--out", "{dir}"],
+                        1, "no recording matches"),
+                       (["diagnose-batch", "mass-spring-damper"], 2, "the following arguments are required")],
     "list": [(["list", "extra"], 2, "unrecognized arguments: extra"),
              (["list", "--json"], 2, "unrecognized arguments: --json"),
              (["lst"], 2, "invalid choice: 'lst'")],

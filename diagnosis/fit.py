@@ -192,6 +192,27 @@ def _started_mid_run(candidate, train, x0):
     return replace(candidate, initial={k: u0 for k in candidate.initial})
 
 
+def _release_unsupported_limits(objective, specs, theta, lower, upper):
+    """A saturation limit that the training part gives no evidence for, i.e. whose release
+    to its outer bound (no limit on that side) raises the training cost by less than 1 %,
+    is released: a limit left where the training data happen to end would clip the
+    held-out part, which may go further."""
+    theta = np.array(theta, dtype=float)
+    r = objective(theta)
+    base = 0.5 * float(r @ r)
+    for i, spec in enumerate(specs):
+        side = spec.name.split("_")[1] if spec.name.count("_") >= 2 else ""
+        if side not in ("min", "max"):
+            continue
+        trial = theta.copy()
+        trial[i] = lower[i] if side == "min" else upper[i]
+        r = objective(trial)
+        cost = 0.5 * float(r @ r)
+        if cost <= 1.01 * base:
+            theta, base = trial, min(base, cost)
+    return theta
+
+
 def _best_start(objective, candidate, theta0):
     """The guess or the candidate's alternative start with the smallest training cost (one batch)."""
     if candidate is None or not candidate.starts:
@@ -284,6 +305,8 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
         message = f"{result.message} ({result.nfev} evaluations, {objective.n_runs} simulations)"
     else:
         theta, converged, message = theta0, True, "nothing to fit"
+    if candidate is not None and candidate.kind == "saturation" and specs:
+        theta = _release_unsupported_limits(objective, specs, theta, lower, upper)
     values = objective.params(theta)
     if candidate is not None:
         values = candidate.settle(values, train)

@@ -282,17 +282,33 @@ class _Context:
             self.sim.U[:, j] = saved
 
 
+#: quantiles of the simulated output at which a sensor's range may begin (hinges of the correction)
+_RANGE_QUANTILES = (0.03, 0.1, 0.25, 0.75, 0.9, 0.97)
+
+
 def _score_output(ctx, place) -> PlaceScore:
-    """Sensor correction a + b*y_hat of one output, exact linear least squares."""
+    """Sensor correction of one output: ``a + b*y_hat`` plus hinges ``max(y_hat - c, 0)`` /
+    ``min(y_hat - c, 0)`` at quantiles of ``y_hat`` (a sensor that clips at the ends of its
+    range), exact linear least squares; the hinges are kept only when they pay for their
+    degrees of freedom."""
     o = place.name
     y_hat = ctx.run.outputs[o]
-    basis = np.stack([np.ones_like(y_hat), y_hat - np.mean(y_hat)], axis=1)
-    coef, *_ = np.linalg.lstsq(basis, ctx.residual[o], rcond=None)
-    estimate = basis @ coef
-    corrected = dict(ctx.run.outputs)
-    corrected[o] = y_hat + estimate
+    linear = np.stack([np.ones_like(y_hat), y_hat - np.mean(y_hat)], axis=1)
+    cuts = np.quantile(y_hat, _RANGE_QUANTILES)
+    hinges = [np.minimum(y_hat - c, 0.0) if q < 0.5 else np.maximum(y_hat - c, 0.0)
+              for q, c in zip(_RANGE_QUANTILES, cuts)]
     unit = ctx.sim.equations.units.get(o, "")
-    return PlaceScore(place, ctx.share(ctx.energy(corrected), 2.0), estimate, str(unit), None, 2.0)
+    best = None
+    for basis in (linear, np.column_stack([linear] + hinges)):
+        coef, *_ = np.linalg.lstsq(basis, ctx.residual[o], rcond=None)
+        estimate = basis @ coef
+        corrected = dict(ctx.run.outputs)
+        corrected[o] = y_hat + estimate
+        dof = float(basis.shape[1])
+        share = ctx.share(ctx.energy(corrected), dof)
+        if best is None or share > best.explained:
+            best = PlaceScore(place, share, estimate, str(unit), None, dof)
+    return best
 
 
 def _lagged(u, t, tau):

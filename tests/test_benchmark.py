@@ -149,3 +149,12 @@ def test_the_benchmark_command_on_a_small_seeded_subset(tmp_path, capsys):
     # a rerun finds every case done and diagnoses nothing again
     assert main(["--cases", "4", "--seed", "7", "--plants", "msd", "--report", str(tmp_path)]) == 0
     assert "4 cases (4 done before)" in capsys.readouterr().err
+
+
+def test_a_clipping_sensor_is_located_and_named(tmp_path):
+    # the output place's correction has hinges at quantiles of the simulated output (a range),
+    # and a limit the training part gives no evidence for is released, not left where it ends
+    spec = CaseSpec(0, 72, "msd", "saturation", "output", "x", target_change=0.1, ratio=10.0)
+    r = run_case(spec, PLANTS, tmp_path, max_effects=1)
+    assert (r["answer_kind"], r["answer_place"]) == ("saturation", "output x"), r["answers"]
+    assert r["improvement"] >= 0.5

@@ -339,10 +339,12 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     fits = []
     for i, cand in enumerate(cands, 1):
         say("fitting", f"{cand} ({i}/{len(cands)})")
-        fits.append(fit_candidate(graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0))
+        fits.append(fit_candidate(graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0,
+                                  through=train))
     if uncertain:
         say("fitting", f"nominal parameters {', '.join(uncertain)} alone")
-        fits.append(fit_candidate(graph, None, fit_part, held, uncertain=uncertain, x0=fit_x0))
+        fits.append(fit_candidate(graph, None, fit_part, held, uncertain=uncertain, x0=fit_x0,
+                                  through=train))
     say("choosing")
     floor = noise_floor(held, res.noise)
     chosen = choose(nominal, fits, noise=floor) if fits else None
@@ -421,7 +423,7 @@ def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, 
     fits = []
     for i, cand in enumerate(cands, 1):
         say(f"{label}: fitting", f"{cand} ({i}/{len(cands)})")
-        fits.append(fit_candidate(graph, cand, fit_part, held, x0=fit_x0))
+        fits.append(fit_candidate(graph, cand, fit_part, held, x0=fit_x0, through=train))
     say(f"{label}: choosing")
     chosen = choose(reference, fits, noise=floor) if fits else None
     out = {"chosen": chosen, "fits": fits, "reference": dict(reference), "improved": dict(reference),
@@ -449,7 +451,7 @@ def _joint_refit(graph, effects, exp, train, held, mask, x0, reference, floor, u
     names = [p.name for e in effects for p in e.candidate.params] + list(uncertain)
     res = residuals(graph, exp, simulator=OutputSimulator(graph, exp), x0=x0)
     part, part_x0 = _fit_window(train, res.run, x0)
-    fit = fit_candidate(graph, None, part, held, uncertain=names, x0=part_x0)
+    fit = fit_candidate(graph, None, part, held, uncertain=names, x0=part_x0, through=train)
     out = {"fit": fit, "reference": dict(reference), "improved": dict(reference), "kept": False}
     if not all(np.isfinite(v) for v in fit.values.values()) or not np.all(np.isfinite(
             list(fit.holdout_nrmse.values()))):

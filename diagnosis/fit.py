@@ -231,7 +231,7 @@ def _best_start(objective, candidate, theta0):
 
 
 def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, max_nfev: int = 40,
-                  abandon_above: float | None = None) -> CandidateFit:
+                  abandon_above: float | None = None, through=None) -> CandidateFit:
     """Fit a candidate's parameters (and uncertain nominal ones) by simulation-error least squares.
 
     Parameters
@@ -256,6 +256,10 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
         (``success=False``) once :data:`_ABANDON_AFTER` evaluations have not gone below it: a
         caller fitting several candidates passes a cost the best one so far makes hopeless to
         beat.  Every fit reports its training cost in ``extra["train_cost"]``.
+    through : Experiment, optional
+        The whole training part when `train` is only its start (a long recording fitted on its
+        first samples): the held-out part is simulated continuing through it, not across the
+        gap between the end of `train` and the start of `holdout`.
 
     Returns
     -------
@@ -311,11 +315,13 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     if candidate is not None:
         values = candidate.settle(values, train)
     try:   # one run of training + held-out part (the training outputs are its first samples)
-        full = _joined(train, holdout) if holdout is not None else train
+        lead = train if through is None else through
+        full = _joined(lead, holdout) if holdout is not None else lead
         y = objective.sim.on(full)(values, x0)
         n = train.t.size
         train_nrmse = {o: nrmse(train.outputs[o], y[o][:n]) for o in outputs}
-        holdout_nrmse = {o: nrmse(holdout.outputs[o], y[o][n:]) for o in outputs} if holdout is not None else {}
+        holdout_nrmse = ({o: nrmse(holdout.outputs[o], y[o][lead.t.size:]) for o in outputs}
+                         if holdout is not None else {})
     except BondcosimError as exc:
         return CandidateFit(candidate, message=f"{label}: the fitted model does not run: {exc}", graph=model,
                             n_simulations=objective.n_runs, **failed)

@@ -150,6 +150,20 @@ def test_long_training_parts_are_fitted_on_their_start(monkeypatch):
     np.testing.assert_allclose(again, run.outputs["x"][:50], atol=1e-12)
 
 
+def test_a_fit_window_shorter_than_the_training_part_is_judged_through_it(tmp_path, monkeypatch):
+    """A long recording is fitted on its first samples; the held-out part is simulated on from
+    there through the rest of the training part (not across the gap: a 130 s pam recording
+    fitted on 15 s once had every candidate 'not run')."""
+    import diagnosis.diagnose as pipeline
+    monkeypatch.setattr(pipeline, "MAX_FIT_SAMPLES", 300)
+    path = _recording(tmp_path / "msd_coulomb_long.csv", FC, seed=11)
+    report = diagnose("mass-spring-damper", str(path), **BINDINGS, max_effects=1)
+    data = report.to_json()
+    assert data["fit"]["window"][1] == pytest.approx(299 * 0.02)          # 300 samples at 50 Hz
+    assert [m["kind"] for m in data["missing_physics"]] == ["coulomb_friction"]
+    assert report.improvement()["x"] > 0.9
+
+
 def test_nominal_recording_answers_none(null):
     data = null.to_json()
     assert [m["kind"] for m in data["missing_physics"]] == ["none"]

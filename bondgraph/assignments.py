@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-__all__ = ["Readable", "readable_form", "substitute", "KEEP_OPS"]
+__all__ = ["Readable", "readable_form", "substitute", "needed_assignments", "KEEP_OPS"]
 
 #: Operations above which a bond variable used once still gets its own line.
 KEEP_OPS = 8
@@ -118,16 +118,21 @@ def readable_form(defs, order, locals_, final, names, rates, outputs, updates) -
         return expr.xreplace(deps) if deps else expr
 
     f, h, upd = [short(e) for e in rates], [short(e) for e in outputs], [short(e) for e in updates]
-    # drop assignments nothing uses (walk back from the results)
-    bodies = dict(kept)
-    needed, stack = set(), [s for e in (*f, *h, *upd) for s in e.free_symbols if s in bodies]
+    kept = needed_assignments(kept, (*f, *h, *upd))   # drop assignments nothing uses
+    return Readable(_grouped(kept), tuple(f), tuple(h), tuple(upd))
+
+
+def needed_assignments(assignments, exprs) -> list:
+    """The ``(symbol, body)`` pairs of `assignments` that `exprs` use, directly or through
+    other assignments, in their given order (a walk back from the expressions)."""
+    bodies = dict(assignments)
+    needed, stack = set(), [s for e in exprs for s in sp.sympify(e).free_symbols if s in bodies]
     while stack:
         s = stack.pop()
         if s not in needed:
             needed.add(s)
             stack += [d for d in bodies[s].free_symbols if d in bodies]
-    kept = [(s, e) for s, e in kept if s in needed]
-    return Readable(_grouped(kept), tuple(f), tuple(h), tuple(upd))
+    return [(s, e) for s, e in assignments if s in needed]
 
 
 def _grouped(kept: list) -> tuple:

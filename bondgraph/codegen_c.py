@@ -79,6 +79,7 @@ import math
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
+from .assignments import needed_assignments
 from .codegen_c_templates import BATCH_HEAD, newton_source, rk4_source
 from .derivatives import NotDifferentiable, diff_almost_everywhere
 from .errors import ArgumentError, CompilationError
@@ -157,14 +158,7 @@ def _statements(targets: list, prelude) -> tuple[list, list]:
     expr)`` in an evaluation order, and each target over them."""
     from graphlib import TopologicalSorter
 
-    bodies = dict(prelude)
-    needed, stack = [], [s for _, e in targets for s in sp.sympify(e).free_symbols if s in bodies]
-    while stack:
-        s = stack.pop()
-        if s not in needed:
-            needed.append(s)
-            stack += [d for d in bodies[s].free_symbols if d in bodies]
-    pre = [(s, e) for s, e in prelude if s in needed]
+    pre = needed_assignments(prelude, [e for _, e in targets])
     exprs = [prepare_expression(e) for _, e in pre] + [prepare_expression(e) for _, e in targets]
     used = set().union(*(e.free_symbols for e in exprs))
     temps = sp.numbered_symbols("w", exclude=used)

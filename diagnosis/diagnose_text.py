@@ -93,24 +93,15 @@ def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, r
 
 def _why_none(nominal, fits, rounds) -> str:
     """Which rule of :func:`diagnosis.fit.choose` answered none, with the numbers."""
-    from .fit import MIN_GAIN, MIN_SHARE, _excess
+    from .fit import MIN_GAIN, MIN_SHARE, acceptance, needs_explaining, usable_fits
     floor = (rounds[0].get("floor") if rounds else None) or {}
-    names = list(nominal)
-    significant = [o for o in names if nominal[o] ** 2 - floor.get(o, 0.0) ** 2
-                   > max(0.1 * floor.get(o, 0.0) ** 2, 1e-6)]
-    if not significant:
+    if not needs_explaining(nominal, floor):
         return "the nominal model's held-out error stays within the measurement noise"
-    usable = [f for f in fits if f.success and f.holdout_nrmse
-              and all(np.isfinite(f.holdout_nrmse.get(o, np.nan)) for o in names)]
+    usable = usable_fits(fits, list(nominal))
     if not usable:
         return f"none of the {len(fits)} candidate fits succeeded"
-    e0 = _excess(nominal, floor, significant)
-    if not np.isfinite(e0):
-        e0 = _excess({o: 1.0 for o in names}, floor, significant)
-    best = min(usable, key=lambda f: _excess(f.holdout_nrmse, floor, significant))
-    share = 1.0 - _excess(best.holdout_nrmse, floor, significant) / e0
-    before = sum(min(nominal[o], 1e300) ** 2 for o in significant)
-    gain = 1.0 - np.sqrt(sum(best.holdout_nrmse[o] ** 2 for o in significant) / before)
+    best = max(usable, key=lambda f: acceptance(nominal, f, floor)[0])
+    share, gain = acceptance(nominal, best, floor)
     return (f"the best candidate ({best.candidate or 'nominal refit'}) explains {100 * share:.0f} % of the "
             f"held-out error beyond the noise and lowers its NRMSE by {100 * gain:.0f} % (at least "
             f"{100 * MIN_SHARE:.0f} % and {100 * MIN_GAIN:.0f} % are required)")

@@ -25,12 +25,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-
 from .catalogue_common import ParamSpec
 from .errors import BondcosimError, DiagnosisError
 
-__all__ = ["CandidateFit", "fit_candidate", "choose", "noise_floor", "PARAMETER_PRICE", "MIN_SHARE", "MIN_GAIN",
-           "TIE"]
+__all__ = ["CandidateFit", "fit_candidate", "choose", "noise_floor", "needs_explaining", "usable_fits",
+           "acceptance", "PARAMETER_PRICE", "MIN_SHARE", "MIN_GAIN", "TIE"]
 
 #: relative reduction of the held-out excess error each extra parameter must buy
 PARAMETER_PRICE = 0.10
@@ -381,8 +380,10 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
        them apart (a constant load and a sensor offset look alike once a
        transient is over).  Among
        tied fits: fewer parameters, then the smaller training error (where the
-       start of the record may tell them apart), then the smaller raw held-out
-       error, then catalogue order.
+       start of the record may tell them apart; within 2 % again a tie), then
+       catalogue order (effects exactly equivalent on the data, such as a
+       sensor offset and a constant load on a linear spring, go to the simpler
+       reading: a sensor before a change of the dynamics).
     3. The winner must explain at least :data:`MIN_SHARE` (30 %) of :math:`E_0`
        (for a nominal whose held-out error is infinite, a diverging one, :math:`E_0`
        is the excess error of predicting each output's mean, NRMSE 1), and lower
@@ -418,15 +419,11 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
     from .catalogue import KINDS
     floor = dict(noise or {})
     names = list(nominal_holdout)
-    significant = [o for o in names if nominal_holdout[o] ** 2 - floor.get(o, 0.0) ** 2
-                   > max(0.1 * floor.get(o, 0.0) ** 2, _EXPLAINED)]
+    significant = needs_explaining(nominal_holdout, floor)
     if not significant:
         return None
-    e0 = _excess(nominal_holdout, floor, significant)
-    if not np.isfinite(e0):     # a diverging nominal: the reference is predicting each output's mean
-        e0 = _excess({o: 1.0 for o in names}, floor, significant)
-    usable = [f for f in fits if f.success and f.holdout_nrmse
-              and all(np.isfinite(f.holdout_nrmse.get(o, np.nan)) for o in names)]
+    e0 = _reference_excess(nominal_holdout, floor, significant)
+    usable = usable_fits(fits, names)
     if not usable:
         return None
 
@@ -451,8 +448,40 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
     lowest = min(train(f) for f in tied)
     tied = [f for f in tied if train(f) <= lowest * (1 + TIE) ** 2] or tied
     best = min(tied, key=order)
-    share = 1.0 - _excess(best.holdout_nrmse, floor, significant) / e0
-    before = sum(nominal_holdout[o] ** 2 for o in significant)
-    after = sum(best.holdout_nrmse[o] ** 2 for o in significant)
-    gain = 1.0 - np.sqrt(after / before) if np.isfinite(before) and before > 0 else 1.0
+    share, gain = acceptance(nominal_holdout, best, floor)
     return best if share >= MIN_SHARE and gain >= MIN_GAIN else None
+
+
+def needs_explaining(nominal_holdout: dict, floor: dict) -> list:
+    """The outputs whose nominal held-out excess over the noise floor counts (rule 1 of
+    :func:`choose`): above a tenth of the floor's square and above rounding."""
+    return [o for o in nominal_holdout if nominal_holdout[o] ** 2 - floor.get(o, 0.0) ** 2
+            > max(0.1 * floor.get(o, 0.0) ** 2, _EXPLAINED)]
+
+
+def usable_fits(fits, names) -> list:
+    """The fits :func:`choose` considers: successful, with a finite held-out NRMSE on every output."""
+    return [f for f in fits if f.success and f.holdout_nrmse
+            and all(np.isfinite(f.holdout_nrmse.get(o, np.nan)) for o in names)]
+
+
+def _reference_excess(nominal_holdout: dict, floor: dict, significant) -> float:
+    """:math:`E_0` of :func:`choose`; for a diverging nominal (infinite error) that of predicting
+    each output's mean (NRMSE 1)."""
+    e0 = _excess(nominal_holdout, floor, significant)
+    return e0 if np.isfinite(e0) else _excess({o: 1.0 for o in nominal_holdout}, floor, significant)
+
+
+def acceptance(nominal_holdout: dict, fit, floor: dict) -> tuple[float, float]:
+    """``(share, gain)`` of `fit` in rule 3 of :func:`choose`: the share of the nominal held-out
+    excess error it explains, and the relative reduction of the held-out NRMSE (root sum of
+    squares) of the outputs that need explaining (1 for a diverging nominal)."""
+    significant = needs_explaining(nominal_holdout, floor)
+    if not significant:
+        return 0.0, 0.0
+    e0 = _reference_excess(nominal_holdout, floor, significant)
+    share = 1.0 - _excess(fit.holdout_nrmse, floor, significant) / e0
+    before = sum(nominal_holdout[o] ** 2 for o in significant)
+    after = sum(fit.holdout_nrmse[o] ** 2 for o in significant)
+    gain = 1.0 - np.sqrt(after / before) if np.isfinite(before) and before > 0 else 1.0
+    return share, float(gain)

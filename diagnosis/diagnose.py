@@ -166,15 +166,17 @@ def _start_inconsistent(res, diverged, n_train) -> bool:
     return False
 
 
-def _nominal_residuals(sim, graph, exp, x0, residuals, SimulationError):
+def _nominal_residuals(sim, graph, exp, x0):
     """The nominal residuals from `x0`, and ``""`` or the message of its divergence."""
+    from .errors import SimulationError
+    from .residuals import residuals
     try:
         return residuals(graph, exp, simulator=sim, x0=x0), ""
     except SimulationError as exc:        # evidence of missing physics, not an error
-        return _diverged_residuals(sim, exp, x0), str(exc)
+        return _diverged_residuals(sim, exp), str(exc)
 
 
-def _diverged_residuals(sim, experiment, x0):
+def _diverged_residuals(sim, experiment):
     """Residuals of a nominal model whose simulation left the finite numbers: NaN simulated
     outputs and states (nothing of the run is used), noise from the measurements alone."""
     from .residuals import Residuals, SimRun, noise_sigma
@@ -283,8 +285,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     from .initial_state import estimate_initial_state
     from .locate import locate_regime, regime_variables, significant_windows
     from .recording import bind
-    from .residuals import OutputSimulator, nrmse, residuals
-    from .errors import SimulationError
+    from .residuals import OutputSimulator, nrmse
 
     if int(top) < 1:
         raise DiagnosisError(f"top must be a positive number of places; found {top!r}")
@@ -300,7 +301,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
 
     say("nominal simulation", f"{exp.t.size} samples, {exp.span[1] - exp.span[0]:.4g} s")
     sim = OutputSimulator(graph, exp)
-    res, diverged = _nominal_residuals(sim, graph, exp, x0, residuals, SimulationError)
+    res, diverged = _nominal_residuals(sim, graph, exp, x0)
     res.noise.update(_noise_overrides(noise, exp))
     n_train = train.t.size
     start = "the given initial state" if x0 is not None else "the model's initial state"
@@ -312,7 +313,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         start = est.description
         if est.samples:
             x0 = est.values
-            res, diverged = _nominal_residuals(sim, graph, exp, x0, residuals, SimulationError)
+            res, diverged = _nominal_residuals(sim, graph, exp, x0)
             res.noise.update(_noise_overrides(noise, exp))
     if diverged:
         say("nominal diverges", diverged)

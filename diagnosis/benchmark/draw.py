@@ -334,7 +334,7 @@ def _calibrate(rec: Realised, rng) -> None:
         raise BenchmarkError(f"{spec.label}: no finite truth run while sizing the effect")
     eff, out, name, c, m = best
     rec.effect, rec.truth, rec.affected, rec.change = eff, out, name, c
-    rec.calibration_runs = runs + 0
+    rec.calibration_runs = runs
     diff_rms = c * float(np.std(rec.nominal[name]))
     share = diff_rms / spec.ratio / max(float(np.std(rec.nominal[name])), 1e-300)
     rec.sigma = {o.name: (diff_rms / spec.ratio if o.name == name else share * float(np.std(rec.nominal[o.name])))

@@ -16,8 +16,8 @@ import dataclasses
 import time
 
 from bondgraph import library
-from bondgraph.c_build import compile_source, find_compiler
-from bondgraph.codegen_c import generate_source
+from bondgraph.numerics.c_build import compile_source, find_compiler
+from bondgraph.numerics.codegen_c import generate_source
 from bondgraph.library.chain import mass_spring_chain
 
 

@@ -57,7 +57,7 @@ TARGET_US, TARGET_RATIO = 35.0, 10.0
 
 def setup(steps: int, seed: int = 1) -> dict:
     """Compiled pam model, state map and a recording of ``steps + 1`` samples."""
-    from bondgraph.evaluate import compile_model
+    from bondgraph.numerics.evaluate import compile_model
     from bondgraph.library import build
     from estimators import StateMap
 

@@ -203,7 +203,7 @@ def _numbers(items, what: str = "--param") -> dict[str, float]:
 
 
 def _cmd_simulate(args) -> int:
-    from bondgraph.simulation import simulate
+    from bondgraph.numerics.simulation import simulate
     from .models import load_model
     graph = load_model(args.model)
     params = _numbers(args.param)
@@ -214,7 +214,7 @@ def _cmd_simulate(args) -> int:
         except ValueError:
             inputs[name] = text
     if args.stream:
-        from bondgraph.simulation_stream import simulate_to_csv
+        from bondgraph.numerics.simulation_stream import simulate_to_csv
         if args.output_interval is None or args.plot:
             raise ParameterError("--stream needs --output-interval and cannot --plot (the result is never "
                                  "all in memory)", name="--stream")

@@ -32,7 +32,7 @@ def run_demo(output_dir="demo-output", *, quick: bool = False) -> dict:
     import matplotlib
     matplotlib.use("Agg")
     from bondgraph import library
-    from bondgraph.simulation import simulate
+    from bondgraph.numerics.simulation import simulate
 
     out = Path(output_dir)
     out.mkdir(parents=True, exist_ok=True)

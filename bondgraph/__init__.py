@@ -3,8 +3,9 @@
 Build a :class:`BondGraph` from elements (``Se, Sf, MSe, MSf, I, C, R, TF,
 GY, MTF, MGY, Zero, One, CField, IField, EquationElement``), connect them with
 bonds, state physical-domain conditions with :class:`Guard`, and derive explicit state equations with :meth:`BondGraph.equations`
-(a :class:`StateEquations`).  ``simulate``, ``compile_model`` and
-``linearize`` turn those into numbers.
+(a :class:`StateEquations`), and linearise them (``linearize``, a :class:`LinearModel`).
+The numerics (C generation, compiled evaluation, ``simulate``, results) are in
+:mod:`bondgraph.numerics`, which imports this language and is never imported by it.
 """
 from .elements import (C, CField, EquationElement, GY, I, IField, MGY, MSe, MSf, MTF, One, R, Se, Sf, TF,
                        Zero, Element, ELEMENT_KINDS)
@@ -22,13 +23,11 @@ __all__ = [
     "Zero", "One", "CField", "IField", "EquationElement", "Guard", "DomainError",
     "BondcosimError", "GraphError", "CausalityError", "DerivationError", "DuplicateNameError",
     "ExpressionError", "JunctionError", "ParameterError", "PortError", "SchemaError",
-    "UnknownElementKindError", "UnknownNameError", "simulate", "compile_model", "linearize", "LinearModel",
+    "UnknownElementKindError", "UnknownNameError", "linearize", "LinearModel",
 ]
 
 
-_LAZY = {  # numerics are imported on first use: fast CLI start
-    "simulate": ("simulation", "simulate"),
-    "compile_model": ("evaluate", "compile_model"),
+_LAZY = {  # imported on first use: fast CLI start
     "linearize": ("linearization", "linearize"),
     "LinearModel": ("linear_model", "LinearModel"),
 }

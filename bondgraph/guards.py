@@ -11,7 +11,7 @@ derivation carries them into :attr:`StateEquations.guards
 <bondgraph.system.StateEquations.guards>` as :class:`DerivedGuard` (the
 expression in the model's symbols), and
 
-* :func:`bondgraph.simulate` raises :class:`~bondgraph.errors.DomainError`
+* :func:`bondgraph.numerics.simulate` raises :class:`~bondgraph.errors.DomainError`
   at the first recorded time point where one is left;
 * an exported FMU evaluates them after every internal solver sub-step and
   ends the step with ``fmi2Discard`` / ``fmi3Discard``, naming the guard, its

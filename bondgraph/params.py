@@ -33,7 +33,7 @@ class Param:
     min, max : float, optional
         Physical range of `value` (inclusive, same unit), e.g. ``min=0`` for a
         mass; a value outside it is a :class:`ParameterError` here, in
-        :func:`bondgraph.simulate` and when an FMU parameter is set.
+        :func:`bondgraph.numerics.simulate` and when an FMU parameter is set.
     """
 
     name: str

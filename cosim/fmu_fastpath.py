@@ -6,7 +6,7 @@ outputs do not depend on its inputs at the same instant, the outputs at
 :math:`t + \\Delta t` are known as soon as ``doStep`` returns, so a tiny C
 function makes the three calls through the FMU's own function pointers in one
 go.  It is compiled once per machine (cached like the model kernels, see
-:func:`bondgraph.c_build.compile_source`); without a C compiler
+:func:`bondgraph.numerics.c_build.compile_source`); without a C compiler
 :func:`advance_function` returns None and the component makes the three calls.
 """
 from __future__ import annotations
@@ -66,7 +66,7 @@ int bc_advance3(void *set, void *step, void *get, void *c,
 
 @functools.cache
 def _library():
-    from bondgraph.c_build import compile_source
+    from bondgraph.numerics.c_build import compile_source
     from cosim.errors import CompilationError
     try:
         lib = ctypes.CDLL(str(compile_source(_SOURCE)))

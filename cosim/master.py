@@ -42,8 +42,8 @@ import time as _time
 import numpy as np
 
 from cosim.errors import BondcosimError, CosimError, SimulationError, UnitError
-from bondgraph.progress import Progress
-from bondgraph.results import SimulationResult
+from bondgraph.numerics.progress import Progress
+from bondgraph.numerics.results import SimulationResult
 from bondgraph.units import parse_unit
 
 from .component import Component, PythonBlock
@@ -60,7 +60,7 @@ class CosimResult(SimulationResult):
     Outputs have kind ``"output"``, inputs ``"input"``; ``info`` holds
     ``step`` (s), ``n_steps``, ``t0``, ``t_end`` (s), ``wall_time`` (s),
     ``order`` (component names in execution order, repeats for passes) and
-    ``connections``.  CSV and plotting as :class:`~bondgraph.results.SimulationResult`.
+    ``connections``.  CSV and plotting as :class:`~bondgraph.numerics.results.SimulationResult`.
     """
 
     __slots__ = ()

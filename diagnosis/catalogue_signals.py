@@ -85,7 +85,7 @@ def resting_input(graph, u: str, recorded) -> float:
     on the input at all (nothing says where it rested: the actuator is taken to have
     followed its first command).
     """
-    from bondgraph.evaluate import compile_model
+    from bondgraph.numerics.evaluate import compile_model
     decl = next(d for d in graph.inputs() if d.name == u)
     first = float(recorded[0]) if recorded is not None else float(decl.default)
     options = (0.0, float(decl.default), first)

@@ -50,7 +50,7 @@ class LinearisedResponse:
 
     Parameters
     ----------
-    compiled : bondgraph.evaluate.CompiledModel
+    compiled : bondgraph.numerics.evaluate.CompiledModel
         The model the run was made with.
     run : diagnosis.residuals.SimRun
         States and inputs at the sample times.

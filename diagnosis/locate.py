@@ -149,7 +149,7 @@ def regime_variables(model, experiment, x_sim) -> dict:
     if not isinstance(model, StateEquations):
         extra = _augmented_outputs(model, eqs)
         if extra:
-            from bondgraph.evaluate import compile_model
+            from bondgraph.numerics.evaluate import compile_model
             from bondgraph.io_json import graph_from_dict
 
             aug = graph_from_dict(model.to_dict())

@@ -4,14 +4,14 @@
 experiment's time grid as often as a fit needs: recorded inputs are
 zero-order held over each sample interval (as a co-simulation master holds
 them), and each interval is integrated by the compiled classic RK4 of
-:mod:`bondgraph.evaluate` (``rk4_step``) in equal sub-steps no longer than
+:mod:`bondgraph.numerics.evaluate` (``rk4_step``) in equal sub-steps no longer than
 
 * the model's ``fixed_step`` (held variables such as Kikuuwe friction), and
 * for smooth models :math:`0.5 / \\lambda_{max}`, with :math:`\\lambda_{max}`
   the largest eigenvalue modulus of :math:`\\partial f/\\partial x` at the
   initial point (RK4 stays accurate for :math:`h|\\lambda| \\le 0.5`).
 
-This is the fixed-step scheme of :func:`bondgraph.simulate` with the sample
+This is the fixed-step scheme of :func:`bondgraph.numerics.simulate` with the sample
 intervals of the recording as output intervals, uneven sampling included;
 unlike ``simulate`` it does not restart an adaptive solver at every table
 breakpoint, so a 1 kHz recording costs one compiled call per sample.
@@ -114,7 +114,7 @@ class OutputSimulator:
         Outputs to return; default the experiment's outputs (all model outputs
         if it has none).
     backend : {"auto", "c", "numpy"}
-        Evaluator backend (:func:`bondgraph.compile_model`).
+        Evaluator backend (:func:`bondgraph.numerics.compile_model`).
 
     Examples
     --------
@@ -130,7 +130,7 @@ class OutputSimulator:
 
     def __init__(self, model, experiment, *, outputs=None, backend: str = "auto"):
         from diagnosis.errors import UnknownNameError
-        from bondgraph.evaluate import compile_model
+        from bondgraph.numerics.evaluate import compile_model
         from bondgraph.system import StateEquations
 
         self.equations = model if isinstance(model, StateEquations) else model.equations()
@@ -150,7 +150,7 @@ class OutputSimulator:
     def on(self, experiment) -> "OutputSimulator":
         """The same compiled model and outputs on another experiment's grid and inputs.
 
-        Compiling a model (:func:`bondgraph.compile_model`) takes about 0.2 s on pam; a fit
+        Compiling a model (:func:`bondgraph.numerics.compile_model`) takes about 0.2 s on pam; a fit
         that simulates the training and the held-out part reuses it.
 
         Parameters

@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bondgraph.progress import Progress
+from bondgraph.numerics.progress import Progress
 from estimators.errors import EstimatorError
 
 from .ukf_checks import check_covariance, check_vector, raise_problems, validate_setup
@@ -130,7 +130,7 @@ class UnscentedKalmanFilter:
         Parameters
         ----------
         model : BondGraph, StateEquations or CompiledModel
-            The model (compiled with :func:`~bondgraph.evaluate.compile_model`
+            The model (compiled with :func:`~bondgraph.numerics.evaluate.compile_model`
             and `backend` unless already compiled).
         dt : float, s
             Sample time: the process model is one sample of fixed-step RK4,
@@ -158,7 +158,7 @@ class UnscentedKalmanFilter:
             Engine; ``"auto"`` is ``"c"`` when a C compiler is available and
             the model has no algebraic unknowns.
         backend : {"auto", "c", "numpy"}
-            Backend of :func:`~bondgraph.evaluate.compile_model` for the numpy engine.
+            Backend of :func:`~bondgraph.numerics.evaluate.compile_model` for the numpy engine.
 
         Returns
         -------
@@ -171,7 +171,7 @@ class UnscentedKalmanFilter:
         UnknownNameError
             An unknown output name.
         """
-        from bondgraph.evaluate import CompiledModel, compile_model
+        from bondgraph.numerics.evaluate import CompiledModel, compile_model
 
         from .ukf_c import CEngine, c_engine_available
 

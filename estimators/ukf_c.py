@@ -1,7 +1,7 @@
 """The UKF step as one compiled C call: the fast engine of a model-based filter.
 
 :class:`CEngine` generates (:func:`estimators.ukf_c_source.ukf_source`),
-compiles and caches (:func:`bondgraph.c_build.compile_source`) and loads the
+compiles and caches (:func:`bondgraph.numerics.c_build.compile_source`) and loads the
 step kernel of one model and filter configuration, owns its workspace (one
 ``double`` array whose numpy views are the filter's state), and calls
 ``bc_ukf_predict`` / ``bc_ukf_update`` / ``bc_ukf_run`` through ctypes with
@@ -17,8 +17,8 @@ import weakref
 
 import numpy as np
 
-from bondgraph.c_build import compile_source, find_compiler
-from bondgraph.codegen_c import generate_source
+from bondgraph.numerics.c_build import compile_source, find_compiler
+from bondgraph.numerics.codegen_c import generate_source
 from estimators.errors import EstimatorError
 
 from .ukf_c_source import STATUS, layout, ukf_source

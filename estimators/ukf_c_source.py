@@ -1,9 +1,9 @@
 """C source of the UKF step kernel: the model's generated C plus one fixed UKF template.
 
 :func:`ukf_source` appends :data:`UKF_TEMPLATE` to the model's ``"main"``
-library source (:func:`bondgraph.codegen_c.generate_source`: row kernels,
+library source (:func:`bondgraph.numerics.codegen_c.generate_source`: row kernels,
 ``bc_rk4``) and fills in the sizes and the workspace layout.  The result is one
-translation unit, compiled and cached by :func:`bondgraph.c_build.compile_source`.
+translation unit, compiled and cached by :func:`bondgraph.numerics.c_build.compile_source`.
 
 C contract
 ----------
@@ -326,7 +326,7 @@ def ukf_source(model_source: str, *, nf: int, nm: int, nu: int, nd: int, npar: i
     Parameters
     ----------
     model_source : str
-        :func:`bondgraph.codegen_c.generate_source` of the model (``part="main"``),
+        :func:`bondgraph.numerics.codegen_c.generate_source` of the model (``part="main"``),
         which defines ``h_row`` and ``bc_rk4``; the model must have no algebraic unknowns.
     nf, nm : int
         Filter and model state dimensions (equal; kept apart for clarity).

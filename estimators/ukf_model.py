@@ -1,6 +1,6 @@
 """A bond-graph model as the UKF's process and measurement model.
 
-:class:`ModelFunctions` turns a :class:`~bondgraph.evaluate.CompiledModel` into
+:class:`ModelFunctions` turns a :class:`~bondgraph.numerics.evaluate.CompiledModel` into
 the discrete process model of the filter: one sample :math:`\\Delta t` of the
 model's fixed-step RK4 (``substeps`` classic sub-steps, inputs held), every
 sigma point in one batched call, and the measurement model: named outputs of
@@ -135,7 +135,7 @@ class StateMap:
 
 def substeps_for(eqs, dt: float, substeps: int | None) -> int:
     """Sub-steps per sample: `substeps`, else the fewest with a sub-step no longer than
-    the model's ``fixed_step`` (1 for a smooth model), as :func:`~bondgraph.simulation.simulate`."""
+    the model's ``fixed_step`` (1 for a smooth model), as :func:`~bondgraph.numerics.simulation.simulate`."""
     if substeps is not None:
         if int(substeps) != substeps or substeps < 1:
             raise EstimatorError(f"substeps must be an integer >= 1; found {substeps!r}", "substeps")
@@ -160,7 +160,7 @@ class ModelFunctions:
     state_map : StateMap or None
         None: the filter's state is the model's.
     params : None, dict or array_like
-        Model parameters (see :class:`~bondgraph.evaluate.CompiledModel`).
+        Model parameters (see :class:`~bondgraph.numerics.evaluate.CompiledModel`).
 
     Attributes
     ----------

@@ -2,7 +2,8 @@
 
 Run:  python examples/errors.py
 """
-from bondgraph import library, simulate
+from bondgraph import library
+from bondgraph.numerics import simulate
 from bondgraph.errors import BondcosimError
 
 

@@ -10,7 +10,8 @@ Run:  python examples/pneumatic_cylinder.py [output_dir]
 import sys
 from pathlib import Path
 
-from bondgraph import BondGraph, C, EquationElement, I, MSf, One, R, simulate
+from bondgraph import BondGraph, C, EquationElement, I, MSf, One, R
+from bondgraph.numerics import simulate
 
 
 def build() -> BondGraph:

@@ -5,7 +5,8 @@ Run:  python examples/quickstart.py [output_dir]
 import sys
 from pathlib import Path
 
-from bondgraph import BondGraph, C, I, One, R, Se, simulate
+from bondgraph import BondGraph, C, I, One, R, Se
+from bondgraph.numerics import simulate
 
 
 def build() -> BondGraph:

@@ -5,7 +5,8 @@ Run:  python examples/results_to_pandas.py [output_dir]     (needs pandas and xa
 import sys
 from pathlib import Path
 
-from bondgraph import library, simulate
+from bondgraph import library
+from bondgraph.numerics import simulate
 
 
 def main(output_dir="."):

@@ -1,6 +1,6 @@
 """Compile an FMU's shared library from generated files and the fixed wrappers in ``fmus/c/``.
 
-Builds are cached in :func:`bondgraph.c_build.cache_dir` by the sha256 of
+Builds are cached in :func:`bondgraph.numerics.c_build.cache_dir` by the sha256 of
 every source file, the compiler and the flags, so exporting the same model
 twice compiles once.
 """
@@ -12,7 +12,7 @@ import subprocess
 import tempfile
 from pathlib import Path
 
-from bondgraph.c_build import cache_dir, find_compiler
+from bondgraph.numerics.c_build import cache_dir, find_compiler
 from fmus.errors import CompilationError
 
 __all__ = ["compile_fmu_binary", "fmi_headers", "fixed_sources", "fmi_header_files", "WRAPPERS",

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import json
 
-from bondgraph.codegen_c_templates import NEWTON_STATUS
+from bondgraph.numerics.codegen_c_templates import NEWTON_STATUS
 
 __all__ = ["model_header"]
 

@@ -2,9 +2,9 @@
 
 The FMU's C is generated in three parts:
 
-* ``model_kernels.c`` -- the row kernels of :mod:`bondgraph.codegen_c`
+* ``model_kernels.c`` -- the row kernels of :mod:`bondgraph.numerics.codegen_c`
   (f, h, held-variable updates, the Newton solver of algebraic loops and the
-  RK4 driver ``bc_rk4``), the same code :func:`bondgraph.simulate` runs;
+  RK4 driver ``bc_rk4``), the same code :func:`bondgraph.numerics.simulate` runs;
 * ``model.h`` -- sizes, value references, start values (:mod:`fmus.c_header`);
 * one fixed wrapper per FMI version in ``fmus/c/`` on top of the
   version-independent ``bc_fmu_core.h``,
@@ -17,7 +17,7 @@ from them alone.
 Co-Simulation integrates with classic RK4 in equal sub-steps no longer than
 the ``solver_step`` parameter, inputs held over the communication step and
 held variables updated at each sub-step start -- exactly
-:func:`bondgraph.simulate`'s fixed-step scheme.  Model Exchange is offered
+:func:`bondgraph.numerics.simulate`'s fixed-step scheme.  Model Exchange is offered
 only for smooth models (no held variables, no ``fixed_step``): a model that
 needs a fixed step cannot honour an external integrator's steps.
 """
@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
-from bondgraph.codegen_c import generate_source, guard_source
+from bondgraph.numerics.codegen_c import generate_source, guard_source
 from bondgraph.guards import check_param_bounds
 from fmus.errors import FMUError, FMUModelTypeError, ParameterError
 

@@ -14,7 +14,7 @@ What is cheap to ship, and so shipped instead of rebuilt:
 - a model's :class:`~bondgraph.equations.StateEquations` (some 17 kB,
   cloudpickled): deriving them takes ~1 s (``pam``); their compiled C
   evaluator is looked up by content hash in the bondgraph cache
-  (:func:`bondgraph.c_build.cache_dir`), so it is compiled at most once per
+  (:func:`bondgraph.numerics.c_build.cache_dir`), so it is compiled at most once per
   machine -- never per task -- and not at all on a shared cache directory.
 """
 from __future__ import annotations
@@ -135,7 +135,7 @@ class ScenarioRunner:
 
 
 class ModelRunner:
-    """Simulates a bond-graph model open loop per call (:func:`bondgraph.simulation.simulate`).
+    """Simulates a bond-graph model open loop per call (:func:`bondgraph.numerics.simulation.simulate`).
 
     Metrics are statistics of every output (``NAME.final``, ``.mean``, ``.min``,
     ``.max``, ``.rms``, ``.std``, the output's unit); the outputs named in the
@@ -181,7 +181,7 @@ class ModelRunner:
         """Nothing to build: the equations were derived in the constructor."""
 
     def __call__(self, params: dict, seed: int) -> dict:
-        from bondgraph.simulation import simulate
+        from bondgraph.numerics.simulation import simulate
         t = self.target
         res = simulate(self.eqs, (0.0, t.stop_time), inputs=dict(t.inputs), params={**self.fixed, **params},
                        output_interval=t.output_interval)

@@ -16,7 +16,7 @@ import sympy as sp
 from bondcosim.cli import main
 from bondgraph import library
 from bondgraph.assignments import substitute
-from bondgraph.evaluate import compile_model
+from bondgraph.numerics.evaluate import compile_model
 from bondgraph.io_json import dumps, graph_from_dict
 
 MODELS = library.names()
@@ -83,7 +83,7 @@ def test_pam_names_its_intermediates_and_stays_short():
 
 def test_pam_compiled_from_assignments_matches_the_flat_numpy_evaluator():
     """C code (built from the assignments) vs numpy (lambdified flat f), random states."""
-    from bondgraph.c_build import find_compiler
+    from bondgraph.numerics.c_build import find_compiler
     if find_compiler() is None:
         pytest.skip("no C compiler")
     eqs = library.build("pam").equations()

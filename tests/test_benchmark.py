@@ -1,7 +1,7 @@
 """The generalisation benchmark's machinery: truth plants, effects, case drawing, scoring.
 
 The truth plants are hand-written state equations; here they are checked
-against the library's bond graphs (``bondgraph.simulate``), and the effects
+against the library's bond graphs (``bondgraph.numerics.simulate``), and the effects
 against closed forms.  One small seeded run diagnoses two cases end to end.
 """
 from __future__ import annotations
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import bondgraph.library as library
-from bondgraph import simulate
+from bondgraph.numerics import simulate
 from diagnosis.benchmark import plants_textbook as tb
 from diagnosis.benchmark.draw import CaseSpec, draw_cases, realise
 from diagnosis.benchmark.effects import KIND_PLACES, make_effect, places_for

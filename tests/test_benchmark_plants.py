@@ -1,7 +1,7 @@
 """Each benchmark truth plant (hand-written numpy) against the library graph it mirrors.
 
 Random zero-order-held inputs within the plant's InputSpecs drive both
-``simulate_truth(plant, ...)`` and ``bondgraph.simulate`` of
+``simulate_truth(plant, ...)`` and ``bondgraph.numerics.simulate`` of
 ``library.build(plant.model)``; every output must agree to a small fraction
 of its spread.  The two codes share nothing but the equations on paper.
 """
@@ -10,7 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bondgraph import library, simulate
+from bondgraph import library
+from bondgraph.numerics import simulate
 from diagnosis.benchmark.plants import PLANTS, plant
 from diagnosis.benchmark.plants_cylinder import pneumatic_cylinder
 from diagnosis.benchmark.plants_drivetrain import carriage, drivetrain

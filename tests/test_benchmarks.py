@@ -9,7 +9,7 @@ def test_derivation_benchmark_runs(capsys, load_script):
 
 
 def test_codegen_benchmark_runs(capsys, load_script):
-    from bondgraph.c_build import find_compiler
+    from bondgraph.numerics.c_build import find_compiler
     if find_compiler() is None:
         import pytest
         pytest.skip("no C compiler")

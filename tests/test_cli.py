@@ -71,7 +71,7 @@ def test_draw_writes_a_png(tmp_path):
 
 
 def test_simulate_writes_csv_with_inputs_and_parameters(tmp_path):
-    from bondgraph.results import SimulationResult
+    from bondgraph.numerics.results import SimulationResult
     csv, png = tmp_path / "rlc.csv", tmp_path / "rlc.png"
     code = main(["simulate", "rlc", "--stop-time", "0.5", "--input", "V=2", "--param", "Rs=20",
                  "--output-interval", "0.01", "-o", str(csv), "--plot", str(png)])

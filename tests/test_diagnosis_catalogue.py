@@ -262,7 +262,7 @@ def test_built_candidate_exports_to_a_valid_fmu(tmp_path, kind, place):
     from fmpy import simulate_fmu
     from fmpy.validation import validate_fmu
     from fmus import export
-    from bondgraph import simulate
+    from bondgraph.numerics import simulate
     msd = library.build("mass-spring-damper")
     built = _one(msd, place, kind).build(msd)
     path = tmp_path / f"{kind}.fmu"

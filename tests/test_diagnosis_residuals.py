@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from bondgraph import library, simulate
+from bondgraph import library
+from bondgraph.numerics import simulate
 from bondgraph.errors import ParameterError, UnknownNameError
 from diagnosis.errors import DiagnosisError
 from diagnosis.recording import Experiment
@@ -52,7 +53,7 @@ def pam_run():
 
 
 def test_pam_equals_bondgraph_simulate(pam_run):
-    """Same fixed-step scheme as bondgraph.simulate (1 ms samples, 4 RK4 sub-steps, ZOH)."""
+    """Same fixed-step scheme as bondgraph.numerics.simulate (1 ms samples, 4 RK4 sub-steps, ZOH)."""
     exp, graph = pam_run
     ours = OutputSimulator(graph, exp)()
     ref = simulate(graph, exp.span, inputs={k: (exp.t, v) for k, v in exp.inputs.items()},

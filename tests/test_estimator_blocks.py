@@ -4,7 +4,7 @@ import pytest
 
 from bondgraph.blockdiagram import pam as pam_bd
 from bondgraph.errors import CosimError, UnknownNameError
-from bondgraph.evaluate import compile_model
+from bondgraph.numerics.evaluate import compile_model
 from bondgraph.library import build
 from cosim import CoSimulation, FMUComponent, Function
 from cosim.estimator_blocks import UKFBlock

@@ -1,5 +1,5 @@
 """FMU export: every exported FMU passes fmpy's validator and simulates in fmpy
-(Co-Simulation, and Model Exchange where offered) to :func:`bondgraph.simulate`'s result."""
+(Co-Simulation, and Model Exchange where offered) to :func:`bondgraph.numerics.simulate`'s result."""
 from __future__ import annotations
 
 import zipfile
@@ -74,7 +74,7 @@ def test_exported_fmu_validates_and_matches_the_python_model(exported, model, ve
 @pytest.mark.parametrize("version", VERSIONS)
 def test_pam_follows_a_changing_input_to_rounding(exported, version):
     """Inputs changed at every communication point (zero-order hold), held friction:
-    the FMU and bondgraph.simulate run the same kernel with the same steps (the
+    the FMU and bondgraph.numerics.simulate run the same kernel with the same steps (the
     sub-step differs in the last bits: simulate divides grid differences)."""
     dt, n = 1e-3, 2000
     t = np.arange(n + 1) * dt

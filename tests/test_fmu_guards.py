@@ -1,6 +1,6 @@
 """A step never lies: the cases measured in issue 12 (overflowing sub-step counts, unbounded
 doSteps, leaving the physical domain, NaN inputs, negative masses), driven through fmpy
-(FMI 2.0 and 3.0), through ``bondgraph.simulate`` and through the co-simulation master."""
+(FMI 2.0 and 3.0), through ``bondgraph.numerics.simulate`` and through the co-simulation master."""
 from __future__ import annotations
 
 import math
@@ -90,7 +90,7 @@ def test_max_substeps_is_a_parameter(fmu, version):
 @pytest.mark.parametrize("version", VERSIONS)
 def test_vented_frictionless_pam_is_discarded_when_a_chamber_volume_vanishes(fmu, version):
     # issue 12: pam-frictionless from vented muscles reached psi = 142 deg, P2 = 2.08e6 Pa, fmi2OK.
-    # Reference: bondgraph.simulate on the same RK4 sub-step also stops on a vanishing chamber.
+    # Reference: bondgraph.numerics.simulate on the same RK4 sub-step also stops on a vanishing chamber.
     path = fmu("pam-frictionless", version)
     h = 1e-3
     with open_slave(path) as s:

@@ -1,6 +1,6 @@
 """The variable-step Co-Simulation solver inside exported FMUs (issue 12, part 3):
 Dormand-Prince 5(4) with error control (``solver = 1``, ``tolerance``), against the analytic
-mass-spring-damper response, bondgraph.simulate (LSODA) on an algebraic-loop model, and the
+mass-spring-damper response, bondgraph.numerics.simulate (LSODA) on an algebraic-loop model, and the
 singularity of the vented frictionless PAM; fixed-step models refuse it."""
 from __future__ import annotations
 

@@ -12,7 +12,7 @@ from scipy.linalg import expm
 from scipy.optimize import brentq
 
 from bondgraph import library
-from bondgraph.simulation import simulate
+from bondgraph.numerics.simulation import simulate
 
 
 def _second_order_step(t, gain, wn, zeta):
@@ -91,7 +91,7 @@ def test_nonlinear_resistor_loop_matches_independent_solution(backend):
 
 
 def test_backends_agree_on_every_builtin_model(rng):
-    from bondgraph import compile_model
+    from bondgraph.numerics import compile_model
     for name in library.names():
         eqs = library.build(name).equations()
         c, py = compile_model(eqs, backend="c"), compile_model(eqs, backend="numpy")

@@ -1,6 +1,6 @@
 """Linearisation of every built-in model, switched laws included (bondgraph/linearization.py).
 
-References: the compiled right-hand side (bondgraph.evaluate, C backend when a compiler is there)
+References: the compiled right-hand side (bondgraph.numerics.evaluate, C backend when a compiler is there)
 differentiated by finite differences here, independently of the linearisation's own code; and,
 at a point where the PAM laws are differentiable, the symbolic Jacobian against the numerical one.
 """
@@ -14,7 +14,7 @@ import pytest
 from bondcosim.cli import main
 from bondgraph import library
 from bondgraph.errors import ParameterError
-from bondgraph.evaluate import compile_model
+from bondgraph.numerics.evaluate import compile_model
 
 
 @pytest.mark.parametrize("name", library.names())

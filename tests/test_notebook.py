@@ -6,9 +6,10 @@ import sys
 import numpy as np
 import pytest
 
-from bondgraph import library, simulate
+from bondgraph import library
+from bondgraph.numerics import simulate
 from bondgraph.errors import OptionalDependencyError
-from bondgraph.progress import Progress
+from bondgraph.numerics.progress import Progress
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""Compiled evaluators (bondgraph.codegen_c, bondgraph.evaluate) against independent references.
+"""Compiled evaluators (bondgraph.numerics.codegen_c, bondgraph.numerics.evaluate) against independent references.
 
 References: plain sympy ``xreplace`` + ``evalf`` of the same expressions (exact
 rational arithmetic up to float inputs), hand-written formulas, and central
@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from bondgraph import c_build, codegen_c
+from bondgraph.numerics import c_build, codegen_c
 from bondgraph.errors import CompilationError, ExpressionError, ParameterError, SimulationError
-from bondgraph.evaluate import compile_model
+from bondgraph.numerics.evaluate import compile_model
 from bondgraph.system import StateEquations
 
 BACKENDS = ["c", "numpy"]

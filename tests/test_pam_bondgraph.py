@@ -10,7 +10,8 @@ import math
 import numpy as np
 import pytest
 
-from bondgraph import ParameterError, compile_model, simulate
+from bondgraph import ParameterError
+from bondgraph.numerics import compile_model, simulate
 from bondgraph.library.pam import FRICTION_STEP, KAPPA_KNOTS, PARAMETERS, pam
 
 # Table II of [1], typed from the paper (last index of p_v/p_w = muscle, A_11 = A1, A_12 = A2,

@@ -8,7 +8,7 @@ import pytest
 
 from bondgraph.blockdiagram import pam as pam_bd
 from bondgraph.library.pam import FRICTION_STEP, PARAMETERS
-from bondgraph.simulation import simulate
+from bondgraph.numerics.simulation import simulate
 from cosim.scenarios import _pam_rig as rig
 from cosim.scenarios import pam_ukf
 from cosim.scenarios._pam_ukf_metrics import indices, max_index, ratio_index, rmse_index

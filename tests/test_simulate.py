@@ -1,4 +1,4 @@
-"""bondgraph.simulation and bondgraph.results against analytic and hand-written references."""
+"""bondgraph.numerics.simulation and bondgraph.numerics.results against analytic and hand-written references."""
 from __future__ import annotations
 
 import matplotlib
@@ -12,11 +12,11 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bondgraph import c_build
+from bondgraph.numerics import c_build
 from bondgraph.errors import ExpressionError, ParameterError, SimulationError
-from bondgraph.results import SimulationResult
+from bondgraph.numerics.results import SimulationResult
 from bondgraph.errors import UnknownNameError
-from bondgraph.simulation import simulate
+from bondgraph.numerics.simulation import simulate
 from bondgraph.system import StateEquations
 
 needs_cc = pytest.mark.skipif(c_build.find_compiler() is None, reason="no C compiler")

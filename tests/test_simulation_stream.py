@@ -1,6 +1,6 @@
-"""Streaming a simulation to CSV (bondgraph/simulation_stream.py, ``simulate --stream``).
+"""Streaming a simulation to CSV (bondgraph/numerics/simulation_stream.py, ``simulate --stream``).
 
-Reference: the same simulation in one call (bondgraph.simulation.simulate); fixed-step models
+Reference: the same simulation in one call (bondgraph.numerics.simulation.simulate); fixed-step models
 must agree to rounding, adaptive ones within the solver's tolerances.
 """
 from __future__ import annotations
@@ -9,10 +9,11 @@ import numpy as np
 import pytest
 
 from bondcosim.cli import main
-from bondgraph import library, simulate
+from bondgraph import library
+from bondgraph.numerics import simulate
 from bondgraph.errors import ArgumentError, OutputTooLargeError, UnknownNameError
-from bondgraph.results import SimulationResult
-from bondgraph.simulation_stream import simulate_to_csv
+from bondgraph.numerics.results import SimulationResult
+from bondgraph.numerics.simulation_stream import simulate_to_csv
 
 
 def test_fixed_step_pam_in_segments_equals_one_run(tmp_path):

@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 
 from bondgraph import library
-from bondgraph.simulation import simulate
+from bondgraph.numerics.simulation import simulate
 from cosim import scenarios
 from sweeps import MetricError, StoreError, montecarlo_spec, run_sweep, spec_from_dict
 

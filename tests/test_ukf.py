@@ -18,7 +18,7 @@ from filterpy.kalman import UnscentedKalmanFilter as FpUKF
 from filterpy.kalman import unscented_transform
 
 from bondgraph.errors import EstimatorError
-from bondgraph.evaluate import compile_model
+from bondgraph.numerics.evaluate import compile_model
 from bondgraph.library import build
 from estimators import JulierSigmaPoints, MerweScaledSigmaPoints, StateMap, UnscentedKalmanFilter
 

@@ -219,7 +219,7 @@ def compare_section_5_1(*, params: Mapping[str, float] | None = None, t_end: flo
         Horizon and sample spacing.
     """
     from ..library.exoskeleton import exoskeleton, parameter_values
-    from ..simulation import simulate
+    from ..numerics.simulation import simulate
 
     overrides = {"b_f": 0.0} if params is None else dict(params)
     values = parameter_values(overrides)

@@ -73,7 +73,7 @@ def compare_fig8(*, variant: str = "full", duration: float = 20.0, segment: floa
         Length of each step/ramp segment of the profile.
     """
     from ..library.pam import pam
-    from ..simulation import simulate
+    from ..numerics.simulation import simulate
 
     _, u = bd.fig8_profile(segment=segment)
     n = int(round(duration / bd.SAMPLE_TIME))

@@ -29,7 +29,7 @@ import numpy as np
 import bondgraph.library as library
 from bondgraph.blockdiagram import pam as pam_bd
 from cosim.errors import CosimError
-from bondgraph.evaluate import compile_model
+from bondgraph.numerics.evaluate import compile_model
 from estimators import DiscretePI, JulierSigmaPoints
 
 from ..blocks import Table

@@ -60,7 +60,7 @@ from bondgraph.blockdiagram import pam as pam_bd
 from bondgraph.library.pam import FRICTION_STEP, PARAMETERS as PAM_PARAMETERS, parameter_values
 from cosim.errors import ParameterError, UnknownNameError
 from bondgraph.params import Param
-from bondgraph.simulation import simulate
+from bondgraph.numerics.simulation import simulate
 from estimators import JulierSigmaPoints, UnscentedKalmanFilter
 from estimators.ukf_model import StateMap
 

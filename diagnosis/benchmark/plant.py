@@ -4,7 +4,7 @@ A :class:`TruthPlant` is a plant written directly as numpy state equations,
 independently of the bond-graph code and of the diagnosis catalogue (it
 imports neither), beside the name of the nominal library model it mirrors.
 With no effect, its outputs equal the nominal model's (a test checks every
-plant against ``bondgraph.simulate`` of its nominal model); a concealed effect
+plant against ``bondgraph.numerics.simulate`` of its nominal model); a concealed effect
 enters through one of four doors:
 
 * ``extra`` -- an effort added at a 1-junction or a flow added at a
@@ -163,7 +163,7 @@ class TruthPlant:
     nominal_x0 : dict, optional
         The nominal graph's initial state (its state names -> SI values) that
         equals :attr:`x0`, when :attr:`x0` is not the library graph's default
-        (pass it as ``x0`` to ``bondgraph.simulate``); ``None``: the default.
+        (pass it as ``x0`` to ``bondgraph.numerics.simulate``); ``None``: the default.
     feedthrough : bool
         ``measure`` takes a third argument, ``extra``: an output is a junction
         effort that an effect changes algebraically, with no storage between

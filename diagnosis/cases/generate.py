@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 import bondgraph.library as library
-from bondgraph import simulate
+from bondgraph.numerics import simulate
 
 from .definitions import CASES, Case
 from ..errors import DiagnosisError

@@ -25,7 +25,7 @@ from typing import Mapping
 
 import numpy as np
 
-from .errors import ArgumentError, UnknownSignalError
+from ..errors import ArgumentError, UnknownSignalError
 
 __all__ = ["SimulationResult", "KINDS"]
 
@@ -212,12 +212,12 @@ class SimulationResult:
 
     # -- plot --------------------------------------------------------------------
     def to_pandas(self):
-        """A ``pandas.DataFrame`` (index ``t``, s) with units in ``attrs`` (see :func:`bondgraph.results_export.to_pandas`)."""
+        """A ``pandas.DataFrame`` (index ``t``, s) with units in ``attrs`` (see :func:`bondgraph.numerics.results_export.to_pandas`)."""
         from .results_export import to_pandas
         return to_pandas(self)
 
     def to_xarray(self):
-        """An ``xarray.Dataset`` with a ``units`` attribute per variable (see :func:`bondgraph.results_export.to_xarray`)."""
+        """An ``xarray.Dataset`` with a ``units`` attribute per variable (see :func:`bondgraph.numerics.results_export.to_xarray`)."""
         from .results_export import to_xarray
         return to_xarray(self)
 

@@ -2,8 +2,8 @@
 
 :func:`simulate` integrates :math:`\\dot x = f(t, x, u, z, d, p)` from a
 :class:`~bondgraph.system.StateEquations` (compiled by
-:func:`bondgraph.evaluate.compile_model`) and returns a
-:class:`~bondgraph.results.SimulationResult` with every state, algebraic
+:func:`bondgraph.numerics.evaluate.compile_model`) and returns a
+:class:`~bondgraph.numerics.results.SimulationResult` with every state, algebraic
 unknown, held variable, input and output by name.
 
 Two integration regimes
@@ -55,14 +55,14 @@ import numbers
 import numpy as np
 import sympy as sp
 
-from .errors import ArgumentError, DomainError, ExpressionError, SimulationError, UnknownNameError
+from ..errors import ArgumentError, DomainError, ExpressionError, SimulationError, UnknownNameError
 from .memory import check_result_size
 from .progress import Progress
 from .evaluate import compile_model
-from .guards import check_param_bounds, guard_function, guard_values, raise_violation
+from ..guards import check_param_bounds, guard_function, guard_values, raise_violation
 from .results import SimulationResult
-from .symbols import as_expression
-from .system import StateEquations
+from ..symbols import as_expression
+from ..system import StateEquations
 
 __all__ = ["simulate", "IVP_METHODS"]
 
@@ -105,7 +105,7 @@ def simulate(system, t_span, *, inputs=None, x0=None, params=None, method="auto"
         Default: span/1000 for smooth models; for fixed-step integration the
         smallest multiple of the sub-step giving at most 10000 points.
     backend : {"auto", "c", "numpy"}
-        Evaluator backend (:func:`bondgraph.evaluate.compile_model`).
+        Evaluator backend (:func:`bondgraph.numerics.evaluate.compile_model`).
     rtol, atol : float
         Tolerances of the ``solve_ivp`` methods (states in SI units).
     progress : bool

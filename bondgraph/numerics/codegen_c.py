@@ -1,11 +1,11 @@
 """C code for state equations: sympy expressions to batch evaluators.
 
 This module is the low layer of the compiled backend (the Pythonic layer is
-:class:`bondgraph.evaluate.CompiledModel`): :func:`generate_source` writes C
+:class:`bondgraph.numerics.evaluate.CompiledModel`): :func:`generate_source` writes C
 for a :class:`~bondgraph.system.StateEquations`, one row function per kernel
 from the model's expressions plus the fixed Newton solver and RK4 driver of
-:mod:`bondgraph.codegen_c_templates`.  Compiling, caching and loading are in
-:mod:`bondgraph.c_build`, re-exported here: :func:`compile_source` turns
+:mod:`bondgraph.numerics.codegen_c_templates`.  Compiling, caching and loading are in
+:mod:`bondgraph.numerics.c_build`, re-exported here: :func:`compile_source` turns
 the source into a shared library with the system compiler (cached by the
 sha256 of source and flags), :func:`build_library` does both (skipping
 generation too when the same equations were built before), and
@@ -70,7 +70,7 @@ assignments (:attr:`~bondgraph.system.StateEquations.assignments`), each a
 :func:`sympy.cse`, whose temporaries are ``const double`` locals too.  A block with more than :data:`SPLIT_STATEMENTS` statements is split
 into several ``noinline`` functions sharing a scratch array (compile time of
 one huge function grows super-linearly).  The compiler flags (:data:`CFLAGS`)
-are explained in :mod:`bondgraph.c_build`.
+are explained in :mod:`bondgraph.numerics.c_build`.
 """
 from __future__ import annotations
 
@@ -79,10 +79,10 @@ import math
 import sympy as sp
 from sympy.printing.c import C99CodePrinter
 
-from .assignments import needed_assignments
+from ..assignments import needed_assignments
 from .codegen_c_templates import BATCH_HEAD, newton_source, rk4_source
-from .derivatives import NotDifferentiable, diff_almost_everywhere
-from .errors import ArgumentError, CompilationError
+from ..derivatives import NotDifferentiable, diff_almost_everywhere
+from ..errors import ArgumentError, CompilationError
 
 __all__ = ["generate_source", "jacobian_entries", "prepare_expression", "symbol_names",
            "SPLIT_STATEMENTS", "PARTS", "GENERATOR_VERSION", "guard_source"]

@@ -1,14 +1,14 @@
-"""Compiling, caching and loading the generated C of :mod:`bondgraph.codegen_c`.
+"""Compiling, caching and loading the generated C of :mod:`bondgraph.numerics.codegen_c`.
 
 :func:`compile_source` turns a C translation unit into a shared library with
 the system compiler (:func:`find_compiler`), cached in :func:`cache_dir` by the
 sha256 of source, compiler and flags; :func:`build_library` generates
-(:func:`bondgraph.codegen_c.generate_source`), compiles and loads one library
+(:func:`bondgraph.numerics.codegen_c.generate_source`), compiles and loads one library
 of a :class:`~bondgraph.system.StateEquations`, skipping generation too when
 the same equations were built before (an index file ``idx_<key>`` in the cache
 maps a hash of the equations to the library); :class:`CLibrary` is the 1:1
 ctypes binding of the functions of the C contract documented in
-:mod:`bondgraph.codegen_c`, which re-exports every name of this module.
+:mod:`bondgraph.numerics.codegen_c`, which re-exports every name of this module.
 
 Compiler flags
 --------------
@@ -30,7 +30,7 @@ import sympy as sp
 
 from . import codegen_c
 from .codegen_c import PARTS, generate_source
-from .errors import CompilationError
+from ..errors import CompilationError
 
 __all__ = ["compile_source", "build_library", "find_compiler", "cache_dir", "CLibrary", "CFLAGS"]
 
@@ -130,7 +130,7 @@ def build_library(eqs, *, part: str = "main") -> "CLibrary":
     ----------
     eqs : StateEquations
     part : {"main", "jacobian"}
-        See :func:`bondgraph.codegen_c.generate_source`.
+        See :func:`bondgraph.numerics.codegen_c.generate_source`.
 
     Returns
     -------
@@ -161,7 +161,7 @@ def build_library(eqs, *, part: str = "main") -> "CLibrary":
 
 
 class CLibrary:
-    """1:1 ctypes binding of a library made by :func:`bondgraph.codegen_c.generate_source`.
+    """1:1 ctypes binding of a library made by :func:`bondgraph.numerics.codegen_c.generate_source`.
 
     Attributes
     ----------
@@ -172,7 +172,7 @@ class CLibrary:
         Names of the ``bc_*`` functions the library holds; each is an attribute
         (``lib.f``, ``lib.jac_fx``, ``lib.solve``...) taking ``int``,
         ``c_void_p`` and ``double`` arguments as in the C contract of
-        :mod:`bondgraph.codegen_c`.
+        :mod:`bondgraph.numerics.codegen_c`.
         ``solve`` returns the number of failed rows.
     """
 

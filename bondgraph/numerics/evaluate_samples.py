@@ -2,7 +2,7 @@
 
 One compiled RK4 call per sample interval, inputs held over it.  On the C
 backend the loop calls ``bc_rk4`` (its C contract is documented in
-:mod:`bondgraph.codegen_c`) with the argument pointers computed once, which
+:mod:`bondgraph.numerics.codegen_c`) with the argument pointers computed once, which
 takes the per-sample cost from about 13 us (``CompiledModel.rk4_step``
 argument normalisation) to about 5 us on pam; other backends go through
 ``CompiledModel._rk4``.  Both give identical numbers (tested in
@@ -27,7 +27,7 @@ def rk4_samples(model, t, U, subs, x, d, p):
 
     Parameters
     ----------
-    model : bondgraph.evaluate.CompiledModel
+    model : bondgraph.numerics.evaluate.CompiledModel
     t : ndarray, shape (n_t,)
         Sample times, s.
     U : ndarray, shape (n_t, n_inputs)

@@ -1,4 +1,4 @@
-"""A :class:`~bondgraph.results.SimulationResult` as a pandas DataFrame or an xarray Dataset.
+"""A :class:`~bondgraph.numerics.results.SimulationResult` as a pandas DataFrame or an xarray Dataset.
 
 Both carry the units as metadata (the project's rule: SI inside, each signal
 with its ``unit``).  pandas and xarray are optional: each function imports its
@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import importlib
 
-from .errors import OptionalDependencyError
+from ..errors import OptionalDependencyError
 
 __all__ = ["to_pandas", "to_xarray"]
 

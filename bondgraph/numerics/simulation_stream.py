@@ -2,7 +2,7 @@
 
 :func:`simulate_to_csv` cuts the span into segments of at most `chunk_samples`
 output intervals on the same time grid as one run would use, simulates each
-with :func:`bondgraph.simulation.simulate` from the previous segment's final
+with :func:`bondgraph.numerics.simulation.simulate` from the previous segment's final
 state and held values, and appends its rows to the file, so memory stays
 bounded whatever the length.  Fixed-step models (held variables, ``RK4``)
 give the same numbers as one run; adaptive solvers restart at each segment
@@ -19,10 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import ArgumentError, OutputTooLargeError
+from ..errors import ArgumentError, OutputTooLargeError
 from .progress import Progress
 from .simulation import simulate
-from .system import StateEquations
+from ..system import StateEquations
 
 __all__ = ["simulate_to_csv", "BYTES_PER_CSV_VALUE"]
 
@@ -48,7 +48,7 @@ def simulate_to_csv(system, t_span, path, *, output_interval: float, chunk_sampl
     progress : bool
         One progress line on stderr for the whole run.
     **kwargs
-        Passed to :func:`~bondgraph.simulation.simulate` (``inputs``, ``params``,
+        Passed to :func:`~bondgraph.numerics.simulation.simulate` (``inputs``, ``params``,
         ``x0``, ``method``, ``dt``, ``backend``...).
 
     Returns

@@ -1,11 +1,11 @@
-"""C backend of :func:`bondgraph.evaluate.compile_model`: kernels in compiled libraries.
+"""C backend of :func:`bondgraph.numerics.evaluate.compile_model`: kernels in compiled libraries.
 
-:class:`CKernels` implements the kernel interface of :mod:`bondgraph.evaluate`
-on the shared libraries of :func:`bondgraph.c_build.build_library`: the
+:class:`CKernels` implements the kernel interface of :mod:`bondgraph.numerics.evaluate`
+on the shared libraries of :func:`bondgraph.numerics.c_build.build_library`: the
 ``"main"`` library (``f``, ``h``, ``held_update``, ``residuals``, ``jac_rz``,
 ``bc_solve``, ``bc_rk4``) is built at construction, the ``"jacobian"`` one
 (``jac_fx``, ``jac_fz``, ``jac_rx``) on first use.  Arrays are passed by pointer
-with the strides of the C contract in :mod:`bondgraph.codegen_c`.
+with the strides of the C contract in :mod:`bondgraph.numerics.codegen_c`.
 """
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ def _stride(a: np.ndarray, n: int) -> int:
 
 
 class CKernels:
-    """Kernels of `eqs` in generated C libraries (the interface of :mod:`bondgraph.evaluate`).
+    """Kernels of `eqs` in generated C libraries (the interface of :mod:`bondgraph.numerics.evaluate`).
 
     Parameters
     ----------

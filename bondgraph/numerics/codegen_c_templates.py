@@ -1,12 +1,12 @@
 """Fixed C of every generated ``"main"`` library: the Newton solver and the RK4 driver.
 
-:func:`bondgraph.codegen_c.generate_source` appends :func:`newton_source`
+:func:`bondgraph.numerics.codegen_c.generate_source` appends :func:`newton_source`
 (``bc_solve``) and :func:`rk4_source` (``bc_rk4``) to the row functions it
 generates from the model (``residuals_row``, ``jac_rz_row``, ``f_row``,
 ``held_update_row``); only sizes and the constants below are filled in.  Their
-C signatures are part of the contract documented in :mod:`bondgraph.codegen_c`
+C signatures are part of the contract documented in :mod:`bondgraph.numerics.codegen_c`
 (which re-exports the ``NEWTON_*`` constants), and the numpy backend
-(:mod:`bondgraph.evaluate_numpy`) runs the same iterations with the same
+(:mod:`bondgraph.numerics.evaluate_numpy`) runs the same iterations with the same
 tolerances.
 
 Newton's method for :math:`0 = r(z)` on one row, warm-started in place:
@@ -40,7 +40,7 @@ NEWTON_STATUS = {
     2: "singular Jacobian dr/dz",
     3: "residual is not finite (NaN or inf)",
 }
-#: Parameters of every batch function ``bc_<name>`` (see :mod:`bondgraph.codegen_c`);
+#: Parameters of every batch function ``bc_<name>`` (see :mod:`bondgraph.numerics.codegen_c`);
 #: ``{zc}`` is ``"const "`` for the kernels and ``""`` for ``bc_solve`` (z in/out).
 BATCH_HEAD = ("int n, const double *t, int st, const double *x, const double *u, int su, "
               "{zc}double *z, const double *d, int sd, const double *p, int sp, double step")

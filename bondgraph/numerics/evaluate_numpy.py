@@ -1,12 +1,12 @@
-"""Numpy backend of :func:`bondgraph.evaluate.compile_model`: lambdified kernels.
+"""Numpy backend of :func:`bondgraph.numerics.evaluate.compile_model`: lambdified kernels.
 
-:class:`NumpyKernels` implements the kernel interface of :mod:`bondgraph.evaluate`
+:class:`NumpyKernels` implements the kernel interface of :mod:`bondgraph.numerics.evaluate`
 with :func:`sympy.lambdify` (``cse=True``) vectorised over the batch.  The
 algebraic loops are solved by Newton's method vectorised over the rows still
 iterating, with :func:`numpy.linalg.solve` on stacked Jacobians, and fixed-step
 integration runs RK4 sub-steps in numpy: the same iterations, tolerances and
 status codes as the C ``bc_solve`` and ``bc_rk4``
-(:mod:`bondgraph.codegen_c_templates`), so both backends agree to rounding.
+(:mod:`bondgraph.numerics.codegen_c_templates`), so both backends agree to rounding.
 """
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ __all__ = ["NumpyKernels", "select_rows"]
 
 
 class NumpyKernels:
-    """Kernels of `eqs` as lambdified numpy functions (the interface of :mod:`bondgraph.evaluate`).
+    """Kernels of `eqs` as lambdified numpy functions (the interface of :mod:`bondgraph.numerics.evaluate`).
 
     The main kernels (``f``, ``h``, ``held_update``, ``residuals``, ``jac_rz``)
     are built at construction, the other Jacobians on first use.

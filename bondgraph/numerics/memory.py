@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 import os
 
-from .errors import OutputTooLargeError
+from ..errors import OutputTooLargeError
 
 __all__ = ["available_memory", "check_result_size", "BYTES_PER_VALUE", "COPIES"]
 

@@ -15,10 +15,10 @@ import argparse
 import dataclasses
 import time
 
-from bondgraph import library
+from plants import library
 from bondgraph.numerics.c_build import compile_source, find_compiler
 from bondgraph.numerics.codegen_c import generate_source
-from bondgraph.library.chain import mass_spring_chain
+from plants.library.chain import mass_spring_chain
 
 
 def _flat(eqs):

@@ -41,7 +41,7 @@ peers = importlib.util.module_from_spec(_spec)
 sys.modules["cosim_peers"] = peers
 _spec.loader.exec_module(peers)
 
-import bondgraph.library as library  # noqa: E402
+import plants.library as library  # noqa: E402
 from cosim import CoSimulation, FMUComponent, Port, PythonBlock  # noqa: E402
 from fmus import export  # noqa: E402
 

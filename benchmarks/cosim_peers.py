@@ -15,7 +15,7 @@ do not use our FMU:
   ``benchmarks/pam_pythonfmu3_plant.py``), stepped through fmpy's high-level
   ``FMU3Slave`` (``setFloat64`` / ``doStep`` / ``getFloat64``);
 * (d) :func:`run_solve_ivp`: the plant's right-hand side in Python
-  (:func:`bondgraph.blockdiagram.pam.derivatives`) integrated by
+  (:func:`plants.blockdiagram.pam.derivatives`) integrated by
   ``scipy.integrate.solve_ivp``, restarted at every 1 ms communication step.
 
 Every loop does the same thing per step ``k`` (``t_k = k dt``)::
@@ -62,7 +62,7 @@ _ROOT = _HERE.parent
 if str(_ROOT) not in sys.path:  # run as `python benchmarks/cosim_peers.py`, or imported from benchmarks/
     sys.path.insert(0, str(_ROOT))
 
-from bondgraph.blockdiagram import pam
+from plants.blockdiagram import pam
 
 PLANT_SCRIPT = _HERE / "pam_pythonfmu3_plant.py"
 CLOCK = time.process_time          # what every variant's loop is timed with (CPU seconds)
@@ -281,7 +281,7 @@ def initial_command(scenario: Scenario = SCENARIO) -> float:
 def initial_state(scenario: Scenario = SCENARIO) -> np.ndarray:
     """Initial plant state ``(psi [rad], dpsi [rad/s], P1 [Pa], P2 [Pa])`` of every variant.
 
-    The rest state (:func:`bondgraph.blockdiagram.pam.equilibrium`) for the
+    The rest state (:func:`plants.blockdiagram.pam.equilibrium`) for the
     inputs ``u0 +- initial_command()``, at which psi is the first set-point (0 deg).
     With the integrator preset to that command, the loop starts in equilibrium.
     For the bond-graph FMU of ``pam``, set its states to ``q_psi = psi``,
@@ -325,9 +325,9 @@ def run_solve_ivp(T: float = 10.0, dt: float | None = None, *, method: str = "RK
 
     Per communication step: the controller's command is held, the Kikuuwe
     friction torque is evaluated once at the step's start with ``h = dt``
-    (:func:`bondgraph.blockdiagram.pam.kikuuwe_friction`) and held over the whole
+    (:func:`plants.blockdiagram.pam.kikuuwe_friction`) and held over the whole
     step, and ``solve_ivp(method, (t_k, t_k + dt), x_k)`` integrates
-    :func:`bondgraph.blockdiagram.pam.derivatives` (numpy, one state per call) from
+    :func:`plants.blockdiagram.pam.derivatives` (numpy, one state per call) from
     the state the last step ended in.  So, unlike the other variants, friction is
     held per 1 ms step, not per 0.25 ms RK4 sub-step.  For a solver restarted
     every step, holding it per step is the natural choice.  This makes (d) a
@@ -516,7 +516,7 @@ def run_pythonfmu3(fmu_path, T: float = 10.0, dt: float | None = None, *,
 # agreement checks
 # --------------------------------------------------------------------------
 def replay_blockdiagram(u, scenario: Scenario = SCENARIO) -> np.ndarray:
-    """psi (deg, ``len(u) + 1``) of :func:`bondgraph.blockdiagram.pam.simulate` fed the input sequence ``u``.
+    """psi (deg, ``len(u) + 1``) of :func:`plants.blockdiagram.pam.simulate` fed the input sequence ``u``.
 
     This runs open loop from :func:`initial_state`, with ``u`` a run's recorded
     commands.  It is the reference scheme: 4 RK4 sub-steps per 1 ms, friction held

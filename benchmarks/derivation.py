@@ -63,7 +63,7 @@ _RESULT_TAG = "BGT_RESULT "
 # --------------------------------------------------------------------------
 def build_chain(n: int):
     """The N-stage chain built with bondgraph's API (not yet derived)."""
-    from bondgraph.library import mass_spring_chain
+    from plants.library import mass_spring_chain
 
     return mass_spring_chain(n, m=MASS, b=DAMPING, compliance=COMPLIANCE)
 

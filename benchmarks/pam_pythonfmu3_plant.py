@@ -4,11 +4,11 @@ Built into an ``.fmu`` by :func:`cosim_peers.build_pythonfmu3_plant` (pythonfmu3
 ``FmuBuilder``); not part of the package, and pythonfmu3 is a benchmark-only
 dependency (``pip install pythonfmu3``).
 
-The plant is the numpy state-space model :mod:`bondgraph.blockdiagram.pam`, stepped
+The plant is the numpy state-space model :mod:`plants.blockdiagram.pam`, stepped
 with its own fixed-step scheme: each 1 ms sample holds ``u1``, ``u2`` and is
 integrated by 4 classic RK4 sub-steps of 0.25 ms, the Kikuuwe friction torque being
 evaluated at the start of each sub-step and held over it.  ``do_step`` calls
-:func:`bondgraph.blockdiagram.pam.simulate` for the step's whole number of samples,
+:func:`plants.blockdiagram.pam.simulate` for the step's whole number of samples,
 starting from the state the previous step ended in, so the FMU reproduces a single
 ``pam.simulate`` run over the same input sequence exactly (that function runs
 the scheme on Python floats; the same scheme written with the array functions
@@ -55,7 +55,7 @@ from pythonfmu3 import (
 )
 
 try:
-    from bondgraph.blockdiagram import pam as _pam
+    from plants.blockdiagram import pam as _pam
 except ImportError as exc:  # pragma: no cover - depends on the importer's sys.path
     raise ImportError(
         "the pam pythonfmu3 FMU needs the bondcosim repository (package 'bondgraph') on the "
@@ -74,7 +74,7 @@ class PamPlant(Fmi3Slave):
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self.author = "bondcosim benchmarks"
-        self.description = ("Antagonistic PAM joint (numpy state-space model of bondgraph.blockdiagram.pam); "
+        self.description = ("Antagonistic PAM joint (numpy state-space model of plants.blockdiagram.pam); "
                             "1 ms samples of 4 RK4 sub-steps with held Kikuuwe friction")
         p = _pam.PARAMS
         self.time = 0.0

@@ -24,7 +24,7 @@ state:
   (``CompiledModel.rk4_step``) and whose ``hx`` picks P1, P2;
 * the same filterpy filter with a Python model: ``fx`` integrates one
   sample of the block-diagram twin of the plant
-  (:func:`bondgraph.blockdiagram.pam.simulate`: eq. (11a) in plain Python
+  (:func:`plants.blockdiagram.pam.simulate`: eq. (11a) in plain Python
   floats, written independently of the bond graph, already in the filter's
   coordinates) per sigma point.  It runs the first ``--python-steps`` samples
   (default 200), once; skip it with ``--python-steps 0``.
@@ -58,7 +58,7 @@ TARGET_US, TARGET_RATIO = 35.0, 10.0
 def setup(steps: int, seed: int = 1) -> dict:
     """Compiled pam model, state map and a recording of ``steps + 1`` samples."""
     from bondgraph.numerics.evaluate import compile_model
-    from bondgraph.library import build
+    from plants.library import build
     from estimators import StateMap
 
     model = compile_model(build("pam").equations(), backend="c")
@@ -91,7 +91,7 @@ def filterpy_ukf(data: dict, *, python_model: bool = False):
     the block-diagram twin (plain Python floats)."""
     from filterpy.kalman import JulierSigmaPoints, UnscentedKalmanFilter
 
-    from bondgraph.blockdiagram import pam as block_diagram
+    from plants.blockdiagram import pam as block_diagram
 
     model, smap = data["model"], data["map"]
     T, Ti = smap.matrix, smap.inverse

@@ -155,7 +155,7 @@ def _pairs(items, what: str) -> dict[str, str]:
 
 
 def _cmd_list(args) -> int:
-    from bondgraph import library
+    from plants import library
     width = max(len(n) for n in library.names())
     for name in library.names():
         print(f"{name:<{width}}  {library.describe(name)}")
@@ -163,7 +163,7 @@ def _cmd_list(args) -> int:
 
 
 def _cmd_equations(args) -> int:
-    from .models import load_model
+    from plants import load as load_model
     if args.at and not args.json:
         raise ParameterError("--at sets the linearisation point, which only --json prints", name="--at")
     at = _numbers(args.at, "--at")
@@ -186,7 +186,7 @@ def _cmd_equations(args) -> int:
 
 
 def _cmd_draw(args) -> int:
-    from .models import load_model
+    from plants import load as load_model
     load_model(args.model).draw(args.output)
     print(f"wrote {args.output}")
     return 0
@@ -204,7 +204,7 @@ def _numbers(items, what: str = "--param") -> dict[str, float]:
 
 def _cmd_simulate(args) -> int:
     from bondgraph.numerics.simulation import simulate
-    from .models import load_model
+    from plants import load as load_model
     graph = load_model(args.model)
     params = _numbers(args.param)
     inputs = {}
@@ -252,7 +252,7 @@ def _cmd_compare(args) -> int:
 def _cmd_export_fmu(args) -> int:
     from fmus import export
     from fmus.info import fmu_info
-    from .models import load_model
+    from plants import load as load_model
     path = export(load_model(args.model), args.output, fmi_version=args.fmi,
                   solver_step=args.solver_step, params=_numbers(args.param) or None)
     info = fmu_info(path)
@@ -297,7 +297,7 @@ def _flatten(data, prefix=""):
 
 def _cmd_diagnose(args) -> int:
     from diagnosis.diagnose import diagnose
-    from .models import load_model
+    from plants import load as load_model
     report = diagnose(load_model(args.model), args.recording, inputs=args.input, outputs=args.output,
                       time=args.time, holdout=args.holdout, uncertain=args.uncertain, top=args.top,
                       progress=True, max_effects=args.max_effects, noise=args.noise)

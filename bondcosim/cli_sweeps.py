@@ -94,7 +94,7 @@ def _cmd_sweep(args) -> int:
     spec = load_spec(args.spec)
     graph = None
     if isinstance(spec.target, ModelTarget) and spec.target.model.endswith(".py"):   # the CLI's own loader
-        from .models import load_model
+        from plants import load as load_model
         graph = load_model(spec.target.model)
     result = run_sweep(spec, args.out, resume=args.resume, workers=args.workers, scheduler=args.scheduler,
                        chunk_size=args.chunk_size, graph=graph, flush_interval_s=args.flush_interval)
@@ -114,7 +114,7 @@ def _cmd_montecarlo(args) -> int:
 def _cmd_diagnose_batch(args) -> int:
     from sweeps import diagnose_batch
     from sweeps.fleet import summary_text
-    from .models import load_model
+    from plants import load as load_model
     result = diagnose_batch(load_model(args.model), args.recordings, args.out, inputs=args.input,
                             outputs=args.output, time=args.time, holdout=args.holdout, top=args.top,
                             max_effects=args.max_effects, resume=args.resume, workers=args.workers,

@@ -13,7 +13,7 @@ MATRIX_RTOL = 1e-9
 
 
 def _exoskeleton(plot_dir):
-    from bondgraph.blockdiagram import exoskeleton as bd
+    from plants.blockdiagram import exoskeleton as bd
 
     run = bd.compare_section_5_1()
     if plot_dir is not None:
@@ -22,7 +22,7 @@ def _exoskeleton(plot_dir):
 
 
 def _pam(plot_dir):
-    from bondgraph.blockdiagram.pam_compare import compare_fig8
+    from plants.blockdiagram.pam_compare import compare_fig8
 
     run = compare_fig8(variant="full", duration=20.0)
     if plot_dir is not None:

@@ -31,7 +31,7 @@ def run_demo(output_dir="demo-output", *, quick: bool = False) -> dict:
     """
     import matplotlib
     matplotlib.use("Agg")
-    from bondgraph import library
+    from plants import library
     from bondgraph.numerics.simulation import simulate
 
     out = Path(output_dir)

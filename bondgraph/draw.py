@@ -205,7 +205,7 @@ def draw(graph, path=None, *, layout="auto", causality=True, ax=None, title=None
     Examples
     --------
     >>> import os, tempfile
-    >>> from bondgraph.library import mass_spring_damper
+    >>> from plants.library import mass_spring_damper
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     fig = draw(mass_spring_damper(), os.path.join(tmp, "msd.png"))
     >>> sorted(a.get_gid() for a in fig.axes[0].lines if a.get_gid().startswith("stroke:"))
@@ -244,7 +244,7 @@ def draw_geometry(graph, *, layout="auto", causality=True) -> DrawingGeometry:
 
     Examples
     --------
-    >>> from bondgraph.library import mass_spring_damper
+    >>> from plants.library import mass_spring_damper
     >>> geometry = draw_geometry(mass_spring_damper())
     >>> [(b.name, b.tail, b.head, b.stroke_end) for b in geometry.bonds.values()]  # doctest: +NORMALIZE_WHITESPACE
     [('bond1', 'F', 'v_mass', 'head'), ('bond2', 'v_mass', 'm', 'head'),

@@ -90,7 +90,7 @@ class UKFBlock(PythonBlock):
 
     Examples
     --------
-    >>> from bondgraph.library import build
+    >>> from plants.library import build
     >>> from estimators import JulierSigmaPoints
     >>> import numpy as np
     >>> block = UKFBlock.from_model("ukf", build("pam-locked"), dt=1e-3, outputs=("P1", "P2"),

@@ -36,6 +36,7 @@ import sys
 import time as _time
 
 import numpy as np
+from plants import load as load_model
 
 from .errors import DiagnosisError
 
@@ -69,20 +70,6 @@ class _Progress:
         self.timings.pop("done", None)
         self.timings["total"] = _time.perf_counter() - self.start
         return self.timings
-
-
-def _as_graph(graph):
-    from bondgraph import BondGraph
-    if isinstance(graph, BondGraph):
-        return graph
-    if isinstance(graph, str):
-        if graph.endswith(".json"):
-            from bondgraph.io_json import load
-            return load(graph)
-        from bondgraph import library
-        return library.build(graph)
-    raise DiagnosisError(f"model must be a BondGraph, a built-in model name or a .json graph file; "
-                         f"found {type(graph).__name__}")
 
 
 def _as_recording(recording, time):
@@ -241,7 +228,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     Parameters
     ----------
     graph : BondGraph or str
-        The nominal model, or a built-in model name / ``.json`` graph file.
+        The nominal model, or a built-in model name / ``.json`` or ``.py`` model file
+        (:func:`plants.load`).
     recording : Recording or str or path-like
         The recording, or a CSV file (:meth:`Recording.from_csv`).
     inputs, outputs : iterable of str or Binding, or dict str -> str
@@ -293,7 +281,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         raise DiagnosisError(f"max_effects must be a positive whole number of effects; found {max_effects!r}")
     say = _Progress(progress)
     say("reading and binding the recording")
-    graph = _as_graph(graph)
+    graph = load_model(graph)
     rec = _as_recording(recording, time)
     exp = bind(rec, graph, inputs, outputs)
     train, held = exp.split(holdout)

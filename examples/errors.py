@@ -2,7 +2,7 @@
 
 Run:  python examples/errors.py
 """
-from bondgraph import library
+from plants import library
 from bondgraph.numerics import simulate
 from bondgraph.errors import BondcosimError
 

@@ -10,7 +10,7 @@ import json
 import sys
 from pathlib import Path
 
-from bondgraph import library
+from plants import library
 
 
 def main(output_dir="."):

@@ -7,7 +7,7 @@ Run:  python examples/notebook_display.py [output_dir]
 import sys
 from pathlib import Path
 
-from bondgraph import library
+from plants import library
 
 
 def main(output_dir="."):

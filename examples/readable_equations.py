@@ -8,7 +8,7 @@ Run:  python examples/readable_equations.py [output_dir]
 import sys
 from pathlib import Path
 
-from bondgraph import library
+from plants import library
 from bondgraph.assignments import substitute
 
 

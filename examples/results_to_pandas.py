@@ -5,7 +5,7 @@ Run:  python examples/results_to_pandas.py [output_dir]     (needs pandas and xa
 import sys
 from pathlib import Path
 
-from bondgraph import library
+from plants import library
 from bondgraph.numerics import simulate
 
 

@@ -2,7 +2,7 @@
 
 Layer 2 of the design (imports only ``bondgraph``).
 
->>> import bondgraph.library as library
+>>> import plants.library as library
 >>> from fmus import export
 >>> path = export(library.build("mass-spring-damper"), tmp / "msd.fmu")   # doctest: +SKIP
 

@@ -206,7 +206,7 @@ def _equations(model: str, graph):
 
 def load_graph(model: str):
     """The bond graph of a built-in model name or a ``.json`` graph file."""
-    from bondgraph import library
+    from plants import library
     from bondgraph.errors import GraphError
     path = Path(model)
     if path.suffix == ".json":

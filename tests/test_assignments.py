@@ -14,7 +14,7 @@ import pytest
 import sympy as sp
 
 from bondcosim.cli import main
-from bondgraph import library
+from plants import library
 from bondgraph.assignments import substitute
 from bondgraph.numerics.evaluate import compile_model
 from bondgraph.io_json import dumps, graph_from_dict

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import bondgraph.library as library
+import plants.library as library
 from bondgraph.numerics import simulate
 from diagnosis.benchmark import plants_textbook as tb
 from diagnosis.benchmark.draw import CaseSpec, draw_cases, realise

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bondgraph import library
+from plants import library
 from bondgraph.numerics import simulate
 from diagnosis.benchmark.plants import PLANTS, plant
 from diagnosis.benchmark.plants_cylinder import pneumatic_cylinder

@@ -13,7 +13,7 @@ def test_codegen_benchmark_runs(capsys, load_script):
     if find_compiler() is None:
         import pytest
         pytest.skip("no C compiler")
-    from bondgraph.library.chain import mass_spring_chain
+    from plants.library.chain import mass_spring_chain
     bench = load_script("benchmarks/codegen.py")
     rows = bench.main({"chain2": mass_spring_chain(2)})
     assert rows[0]["model"] == "chain2" and rows[0]["assignments"][2] > 0

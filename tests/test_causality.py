@@ -5,7 +5,7 @@ import sympy as sp
 from hypothesis import given, strategies as st
 
 from bondgraph import BondGraph, C, CausalityError, DerivationError, I, One, R, Se, Sf, TF, Zero
-from bondgraph import library
+from plants import library
 
 
 def test_two_effort_sources_on_a_zero_junction_is_a_conflict():

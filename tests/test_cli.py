@@ -8,7 +8,7 @@ from bondcosim.cli import main
 
 
 def test_list_names_every_builtin_model(capsys):
-    from bondgraph import library
+    from plants import library
     assert main(["list"]) == 0
     out = capsys.readouterr().out
     for name in library.names():
@@ -57,7 +57,7 @@ def test_equations_of_a_python_model_file(tmp_path, capsys):
 
 
 def test_equations_of_a_json_model_file(tmp_path, capsys):
-    from bondgraph import library
+    from plants import library
     path = tmp_path / "rlc.json"
     library.build("rlc").save(path)
     assert main(["equations", str(path), "--json"]) == 0

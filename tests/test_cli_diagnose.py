@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from bondcosim.cli import main
-from bondgraph import library
+from plants import library
 from diagnosis.recording import Experiment
 from diagnosis.residuals import simulate_outputs
 

@@ -96,8 +96,8 @@ def test_double_integral_lqi_matches_python_control_on_the_augmented_system():
 
 
 def _exo_design(order):
-    from bondgraph.blockdiagram.exoskeleton import state_space
-    from bondgraph.library.exoskeleton import parameter_values
+    from plants.blockdiagram.exoskeleton import state_space
+    from plants.library.exoskeleton import parameter_values
 
     A, B, C, _ = state_space(parameter_values({"b_f": 0.0}))
     A1, Bm, Cb = A[:6, :6], B[:6, [0]], C[[2], :6]            # eqs. (4), (7)

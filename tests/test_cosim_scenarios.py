@@ -36,7 +36,7 @@ def test_our_fmus_in_our_master_equal_the_python_model(tmp_path, version):
     """The exported pam FMU (FMI 2.0 and 3.0) driven by zero-order-hold tables in the
     master gives bondgraph.numerics.simulate's result with the same tables (same RK4 kernel)."""
     import bondgraph as bg
-    import bondgraph.library as library
+    import plants.library as library
     from cosim import CoSimulation, FMUComponent, Table
     from fmus import export
 

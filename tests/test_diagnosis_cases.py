@@ -2,7 +2,7 @@
 
 References: the committed CSV files and ``cases.json`` in tests/data/diagnosis
 (written by ``python -m diagnosis.cases``); the nominal models of
-``bondgraph.library``; unit conversions by ``diagnosis.units.convert``
+``plants.library``; unit conversions by ``diagnosis.units.convert``
 (written separately from the generator's own scale factors).
 """
 from __future__ import annotations
@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import bondgraph.library as library
+import plants.library as library
 from diagnosis.cases import CASES, case, record, simulate_case
 from diagnosis.cases import profiles
 from diagnosis.cases.truth import InputDelay, InputSaturation, SensorGain, SensorOffset

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
-import bondgraph.library as library
+import plants.library as library
 from bondgraph import C, I, One, R, Sf, TF, Zero, BondGraph
 from bondgraph.errors import UnknownNameError
 from diagnosis.catalogue import KINDS, Candidate, ParamSpec, candidates

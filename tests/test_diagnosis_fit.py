@@ -6,8 +6,8 @@ candidate's law, its parameter plumbing and the optimiser together."""
 import numpy as np
 import pytest
 
-import bondgraph.library as library
-from bondgraph.library.textbook import mass_spring_damper
+import plants.library as library
+from plants.library.textbook import mass_spring_damper
 from bondgraph import BondGraph, C, EquationElement, I, One, R, Se
 from diagnosis.catalogue import candidates
 from diagnosis.errors import DiagnosisError

@@ -11,7 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bondgraph import MSe, R, library
+from bondgraph import MSe, R
+from plants import library
 from diagnosis.errors import DiagnosisError
 from diagnosis.graph_location import PlaceScore, candidate_places, locate_on_graph
 from diagnosis.graph_location_linear import LinearisedResponse

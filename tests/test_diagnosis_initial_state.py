@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import bondgraph.library as library
+import plants.library as library
 from diagnosis.benchmark.plants import PLANTS
 from diagnosis.benchmark.simulate import simulate_truth
 from diagnosis.diagnose import diagnose

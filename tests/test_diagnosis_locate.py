@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from bondgraph import library
+from plants import library
 from diagnosis.errors import DiagnosisError
 from diagnosis.locate import locate_regime, regime_variables, significant_windows
 from diagnosis.recording import Experiment

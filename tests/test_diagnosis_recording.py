@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from bondgraph import library
+from plants import library
 from bondgraph.errors import UnknownNameError
 from diagnosis.errors import RecordingError, UnitError
 from diagnosis.recording import Binding, Experiment, Recording, bind

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from bondgraph import library
+from plants import library
 from bondgraph.numerics import simulate
 from bondgraph.errors import ParameterError, UnknownNameError
 from diagnosis.errors import DiagnosisError

@@ -14,7 +14,7 @@ import pytest
 
 from bondgraph import GY, TF, BondGraph, C, CField, EquationElement, I, MSf, One, R, Se, Zero
 from bondgraph.draw import LAYOUTS, draw, draw_geometry
-from bondgraph.library import mass_spring_chain
+from plants.library import mass_spring_chain
 
 matplotlib.use("Agg")
 

@@ -7,7 +7,7 @@ import sympy as sp
 import pytest
 
 from bondgraph import BondGraph, C, CField, EquationElement, I, IField, MGY, MSe, MSf, MTF, One, R, Se, Sf
-from bondgraph import library
+from plants import library
 
 
 def S(name):

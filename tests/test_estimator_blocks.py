@@ -2,10 +2,10 @@
 import numpy as np
 import pytest
 
-from bondgraph.blockdiagram import pam as pam_bd
+from plants.blockdiagram import pam as pam_bd
 from bondgraph.errors import CosimError, UnknownNameError
 from bondgraph.numerics.evaluate import compile_model
-from bondgraph.library import build
+from plants.library import build
 from cosim import CoSimulation, FMUComponent, Function
 from cosim.estimator_blocks import UKFBlock
 from cosim.scenarios._pam_sensorless_loop import (UKF_P0, UKF_Q, UKF_R, DiscretePIBlock,

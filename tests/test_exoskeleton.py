@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from bondgraph import DerivationError, I, ParameterError
-from bondgraph.blockdiagram import exoskeleton as bd
-from bondgraph.library.exoskeleton import PARAMETERS, exoskeleton, parameter_values
+from plants.blockdiagram import exoskeleton as bd
+from plants.library.exoskeleton import PARAMETERS, exoskeleton, parameter_values
 
 MATRIX_RTOL = 1e-9
 

@@ -11,7 +11,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 import bondgraph as bg
-import bondgraph.library as library
+import plants.library as library
 from bondgraph.errors import DomainError, FMUStepDiscarded, ParameterError
 from bondgraph.guards import Guard
 from bondgraph.io_json import graph_from_dict, graph_to_dict

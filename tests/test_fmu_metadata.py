@@ -13,7 +13,7 @@ import pytest
 from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
-import bondgraph.library as library
+import plants.library as library
 from bondgraph.units import base_unit
 from fmus import export
 

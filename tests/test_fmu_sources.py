@@ -19,7 +19,7 @@ import pytest
 from fmpy import simulate_fmu
 from fmpy.validation import validate_fmu
 
-import bondgraph.library as library
+import plants.library as library
 from fmus import export
 
 VERSIONS = (2, 3)

@@ -12,7 +12,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 import bondgraph as bg
-import bondgraph.library as library
+import plants.library as library
 from fmus import export
 
 from fmu_helpers import Slave, open_slave

@@ -18,8 +18,8 @@ from hypothesis import strategies as st
 from bondgraph import (BondGraph, C, CField, ELEMENT_KINDS, EquationElement, GraphError, GY, I, IField, MGY, MSe,
                        MSf, MTF, One, Param, ParameterError, R, SchemaError, Se, Sf, TF, Zero)
 from bondgraph.io_json import ELEMENT_KEYS, dumps, graph_from_dict, graph_to_dict, load, save
-from bondgraph.library.chain import mass_spring_chain
-from bondgraph.library.textbook import coupled_tanks, dc_motor, mass_spring_damper, resistor_loop
+from plants.library.chain import mass_spring_chain
+from plants.library.textbook import coupled_tanks, dc_motor, mass_spring_damper, resistor_loop
 
 ROOT = Path(__file__).resolve().parents[1]
 SCHEMA = json.loads((ROOT / "bondgraph" / "graph.schema.json").read_text(encoding="utf-8"))

@@ -5,8 +5,9 @@ import math
 
 import numpy as np
 
-from bondgraph import library, linearize
-from bondgraph.library.hydraulic import hydraulic_values
+from plants import library
+from bondgraph import linearize
+from plants.library.hydraulic import hydraulic_values
 
 
 def _eigs(name):

@@ -11,7 +11,7 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 from scipy.optimize import brentq
 
-from bondgraph import library
+from plants import library
 from bondgraph.numerics.simulation import simulate
 
 

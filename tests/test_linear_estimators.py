@@ -198,8 +198,8 @@ def test_unobservable_position_is_named_by_eigenvalue_and_state():
 def test_exoskeleton_absolute_angles_have_an_unobservable_rigid_body_mode():
     """Seed 004, eqs. (3)-(5): with motor velocity and sensor torque only, turning
     every angle together (theta_m by r_g) is invisible: eigenvalue 0."""
-    from bondgraph.blockdiagram.exoskeleton import STATES, state_space
-    from bondgraph.library.exoskeleton import parameter_values
+    from plants.blockdiagram.exoskeleton import STATES, state_space
+    from plants.library.exoskeleton import parameter_values
 
     p = parameter_values({"b_f": 0.0})
     A, _, C, _ = state_space(p)

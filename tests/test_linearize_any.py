@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from bondcosim.cli import main
-from bondgraph import library
+from plants import library
 from bondgraph.errors import ParameterError
 from bondgraph.numerics.evaluate import compile_model
 

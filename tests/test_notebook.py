@@ -6,7 +6,7 @@ import sys
 import numpy as np
 import pytest
 
-from bondgraph import library
+from plants import library
 from bondgraph.numerics import simulate
 from bondgraph.errors import OptionalDependencyError
 from bondgraph.numerics.progress import Progress

@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from bondgraph.blockdiagram import pam
+from plants.blockdiagram import pam
 from bondgraph.errors import ParameterError
 
 P = pam.PARAMS

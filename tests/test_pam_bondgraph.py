@@ -3,7 +3,7 @@
 References: seed 000 (``docs/references.md``) ([1]: eqs. (2)-(11), Table II, Sec. II-A)
 and ``docs/pam-conventions.md`` ([C]: kappa table, orifice law, friction, fixed-step scheme).
 Every hand formula below is written here from those texts, independently of
-``bondgraph/library/pam.py``.
+``plants/library/pam.py``.
 """
 import math
 
@@ -12,7 +12,7 @@ import pytest
 
 from bondgraph import ParameterError
 from bondgraph.numerics import compile_model, simulate
-from bondgraph.library.pam import FRICTION_STEP, KAPPA_KNOTS, PARAMETERS, pam
+from plants.library.pam import FRICTION_STEP, KAPPA_KNOTS, PARAMETERS, pam
 
 # Table II of [1], typed from the paper (last index of p_v/p_w = muscle, A_11 = A1, A_12 = A2,
 # T'_p = mu_p per [C])

@@ -7,7 +7,7 @@ signal's range (the largest difference seen is about 1e-13 of it).
 import numpy as np
 import pytest
 
-from bondgraph.blockdiagram.pam_compare import SIGNALS, compare_fig8
+from plants.blockdiagram.pam_compare import SIGNALS, compare_fig8
 
 
 @pytest.mark.parametrize("variant", ["full", "frictionless", "locked"])

@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bondgraph import library
-from bondgraph.library.cylinder import BORE_AREA, pneumatic_cylinder
+from plants import library
+from plants.library.cylinder import BORE_AREA, pneumatic_cylinder
 from diagnosis.graph_location import locate_on_graph
 from diagnosis.recording import Experiment, Recording, bind
 from diagnosis.residuals import residuals, simulate_outputs

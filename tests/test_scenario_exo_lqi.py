@@ -9,7 +9,7 @@ import control as ct
 import numpy as np
 import pytest
 
-from bondgraph.blockdiagram.exoskeleton import state_space
+from plants.blockdiagram.exoskeleton import state_space
 from bondgraph.errors import ParameterError, UnobservableModeError
 from cosim.scenarios import _exo_analysis as an
 from cosim.scenarios import _exo_design as de

@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from bondgraph.blockdiagram import pam as pam_bd
-from bondgraph.library.pam import FRICTION_STEP, PARAMETERS
+from plants.blockdiagram import pam as pam_bd
+from plants.library.pam import FRICTION_STEP, PARAMETERS
 from bondgraph.numerics.simulation import simulate
 from cosim.scenarios import _pam_rig as rig
 from cosim.scenarios import pam_ukf

@@ -2,7 +2,7 @@
 import pytest
 
 from bondgraph.errors import ParameterError, UnknownNameError
-from bondgraph.library.pam import PARAMETERS as PAM
+from plants.library.pam import PARAMETERS as PAM
 from cosim import scenarios
 from cosim.scenarios._pam_rig import RIG_PERTURBATION, rig_params
 

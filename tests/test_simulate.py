@@ -333,7 +333,7 @@ def test_csv_round_trip_property(tmp_path_factory, data, n):
 def test_a_solver_grinding_towards_a_singularity_stops_with_a_named_error():
     """pam-frictionless from vented muscles swings towards the angle where a muscle
     volume vanishes; LSODA's steps collapse there.  The budget turns that into an error."""
-    import bondgraph.library as library
+    import plants.library as library
     from bondgraph.errors import SimulationError
     with pytest.raises(SimulationError, match=r"gave up after 3000 right-hand-side evaluations "
                                               r"at t = .* fastest-changing states") as info:

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from bondcosim.cli import main
-from bondgraph import library
+from plants import library
 from bondgraph.numerics import simulate
 from bondgraph.errors import ArgumentError, OutputTooLargeError, UnknownNameError
 from bondgraph.numerics.results import SimulationResult

@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from bondgraph import library
+from plants import library
 from bondgraph.numerics.simulation import simulate
 from cosim import scenarios
 from sweeps import MetricError, StoreError, montecarlo_spec, run_sweep, spec_from_dict

@@ -19,7 +19,7 @@ from filterpy.kalman import unscented_transform
 
 from bondgraph.errors import EstimatorError
 from bondgraph.numerics.evaluate import compile_model
-from bondgraph.library import build
+from plants.library import build
 from estimators import JulierSigmaPoints, MerweScaledSigmaPoints, StateMap, UnscentedKalmanFilter
 
 DT = 1e-3          # pam sample, s (seed 000: 1 ms, 4 RK4 sub-steps)

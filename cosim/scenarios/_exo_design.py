@@ -49,9 +49,9 @@ from types import MappingProxyType
 import numpy as np
 from scipy.signal import cont2discrete
 
-from bondgraph.blockdiagram.exoskeleton import state_space
+from plants.blockdiagram.exoskeleton import state_space
 from cosim.errors import ParameterError
-from bondgraph.library.exoskeleton import parameter_values
+from plants.library.exoskeleton import parameter_values
 from estimators.lqi import LQIGain, lqi
 from estimators.observer import ObserverGain, continuous_kalman_gain, discrete_kalman_gain
 
@@ -80,7 +80,7 @@ def relative_model(params):
     Parameters
     ----------
     params : mapping str -> float
-        Exoskeleton parameters (SI), as :func:`bondgraph.library.exoskeleton.parameter_values`.
+        Exoskeleton parameters (SI), as :func:`plants.library.exoskeleton.parameter_values`.
 
     Returns
     -------

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bondgraph.blockdiagram.exoskeleton import state_space
+from plants.blockdiagram.exoskeleton import state_space
 from cosim.errors import CosimError
 
 from ..blocks import Constant, Step

@@ -35,7 +35,7 @@ References
 .. [1] T. Shin, T. Ibayashi, K. Kogiso, "Detailed dynamic model of antagonistic
    PAM system and its experimental validation: sensor-less angle and torque
    control with UKF", seed 000 (``docs/references.md``).
-.. [2] ``docs/pam-conventions.md``; :func:`bondgraph.library.pam.pam`.
+.. [2] ``docs/pam-conventions.md``; :func:`plants.library.pam.pam`.
 """
 from __future__ import annotations
 
@@ -46,8 +46,8 @@ from typing import Mapping
 
 import numpy as np
 
-from bondgraph.blockdiagram import pam as pam_bd
-from bondgraph.library.pam import FRICTION_STEP, pam, parameter_values
+from plants.blockdiagram import pam as pam_bd
+from plants.library.pam import FRICTION_STEP, pam, parameter_values
 from fmus import export
 from cosim.errors import ScenarioError
 
@@ -72,7 +72,7 @@ def rig_params(overrides: Mapping[str, float] | None = None) -> dict[str, float]
     Returns
     -------
     dict str -> float
-        Every name of :data:`bondgraph.library.pam.PARAMETERS`, SI units.
+        Every name of :data:`plants.library.pam.PARAMETERS`, SI units.
 
     Raises
     ------
@@ -155,7 +155,7 @@ def rig_start_values(u0=(5.0, 5.0), *, locked: bool = False, params=None) -> dic
     """FMU start values: the rig at rest under constant valve commands `u0`.
 
     The pressures are the rig's static pressures at `u0` and the angle the
-    rig's friction-free rest angle (:func:`bondgraph.blockdiagram.pam.equilibrium`
+    rig's friction-free rest angle (:func:`plants.blockdiagram.pam.equilibrium`
     with :func:`rig_params`): physical, but not what an estimator built on the
     nominal model would assume.
 

@@ -26,8 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
-import bondgraph.library as library
-from bondgraph.blockdiagram import pam as pam_bd
+import plants.library as library
+from plants.blockdiagram import pam as pam_bd
 from cosim.errors import CosimError
 from bondgraph.numerics.evaluate import compile_model
 from estimators import DiscretePI, JulierSigmaPoints

@@ -40,7 +40,7 @@ from types import MappingProxyType
 import numpy as np
 
 from cosim.errors import UnknownNameError
-from bondgraph.library.exoskeleton import PARAMETERS as EXO_PARAMETERS, exoskeleton
+from plants.library.exoskeleton import PARAMETERS as EXO_PARAMETERS, exoskeleton
 from bondgraph.params import Param
 from estimators.lqi import lqi
 from estimators.observer import continuous_kalman_gain

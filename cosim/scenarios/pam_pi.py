@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-import bondgraph.library as library
-from bondgraph.blockdiagram import pam
+import plants.library as library
+from plants.blockdiagram import pam
 from fmus import export
 
 from ..blocks import PI, Antagonistic, Table

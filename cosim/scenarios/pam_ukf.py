@@ -9,7 +9,7 @@ indices I (RMSE), M (max) and Q (M over the signal's range).
 Here the "rig" is :mod:`._pam_rig`: the ``pam`` bond graph with perturbed
 orifice areas, polytropic indexes and friction coefficients, exported as an
 FMU and co-simulated in our master under a Fig. 8-like input profile
-(:func:`bondgraph.blockdiagram.pam.fig8_profile`, 13 segments of 10 s; quick:
+(:func:`plants.blockdiagram.pam.fig8_profile`, 13 segments of 10 s; quick:
 0.3 s).  Per run:
 
 1. **recording**: the rig FMU, at rest at :data:`U_PRE` before t = 0, driven by
@@ -56,8 +56,8 @@ from types import MappingProxyType
 
 import numpy as np
 
-from bondgraph.blockdiagram import pam as pam_bd
-from bondgraph.library.pam import FRICTION_STEP, PARAMETERS as PAM_PARAMETERS, parameter_values
+from plants.blockdiagram import pam as pam_bd
+from plants.library.pam import FRICTION_STEP, PARAMETERS as PAM_PARAMETERS, parameter_values
 from cosim.errors import ParameterError, UnknownNameError
 from bondgraph.params import Param
 from bondgraph.numerics.simulation import simulate

@@ -124,7 +124,7 @@ class TruthPlant:
     name : str
         Benchmark name of the plant.
     model : str
-        The nominal model the diagnosis is given (a ``bondgraph.library`` name).
+        The nominal model the diagnosis is given (a ``plants.library`` name).
     inputs, outputs : tuple
         :class:`InputSpec` / :class:`OutputSpec`, in the nominal model's names and units.
     states : tuple of str

@@ -1,6 +1,6 @@
 """Truth plants mirroring the library's textbook graphs (hand-written state equations).
 
-Parameter values are the library defaults (``bondgraph/library/textbook.py``);
+Parameter values are the library defaults (``plants/library/textbook.py``);
 the states are physical (positions, velocities, currents, volumes), not the
 bond graph's momenta, so nothing here is shared with the bond-graph code.
 """

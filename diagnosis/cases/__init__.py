@@ -17,7 +17,7 @@ written to the file, as zero-order-hold tables.
 
 Manifest fields (one entry per case)
 ------------------------------------
-``name``, ``file``, ``model`` (nominal, ``bondgraph.library`` name),
+``name``, ``file``, ``model`` (nominal, ``plants.library`` name),
 ``description`` (one line), ``kind`` (issue 6 vocabulary, or ``"none"``),
 ``place`` (``{"kind": "junction"|"input"|"output", "name": ...}`` or null),
 ``equivalent_places`` (places no recording can tell from ``place``, e.g. a

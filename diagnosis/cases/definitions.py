@@ -1,6 +1,6 @@
 """The test set: nominal library models, concealed effects, excitations and sensors.
 
-Each :class:`Case` names an unmodified built-in model (``bondgraph.library``),
+Each :class:`Case` names an unmodified built-in model (``plants.library``),
 one concealed effect (``diagnosis.cases.truth``; ``None`` for a null case),
 the excitation (seeded, piecewise constant on the sample grid, DAC-quantised),
 and per recorded signal its CSV column, the column's unit and the sensor's

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-import bondgraph.library as library
+import plants.library as library
 from bondgraph.numerics import simulate
 
 from .definitions import CASES, Case

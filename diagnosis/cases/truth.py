@@ -189,7 +189,7 @@ class PamValveLag(Effect):
         return {} if tau == 0.0 else {f"valve{self.place.name[-1]}_driver_R": tau / self.c_drive}
 
     def graph(self, nominal: BondGraph) -> BondGraph:
-        from bondgraph.library.pam import valve_law
+        from plants.library.pam import valve_law
         tau = self.value("tau")
         if tau == 0.0:
             return nominal

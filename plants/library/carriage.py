@@ -13,9 +13,9 @@ integrates the junction velocity and takes no force.
 """
 from __future__ import annotations
 
-from ..elements import C, I, One, Se
-from ..graph import BondGraph
-from ..params import Param
+from bondgraph.elements import C, I, One, Se
+from bondgraph.graph import BondGraph
+from bondgraph.params import Param
 
 __all__ = ["carriage"]
 

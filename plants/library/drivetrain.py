@@ -25,9 +25,9 @@ rigid-body mode has a time constant ``(J_L + J_m/n^2) / (b_L + b_m/n^2)`` = 0.47
 """
 from __future__ import annotations
 
-from ..elements import C, I, One, R, Se, TF, Zero
-from ..graph import BondGraph
-from ..params import Param
+from bondgraph.elements import C, I, One, R, Se, TF, Zero
+from bondgraph.graph import BondGraph
+from bondgraph.params import Param
 
 __all__ = ["drivetrain"]
 

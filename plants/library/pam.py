@@ -60,10 +60,10 @@ from __future__ import annotations
 from types import MappingProxyType
 from typing import Literal, Mapping
 
-from ..elements import C, EquationElement, I, MSf, MTF, One
-from ..graph import BondGraph
-from ..guards import Guard
-from ..params import Param, values_with_overrides
+from bondgraph.elements import C, EquationElement, I, MSf, MTF, One
+from bondgraph.graph import BondGraph
+from bondgraph.guards import Guard
+from bondgraph.params import Param, values_with_overrides
 from ..errors import ArgumentError
 
 __all__ = ["pam", "PARAMETERS", "KAPPA_KNOTS", "FRICTION_STEP", "DP_CLAMP", "parameter_values",

@@ -72,5 +72,5 @@ def _lookup(name: str):
     try:
         return _MODELS[name]
     except KeyError:
-        from ..errors import GraphError
-        raise GraphError(f"no built-in model named {name!r}; available: {', '.join(_MODELS)}") from None
+        from ..errors import UnknownModelError
+        raise UnknownModelError(name, _MODELS, f"no built-in model named {name!r}; available: {', '.join(_MODELS)}") from None

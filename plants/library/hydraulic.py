@@ -23,9 +23,9 @@ from __future__ import annotations
 
 import math
 
-from ..elements import C, I, One, R, Sf, Zero
-from ..graph import BondGraph
-from ..params import Param
+from bondgraph.elements import C, I, One, R, Sf, Zero
+from bondgraph.graph import BondGraph
+from bondgraph.params import Param
 
 __all__ = ["hydraulic", "hydraulic_values"]
 

@@ -1,4 +1,4 @@
-"""The PAM joint's bond graph (``bondgraph.library.pam``) against its state-space twin (eq. 11a).
+"""The PAM joint's bond graph (``plants.library.pam``) against its state-space twin (eq. 11a).
 
 Both run the project's fixed-step scheme (1 ms samples, inputs held per
 sample, 4 classic RK4 sub-steps of 0.25 ms, friction held per sub-step),
@@ -73,7 +73,7 @@ def compare_fig8(*, variant: str = "full", duration: float = 20.0, segment: floa
         Length of each step/ramp segment of the profile.
     """
     from ..library.pam import pam
-    from ..numerics.simulation import simulate
+    from bondgraph.numerics.simulation import simulate
 
     _, u = bd.fig8_profile(segment=segment)
     n = int(round(duration / bd.SAMPLE_TIME))

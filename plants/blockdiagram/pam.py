@@ -1,7 +1,7 @@
 """The antagonistic PAM joint's state-space model, eq. (11a) of [1]_, in plain numpy.
 
 Written from the paper and the project's conventions [2]_ only, independently of
-the bond graph in :mod:`bondgraph.library.pam`, so that the two can be compared.
+the bond graph in :mod:`plants.library.pam`, so that the two can be compared.
 State, input and output (eqs. (1), (11a), (11b)):
 
 .. math::

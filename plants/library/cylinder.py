@@ -40,9 +40,9 @@ from __future__ import annotations
 
 import math
 
-from ..elements import EquationElement, MTF, One, Se
-from ..graph import BondGraph
-from ..params import Param
+from bondgraph.elements import EquationElement, MTF, One, Se
+from bondgraph.graph import BondGraph
+from bondgraph.params import Param
 from ..errors import ArgumentError
 
 __all__ = ["pneumatic_cylinder", "BORE_AREA"]

@@ -50,9 +50,9 @@ from __future__ import annotations
 from types import MappingProxyType
 from typing import Mapping
 
-from ..elements import C, I, One, R, Se, Sf, TF, Zero
-from ..graph import BondGraph
-from ..params import Param, values_with_overrides
+from bondgraph.elements import C, I, One, R, Se, Sf, TF, Zero
+from bondgraph.graph import BondGraph
+from bondgraph.params import Param, values_with_overrides
 
 __all__ = ["exoskeleton", "PARAMETERS", "parameter_values"]
 

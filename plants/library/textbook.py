@@ -5,9 +5,9 @@ on a plot of a few seconds; every graph declares readable outputs.
 """
 from __future__ import annotations
 
-from ..elements import C, GY, I, One, R, Se, Sf, TF, Zero
-from ..graph import BondGraph
-from ..params import Param
+from bondgraph.elements import C, GY, I, One, R, Se, Sf, TF, Zero
+from bondgraph.graph import BondGraph
+from bondgraph.params import Param
 
 __all__ = ["mass_spring_damper", "dc_motor", "rlc_series", "coupled_tanks", "geared_inertias",
            "resistor_loop"]

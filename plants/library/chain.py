@@ -1,8 +1,8 @@
 """A chain of N mass-spring-damper stages, the derivation benchmark's graph."""
 from __future__ import annotations
 
-from ..elements import C, I, One, R, Se, Zero
-from ..graph import BondGraph
+from bondgraph.elements import C, I, One, R, Se, Zero
+from bondgraph.graph import BondGraph
 from ..errors import ArgumentError
 
 __all__ = ["mass_spring_chain"]

@@ -1,6 +1,6 @@
 """The exoskeleton's block-diagram model, eqs. (1)-(6) of [1]_, written from the paper.
 
-Independent of the bond graph in :mod:`bondgraph.library.exoskeleton`: the
+Independent of the bond graph in :mod:`plants.library.exoskeleton`: the
 matrices are typed in from the paper's equations, in the paper's state order
 
 .. math::
@@ -164,7 +164,7 @@ def section_5_1_inputs(t, *, tau_m: float = 0.1, w_h: float = 0.05, delay: float
 
 
 def bond_graph_state_map(params: Mapping[str, float]) -> np.ndarray:
-    """T with ``x_paper = T x_bg`` for the states of :func:`bondgraph.library.exoskeleton.exoskeleton`.
+    """T with ``x_paper = T x_bg`` for the states of :func:`plants.library.exoskeleton.exoskeleton`.
 
     Bond-graph states ``(p_J_m, q_k_g, p_J_sint, q_k_s, p_J_sext, q_k_eh,
     q_theta_h)``: ``theta_h = q_theta_h``, ``theta_sext = q_k_eh + theta_h``,
@@ -219,7 +219,7 @@ def compare_section_5_1(*, params: Mapping[str, float] | None = None, t_end: flo
         Horizon and sample spacing.
     """
     from ..library.exoskeleton import exoskeleton, parameter_values
-    from ..numerics.simulation import simulate
+    from bondgraph.numerics.simulation import simulate
 
     overrides = {"b_f": 0.0} if params is None else dict(params)
     values = parameter_values(overrides)

@@ -269,7 +269,7 @@ def _cmd_fmu_info(args) -> int:
 
 
 def _cmd_cosim(args) -> int:
-    from cosim import scenarios
+    import reproductions as scenarios
     if args.list or not args.scenario:
         width = max(len(n) for n in scenarios.names())
         for name in scenarios.names():

@@ -5,7 +5,7 @@ to PNG, simulate the mass-spring-damper step response and the DC motor
 start-up and plot them, then compare the exoskeleton's and the PAM joint's
 bond graphs with the papers' block-diagram / state-space models, export the
 PAM joint as an FMU and close a PI angle loop around it in the co-simulation
-master, run the papers' closed-loop scenarios (``cosim.scenarios``), a small
+master, run the papers' closed-loop scenarios (``reproductions``), a small
 Monte-Carlo of the UKF scenario on a local Dask cluster (``sweeps``), and end
 with one diagnosis of a recording with a concealed effect (``diagnosis``).
 """
@@ -86,7 +86,7 @@ def run_demo(output_dir="demo-output", *, quick: bool = False) -> dict:
     _step("PAM joint as an FMU: validate it, then close a PI angle loop in the co-simulation master")
     from fmpy.validation import validate_fmu
 
-    from cosim.scenarios import pam_pi
+    from reproductions import pam_pi
     from fmus import export
     from fmus.info import fmu_info
     written["pam.fmu"] = export(library.build("pam"), out / "pam.fmu")

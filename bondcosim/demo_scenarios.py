@@ -43,7 +43,7 @@ def summary_line(name: str, result: dict) -> str:
 
 def run_scenarios(out: Path, *, quick: bool = False, step=print) -> dict:
     """Run the papers' scenarios that are registered, plots into `out`; returns the files written."""
-    from cosim import scenarios
+    import reproductions as scenarios
 
     written = {}
     todo = [n for n in PAPER_SCENARIOS if n in scenarios.names()]

@@ -1,6 +1,7 @@
 """cosim: the co-simulation master for FMUs and Python components.
 
-Layer 4 of the design (imports ``bondgraph`` and ``fmus``).
+The co-simulation engine only; the papers' closed loops built on it are in
+:mod:`reproductions` (``docs/architecture.md``).
 
 Components
     :class:`Component` (the protocol the master drives), :class:`Port`,
@@ -11,8 +12,6 @@ Blocks
     :class:`Constant`, :class:`Step`, :class:`Function`, :class:`Table`,
     :class:`PI` (discrete, with limits and anti-windup), :class:`Antagonistic`
     (one command split into an antagonistic pair).
-Scenarios
-    :mod:`cosim.scenarios` (closed loops around the seed plants' FMUs).
 Master
     :class:`CoSimulation` (fixed communication step, execution order and
     algebraic-loop detection from direct feedthrough) returning a

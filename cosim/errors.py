@@ -10,18 +10,9 @@ from __future__ import annotations
 from bondgraph.errors import (AlgebraicLoopError, BondcosimError, CompilationError, CosimError, FMUError,
                               FMUStepDiscarded, ParameterError, SimulationError, UnitError, UnknownNameError)
 
-__all__ = ["BondcosimError", "CosimError", "AlgebraicLoopError", "ScenarioError", "PortTypeError",
+__all__ = ["BondcosimError", "CosimError", "AlgebraicLoopError", "PortTypeError",
            "CompilationError", "FMUError", "FMUStepDiscarded", "ParameterError", "SimulationError", "UnitError",
            "UnknownNameError"]
-
-
-class ScenarioError(CosimError):
-    """A closed-loop scenario called with a bad argument (a signal of the wrong
-    shape, an unknown controller kind); ``name`` is the argument."""
-
-    def __init__(self, message: str, name: str = ""):
-        self.name = str(name)
-        super().__init__(message)
 
 
 class PortTypeError(BondcosimError, TypeError):

@@ -83,7 +83,7 @@ def _check_names(problems, spec: SweepSpec, known: dict, target: str) -> None:
 
 
 class ScenarioRunner:
-    """Runs one closed-loop scenario of :mod:`cosim.scenarios` per call.
+    """Runs one closed-loop scenario of :mod:`reproductions` per call.
 
     Parameters
     ----------
@@ -101,7 +101,7 @@ class ScenarioRunner:
     run_time_hint_s = 0.5
 
     def __init__(self, spec: SweepSpec):
-        from cosim import scenarios
+        import reproductions as scenarios
         self.target = spec.target
         self.label = f"scenario {self.target.name!r}"
         table = scenarios.parameters(self.target.name)      # UnknownNameError lists the scenarios
@@ -121,14 +121,14 @@ class ScenarioRunner:
 
     def prepare(self) -> None:
         """Export the scenario's FMUs once, keeping their bytes (shipped with the runner)."""
-        from cosim import scenarios
+        import reproductions as scenarios
         with tempfile.TemporaryDirectory() as tmp:
             files = scenarios.export_fmus(self.target.name, tmp)
             self.fmus = {Path(p).name: Path(p).read_bytes() for p in files.values()}
 
     def __call__(self, params: dict, seed: int) -> dict:
         """One scenario run; its numeric results flattened (:func:`flatten`), kept metrics only."""
-        from cosim import scenarios
+        import reproductions as scenarios
         result = scenarios.run(self.target.name, quick=self.target.quick, params={**self.fixed, **params},
                                seed=seed, fmu_dir=_local_files(self.fmus))
         return _select(flatten(result), self.keep, self.label)

@@ -1,7 +1,7 @@
 """A sweep's specification: what to run, what to vary, what to keep -- typed data, and its loader.
 
 A spec file (TOML or YAML) holds the same keys as :class:`SweepSpec`; either a
-scenario (``cosim.scenarios``) or a model (a bond graph simulated open loop)::
+scenario (``reproductions``) or a model (a bond graph simulated open loop)::
 
     name = "ukf-robustness"
     scenario = "pam-ukf"            # bondcosim cosim --list
@@ -45,7 +45,7 @@ OUTPUT_STATS = ("final", "mean", "min", "max", "rms", "std")
 
 @dataclass(frozen=True)
 class ScenarioTarget:
-    """A closed-loop scenario of :mod:`cosim.scenarios` run once per sweep point.
+    """A closed-loop scenario of :mod:`reproductions` run once per sweep point.
 
     Attributes
     ----------

@@ -99,7 +99,7 @@ def summarise(table, spec: SweepSpec, runner) -> dict:
     """Counts, quantiles of the plotted metrics, and the sensitivity ranking (``summary.json``)."""
     wanted = tuple(spec.metrics)
     if not wanted and isinstance(runner, ScenarioRunner):
-        from cosim import scenarios
+        import reproductions as scenarios
         wanted = tuple(m for m in scenarios.headline_metrics(spec.target.name) if f"metric.{m}" in table)
     metrics = metric_columns(table, wanted)[:8]
     params = varied_columns(table)

@@ -5,7 +5,7 @@ import pandas as pd
 import pytest
 
 from bondcosim.cli import main
-from cosim import scenarios
+import reproductions as scenarios
 
 
 def test_montecarlo_writes_one_row_per_run_and_its_plots(tmp_path, capsys):

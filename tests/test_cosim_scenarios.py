@@ -1,8 +1,8 @@
-"""Scenarios of cosim.scenarios: seed plants exported as FMUs, closed loops in the master."""
+"""Scenarios of reproductions: seed plants exported as FMUs, closed loops in the master."""
 import numpy as np
 import pytest
 
-from cosim.scenarios import pam_pi
+from reproductions import pam_pi
 
 
 def test_pam_pi_scenario_tracks_the_setpoints(tmp_path):
@@ -35,7 +35,7 @@ def test_cosim_cli_runs_a_scenario_and_names_unknown_ones(tmp_path, capsys):
 def test_our_fmus_in_our_master_equal_the_python_model(tmp_path, version):
     """The exported pam FMU (FMI 2.0 and 3.0) driven by zero-order-hold tables in the
     master gives bondgraph.numerics.simulate's result with the same tables (same RK4 kernel)."""
-    import bondgraph as bg
+    from bondgraph.numerics import simulate
     import plants.library as library
     from cosim import CoSimulation, FMUComponent, Table
     from fmus import export
@@ -49,7 +49,7 @@ def test_our_fmus_in_our_master_equal_the_python_model(tmp_path, version):
          Table("b", t, 10.0 - u1, unit="V", interpolation="hold"), FMUComponent(fmu, "plant")],
         [("a.y", "plant.u1"), ("b.y", "plant.u2")], step=dt)
     res = sim.run(n * dt)
-    ref = bg.simulate(library.build("pam"), (0.0, n * dt), output_interval=dt,
+    ref = simulate(library.build("pam"), (0.0, n * dt), output_interval=dt,
                       inputs={"u1": (t, u1), "u2": (t, 10.0 - u1)})
     assert np.ptp(ref["psi"]) > 10.0
     for name in ("psi", "P1", "P2", "tau"):

@@ -13,7 +13,7 @@ import pytest
 from bondgraph.errors import BondcosimError
 
 ROOT = Path(__file__).resolve().parents[1]
-LAYERS = ("bondgraph", "fmus", "estimators", "cosim", "diagnosis")
+LAYERS = ("bondgraph", "plants", "fmus", "estimators", "cosim", "reproductions", "diagnosis")
 BUILTIN_ERRORS = {c for c in vars(builtins).values() if isinstance(c, type) and issubclass(c, Exception)}
 
 
@@ -49,7 +49,7 @@ def test_no_plain_builtin_exception_is_raised(layer):
     assert found == []
 
 
-@pytest.mark.parametrize("layer", ("fmus", "estimators", "cosim", "diagnosis"))
+@pytest.mark.parametrize("layer", ("plants", "fmus", "estimators", "cosim", "reproductions", "diagnosis"))
 def test_each_layer_imports_its_errors_from_its_own_module(layer):
     found = [str(p.relative_to(ROOT)) for p in _sources(layer) if "from bondgraph.errors import" in p.read_text()]
     assert found == []

@@ -8,7 +8,7 @@ from bondgraph.numerics.evaluate import compile_model
 from plants.library import build
 from cosim import CoSimulation, FMUComponent, Function
 from cosim.estimator_blocks import UKFBlock
-from cosim.scenarios._pam_sensorless_loop import (UKF_P0, UKF_Q, UKF_R, DiscretePIBlock,
+from reproductions._pam_sensorless_loop import (UKF_P0, UKF_Q, UKF_R, DiscretePIBlock,
                                                   PressureSensors)
 from estimators import DiscretePI, JulierSigmaPoints, StateMap, UnscentedKalmanFilter
 from fmus import export

@@ -11,10 +11,10 @@ import pytest
 
 from plants.blockdiagram.exoskeleton import state_space
 from bondgraph.errors import ParameterError, UnobservableModeError
-from cosim.scenarios import _exo_analysis as an
-from cosim.scenarios import _exo_design as de
-from cosim.scenarios import exo_lqi
-from cosim.scenarios._exo_loop import monolithic
+from reproductions import _exo_analysis as an
+from reproductions import _exo_design as de
+from reproductions import exo_lqi
+from reproductions._exo_loop import monolithic
 from estimators.observer import continuous_kalman_gain
 
 
@@ -186,7 +186,7 @@ def test_run_json_shape_and_plots(quick_run):
 
 def test_noise_block_names_its_problem():
     from bondgraph.errors import CosimError
-    from cosim.scenarios._exo_loop import AddNoise
+    from reproductions._exo_loop import AddNoise
     with pytest.raises(CosimError, match="'act'.*shape \\(n_samples, 2\\)"):
         AddNoise("act", ("tau_m", "w_h"), np.zeros((5, 3)), 1e-4)
     with pytest.raises(CosimError, match="unknown signal.*theta"):

@@ -6,9 +6,9 @@ import pytest
 import scipy.linalg
 import scipy.signal
 
-from cosim.scenarios import _kpid_metrics as metrics
-from cosim.scenarios import kpid
-from cosim.scenarios._kpid_plant import arx_response, continuous_modes, pam_single_equations
+from reproductions import _kpid_metrics as metrics
+from reproductions import kpid
+from reproductions._kpid_plant import arx_response, continuous_modes, pam_single_equations
 from estimators.kpid import PAPER_SIMULATION, kpid_model, kpid_model_zoh
 
 # eq. (15) of seed 002 as a transfer function in z: numerator, denominator

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from bondgraph.errors import CosimError
-from cosim.scenarios import _pam_sensorless_metrics as metrics
-from cosim.scenarios import pam_sensorless_pi as scenario
+from reproductions import _pam_sensorless_metrics as metrics
+from reproductions import pam_sensorless_pi as scenario
 
 # seed 000, Section IV.C 1) and 2): worst steady-state errors and reference ranges as printed
 PAPER_ANGLE = (2.1, 40.0, 94.75)      # deg, deg, %

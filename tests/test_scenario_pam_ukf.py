@@ -9,10 +9,10 @@ import pytest
 from plants.blockdiagram import pam as pam_bd
 from plants.library.pam import FRICTION_STEP, PARAMETERS
 from bondgraph.numerics.simulation import simulate
-from cosim.scenarios import _pam_rig as rig
-from cosim.scenarios import pam_ukf
-from cosim.scenarios._pam_ukf_metrics import indices, max_index, ratio_index, rmse_index
-from cosim.scenarios._pam_ukf_plots import FILES
+from reproductions import _pam_rig as rig
+from reproductions import pam_ukf
+from reproductions._pam_ukf_metrics import indices, max_index, ratio_index, rmse_index
+from reproductions._pam_ukf_plots import FILES
 
 
 # -- indices I, M, Q (Section IV of seed 000) ------------------------------------------------

@@ -1,15 +1,15 @@
-"""Scenario parameter overrides (``cosim.scenarios.run(params=, seed=, fmu_dir=)``), used by sweeps."""
+"""Scenario parameter overrides (``reproductions.run(params=, seed=, fmu_dir=)``), used by sweeps."""
 import pytest
 
 from bondgraph.errors import ParameterError, UnknownNameError
 from plants.library.pam import PARAMETERS as PAM
-from cosim import scenarios
-from cosim.scenarios._pam_rig import RIG_PERTURBATION, rig_params
+import reproductions as scenarios
+from reproductions._pam_rig import RIG_PERTURBATION, rig_params
 
 
 def test_pam_ukf_parameters_default_to_the_rig():
     table = scenarios.parameters("pam-ukf")
-    # the rig of cosim/scenarios/_pam_rig.py: Table II times RIG_PERTURBATION
+    # the rig of reproductions/_pam_rig.py: Table II times RIG_PERTURBATION
     assert table["A1"].value == pytest.approx(PAM["A1"].value * RIG_PERTURBATION["A1"], rel=1e-12)
     assert table["A1"].unit == "m^2" and table["segment_s"].unit == "s" and table["sigma_p"].unit == "Pa"
     assert table["J"].value == PAM["J"].value

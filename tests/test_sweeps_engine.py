@@ -9,7 +9,7 @@ import pytest
 
 from plants import library
 from bondgraph.numerics.simulation import simulate
-from cosim import scenarios
+import reproductions as scenarios
 from sweeps import MetricError, StoreError, montecarlo_spec, run_sweep, spec_from_dict
 
 MSD = {"name": "mass-spring-damper", "stop_time": 20.0, "output_interval": 0.05}

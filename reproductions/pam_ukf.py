@@ -37,7 +37,7 @@ Reading of the paper (see ``docs/reproduction_pam_ukf.md``)
   initial error by construction, so M over the whole record would be
   :math:`|z(0)|` for both; the whole-record values are under ``full_record``.
 
-Run:  python -m cosim.scenarios.pam_ukf [OUTPUT_DIR]
+Run:  python -m reproductions.pam_ukf [OUTPUT_DIR]
 
 References
 ----------
@@ -58,20 +58,20 @@ import numpy as np
 
 from plants.blockdiagram import pam as pam_bd
 from plants.library.pam import FRICTION_STEP, PARAMETERS as PAM_PARAMETERS, parameter_values
-from cosim.errors import ParameterError, UnknownNameError
+from .errors import ParameterError, UnknownNameError
 from bondgraph.params import Param
 from bondgraph.numerics.simulation import simulate
 from estimators import JulierSigmaPoints, UnscentedKalmanFilter
 from estimators.ukf_model import StateMap
 
-from ..blocks import Table
-from ..fmu_component import FMUComponent
-from ..master import CoSimulation
+from cosim.blocks import Table
+from cosim.fmu_component import FMUComponent
+from cosim.master import CoSimulation
 from ._pam_paper_ukf import KAPPA, PAPER_P0, PAPER_Q, PAPER_R, paper_state_map
 from ._pam_rig import RIG_PERTURBATION, add_pressure_noise, export_rig, nominal_equations, rig_params, \
     rig_start_values
 from ._pam_ukf_metrics import indices
-from cosim.errors import ScenarioError
+from .errors import ScenarioError
 
 __all__ = ["NAME", "DESCRIPTION", "PARAMETERS", "SWEEP_METRICS", "FMU_FILES", "run", "export_fmus", "inputs",
            "record_rig", "make_ukf", "ukf_estimates", "model_alone", "estimator_start", "experiment",

@@ -28,15 +28,15 @@ import numpy as np
 
 import plants.library as library
 from plants.blockdiagram import pam as pam_bd
-from cosim.errors import CosimError
+from .errors import CosimError
 from bondgraph.numerics.evaluate import compile_model
 from estimators import DiscretePI, JulierSigmaPoints
 
-from ..blocks import Table
-from ..component import Port, PythonBlock
-from ..estimator_blocks import UKFBlock
-from ..fmu_component import FMUComponent
-from ..master import CoSimulation
+from cosim.blocks import Table
+from cosim.component import Port, PythonBlock
+from cosim.estimator_blocks import UKFBlock
+from cosim.fmu_component import FMUComponent
+from cosim.master import CoSimulation
 from ._pam_paper_ukf import KAPPA, PAPER_P0, PAPER_Q, PAPER_R, paper_state_map
 from ._pam_rig import export_rig, rig_start_values
 

@@ -1,4 +1,7 @@
-"""Closed-loop scenarios: the seed plants exported as FMUs, in the co-simulation master.
+"""reproductions: the papers' closed-loop scenarios, the seed plants exported as FMUs in the co-simulation master.
+
+An application of the engine (:mod:`cosim`), above it in the layer order; used by
+:mod:`sweeps` and the ``bondcosim`` command.
 
 Each scenario is a module with ``NAME``, ``DESCRIPTION`` and
 ``run(plot_dir=None, *, quick=False) -> dict``: it exports its plant as an
@@ -27,7 +30,7 @@ from __future__ import annotations
 
 import importlib
 
-from cosim.errors import ParameterError, UnknownNameError
+from .errors import ParameterError, UnknownNameError
 
 __all__ = ["names", "describe", "run", "parameters", "export_fmus", "headline_metrics", "SCENARIOS"]
 

@@ -22,7 +22,7 @@ torque (Figs. 13-14); the -3 dB band of trunk velocity -> estimated body
 torque (Fig. 15); the step test (Figs. 16-20): largest motor torque against
 +-0.56 N m and the body-torque estimation error.
 
-Run:  python -m cosim.scenarios.exo_lqi [OUTPUT_DIR]
+Run:  python -m reproductions.exo_lqi [OUTPUT_DIR]
 
 References
 ----------
@@ -39,7 +39,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from cosim.errors import UnknownNameError
+from .errors import UnknownNameError
 from plants.library.exoskeleton import PARAMETERS as EXO_PARAMETERS, exoskeleton
 from bondgraph.params import Param
 from estimators.lqi import lqi

@@ -24,7 +24,7 @@ References
 from __future__ import annotations
 
 import numpy as np
-from cosim.errors import ScenarioError
+from .errors import ScenarioError
 
 __all__ = ["rmse_index", "max_index", "ratio_index", "indices"]
 

@@ -54,7 +54,7 @@ def save_plots(runs: dict, out: Path, *, t_converge: float) -> list[Path]:
     ----------
     runs : dict
         ``{"free": ..., "locked": ...}`` as returned by
-        :func:`cosim.scenarios.pam_ukf.experiment`.
+        :func:`reproductions.pam_ukf.experiment`.
     out : pathlib.Path
         Directory (created if missing).
     t_converge : float, s

@@ -49,7 +49,7 @@ import numpy as np
 from plants.blockdiagram import pam as pam_bd
 from plants.library.pam import FRICTION_STEP, pam, parameter_values
 from fmus import export
-from cosim.errors import ScenarioError
+from .errors import ScenarioError
 
 __all__ = ["RIG_PERTURBATION", "rig_params", "rig_graph", "nominal_equations", "export_rig",
            "rig_start_values", "add_pressure_noise"]

@@ -25,12 +25,12 @@ from __future__ import annotations
 import numpy as np
 
 from plants.blockdiagram.exoskeleton import state_space
-from cosim.errors import CosimError
+from .errors import CosimError
 
-from ..blocks import Constant, Step
-from ..component import Port, PythonBlock
-from ..fmu_component import FMUComponent
-from ..master import CoSimulation
+from cosim.blocks import Constant, Step
+from cosim.component import Port, PythonBlock
+from cosim.fmu_component import FMUComponent
+from cosim.master import CoSimulation
 from ._exo_design import ExoDesign
 
 __all__ = ["ObserverLQI", "AddNoise", "cosimulate", "monolithic", "NOISE_COLUMNS"]

@@ -50,7 +50,7 @@ import numpy as np
 from scipy.signal import cont2discrete
 
 from plants.blockdiagram.exoskeleton import state_space
-from cosim.errors import ParameterError
+from .errors import ParameterError
 from plants.library.exoskeleton import parameter_values
 from estimators.lqi import LQIGain, lqi
 from estimators.observer import ObserverGain, continuous_kalman_gain, discrete_kalman_gain

@@ -11,7 +11,7 @@ The plant is slow (pressures settle over about a second) and the friction
 sticks, so a plain PI settles within a few degrees, with overshoot on the
 large steps; the UKF-based controllers of seed 000 are a later scenario.
 
-Run:  python -m cosim.scenarios.pam_pi [OUTPUT_DIR]
+Run:  python -m reproductions.pam_pi [OUTPUT_DIR]
 """
 from __future__ import annotations
 
@@ -25,9 +25,9 @@ import plants.library as library
 from plants.blockdiagram import pam
 from fmus import export
 
-from ..blocks import PI, Antagonistic, Table
-from ..fmu_component import FMUComponent
-from ..master import CoSimulation
+from cosim.blocks import PI, Antagonistic, Table
+from cosim.fmu_component import FMUComponent
+from cosim.master import CoSimulation
 
 U0 = 5.0          # V, common valve command (both muscles half open)
 V_MAX = 5.0       # V, so u1, u2 stay in 0...10 V

@@ -7,12 +7,12 @@ pressures only, and the discrete PI of Section IV.C
 :math:`\\beta = 5.5` V, 1 ms) closes the loop on the estimate.  The true
 angle / torque is used only to evaluate the tracking, by the paper's
 steady-state tracking performance
-(:mod:`cosim.scenarios._pam_sensorless_metrics`): 94.75 % (angle) and
+(:mod:`reproductions._pam_sensorless_metrics`): 94.75 % (angle) and
 95.0 % (torque) reported.
 
-Set-up (:mod:`cosim.scenarios._pam_sensorless_loop`):
+Set-up (:mod:`reproductions._pam_sensorless_loop`):
 
-* plant: the "rig" FMU (:mod:`cosim.scenarios._pam_rig`: ``pam`` with
+* plant: the "rig" FMU (:mod:`reproductions._pam_rig`: ``pam`` with
   perturbed orifice areas, polytropic indexes and friction), started at its
   rest state under :math:`\\beta`; the torque loop uses the rig locked at
   :math:`\\psi = 0` (``pam-locked``), as the paper's torque experiments
@@ -33,7 +33,7 @@ Readings (see ``docs/reproduction_pam_sensorless_pi.md``): the angle error
 references stay within -10...+20 deg and the performance is divided by their
 span (30 deg), not by 40 deg.
 
-Run:  python -m cosim.scenarios.pam_sensorless_pi [OUTPUT_DIR]
+Run:  python -m reproductions.pam_sensorless_pi [OUTPUT_DIR]
 
 References
 ----------
@@ -109,7 +109,7 @@ def evaluate(loop: str, result, *, quick: bool = False) -> dict:
     Returns
     -------
     dict
-        :func:`~cosim.scenarios._pam_sensorless_metrics.steady_state_performance`
+        :func:`~reproductions._pam_sensorless_metrics.steady_state_performance`
         keys, plus ``paper_pct``, ``unit``, ``estimation_rmse`` (estimate minus
         true, after the first second), ``settle_s``, ``duration_s`` and
         ``performance_pct_paper_span`` (the worst error divided by the

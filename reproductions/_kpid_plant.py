@@ -62,7 +62,7 @@ import numpy as np
 import sympy as sp
 
 from bondgraph.system import StateEquations
-from cosim.errors import ScenarioError
+from .errors import ScenarioError
 
 __all__ = ["ARX_A", "ARX_B", "T_ID", "continuous_modes", "pam_single_equations", "arx_response"]
 

@@ -26,7 +26,7 @@ Reading of the paper (see :mod:`estimators.kpid` and ``docs/reproduction_kpid.md
 - the indicators (:mod:`._kpid_metrics`) on the **true** plant output ``y``;
   KPID's filtered output ``y_e`` and the noise-free loops are reported apart.
 
-Run:  python -m cosim.scenarios.kpid [OUTPUT_DIR]
+Run:  python -m reproductions.kpid [OUTPUT_DIR]
 
 References
 ----------
@@ -45,13 +45,13 @@ import numpy as np
 from estimators.kpid import KPID, PAPER_SIMULATION, PID
 from fmus import export
 
-from ..blocks import Function, Table
-from ..component import Port, PythonBlock
-from ..fmu_component import FMUComponent
-from ..master import CoSimulation
+from cosim.blocks import Function, Table
+from cosim.component import Port, PythonBlock
+from cosim.fmu_component import FMUComponent
+from cosim.master import CoSimulation
 from ._kpid_metrics import step_metrics, tracking_precision_pct
 from ._kpid_plant import ARX_A, ARX_B, pam_single_equations
-from cosim.errors import ScenarioError
+from .errors import ScenarioError
 
 NAME = "kpid"
 DESCRIPTION = "single PAM of seed 002 (eq. 15) as FMU: PID vs Kalman-PID under the paper's noise"

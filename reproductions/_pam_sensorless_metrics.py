@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cosim.errors import CosimError
+from .errors import CosimError
 
 __all__ = ["steady_state_mask", "steady_state_performance", "plot_loop"]
 

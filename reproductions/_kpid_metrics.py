@@ -22,7 +22,7 @@ References
 from __future__ import annotations
 
 import numpy as np
-from cosim.errors import ScenarioError
+from .errors import ScenarioError
 
 __all__ = ["tracking_precision_pct", "step_metrics", "SETTLING_BAND", "STEADY_FRACTION"]
 

@@ -44,8 +44,8 @@ import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
-from .draw_layout import (_FONT, _Free, _box, _label, _label_spots, _port_spots, _positions,
-                          _subscript_spots)
+from .draw_layout import (FONT_SIZES, FreeSpace, element_box, element_label, label_spots, port_spots, node_positions,
+                          subscript_spots)
 from .errors import ArgumentError, BondcosimError, CausalityError
 
 __all__ = ["draw", "draw_geometry", "DrawingGeometry", "ElementGeometry", "BondGeometry", "LAYOUTS"]
@@ -255,8 +255,8 @@ def draw_geometry(graph, *, layout="auto", causality=True) -> DrawingGeometry:
     assignment, notes, conflicted = _causality(graph, causality)
     derivative = tuple(assignment.derivative) if assignment else ()
     arbitrary = tuple(assignment.arbitrary) if assignment else ()
-    boxes = {n: _box(e) for n, e in graph.elements.items()}
-    pos = _positions(graph, boxes, layout)
+    boxes = {n: element_box(e) for n, e in graph.elements.items()}
+    pos = node_positions(graph, boxes, layout)
     status = {n: "conflict" for n in conflicted}
     status.update({n: "derivative" for n, _ in derivative})
     elements = {n: _element_geometry(graph, n, pos, boxes[n], status.get(n, "")) for n in graph.elements}
@@ -283,7 +283,7 @@ def _causality(graph, wanted):
 # -- geometry -----------------------------------------------------------------
 def _element_geometry(graph, name, pos, box, status) -> ElementGeometry:
     element, (x, y), (w, h) = graph.elements[name], pos[name], box
-    return ElementGeometry(name, element.kind, _label(element), (x, y), (x - w, y - h, x + w, y + h), None, status)
+    return ElementGeometry(name, element.kind, element_label(element), (x, y), (x - w, y - h, x + w, y + h), None, status)
 
 
 def _exit(box_half, d) -> float:
@@ -334,21 +334,21 @@ def _bond_geometries(graph, elements, assignment, derivative, arbitrary) -> dict
             stroke = ((p[0] + n[0] * _STROKE, p[1] + n[1] * _STROKE), (p[0] - n[0] * _STROKE, p[1] - n[1] * _STROKE))
         status = "derivative" if b.name in dbonds else "arbitrary" if b.name in abonds and stroke else ""
         lines[b.name] = (start, end, d, n, barb, stroke_end, stroke, status)
-    free = _Free([e.box for e in elements.values()],
+    free = FreeSpace([e.box for e in elements.values()],
                  [seg for s, e, _, _, barb, _, stroke, _ in lines.values() for seg in ((s, e), barb, stroke) if seg])
     for name, e in elements.items():
         if graph.elements[name].ports is None:
             others = [elements[b.head.element if b.tail.element == name else b.tail.element].xy
                       for b in graph.bonds.values() if name in (b.tail.element, b.head.element)]
             box = ((e.box[2] - e.box[0]) / 2, (e.box[3] - e.box[1]) / 2)
-            sub = free.place(_subscript_spots(e.xy, box, others), name, _FONT["subscript"], ignore=e.box)
+            sub = free.place(subscript_spots(e.xy, box, others), name, FONT_SIZES["subscript"], ignore=e.box)
             elements[name] = ElementGeometry(e.name, e.kind, e.label, e.xy, e.box, sub, e.status)
-    ports = {b.name: tuple((port, *free.place(spots, port, _FONT["port"]))
-                           for port, spots in _port_spots(graph, b, *lines[b.name][:4])) for b in graph.bonds.values()}
+    ports = {b.name: tuple((port, *free.place(spots, port, FONT_SIZES["port"]))
+                           for port, spots in port_spots(graph, b, *lines[b.name][:4])) for b in graph.bonds.values()}
     out = {}
     for b in graph.bonds.values():
         start, end, d, n, barb, stroke_end, stroke, status = lines[b.name]
-        label = free.place(_label_spots(start, end, n), b.name, _FONT["bond"])
+        label = free.place(label_spots(start, end, n), b.name, FONT_SIZES["bond"])
         out[b.name] = BondGeometry(b.name, b.tail.element, b.head.element, start, end, barb, "left", stroke_end,
                                    stroke, status, label, ports[b.name])
     return out
@@ -414,24 +414,24 @@ def _draw_bond(ax, b: BondGeometry, scale):
         ax.plot([ax_, cx], [ay, cy], color=color, lw=(2.0 if b.status else 1.4) * scale,
                 solid_capstyle="butt", gid=f"stroke:{b.name}")
     (lx, ly), ha, va, _ = b.label
-    ax.text(lx, ly, b.name, fontsize=_FONT["bond"] * scale, color="0.45", ha=ha, va=va, gid=f"bondname:{b.name}")
+    ax.text(lx, ly, b.name, fontsize=FONT_SIZES["bond"] * scale, color="0.45", ha=ha, va=va, gid=f"bondname:{b.name}")
     for text, (px, py), ha, va, _ in b.ports:
-        ax.text(px, py, text, fontsize=_FONT["port"] * scale, color="navy", style="italic", ha=ha, va=va)
+        ax.text(px, py, text, fontsize=FONT_SIZES["port"] * scale, color="navy", style="italic", ha=ha, va=va)
 
 
 def _draw_element(ax, e: ElementGeometry, scale):
     color = _COLORS[e.status]
     x, y = e.xy
     if e.kind in ("0", "1"):
-        ax.text(x, y, e.label, fontsize=_FONT["junction"] * scale, fontweight="bold", color=color,
+        ax.text(x, y, e.label, fontsize=FONT_SIZES["junction"] * scale, fontweight="bold", color=color,
                 ha="center", va="center", gid=f"element:{e.name}")
         (sx, sy), ha, va, _ = e.subscript
-        ax.text(sx, sy, e.name, fontsize=_FONT["subscript"] * scale, color="0.3", ha=ha, va=va)
+        ax.text(sx, sy, e.name, fontsize=FONT_SIZES["subscript"] * scale, color="0.3", ha=ha, va=va)
         return
     bbox = None
     if e.kind == "Eq":
         bbox = dict(boxstyle="round,pad=0.35", fc="white", ec=color, lw=0.9 * scale)
-    ax.text(x, y, e.label, fontsize=_FONT["element"] * scale, color=color, ha="center", va="center_baseline",
+    ax.text(x, y, e.label, fontsize=FONT_SIZES["element"] * scale, color=color, ha="center", va="center_baseline",
             bbox=bbox, gid=f"element:{e.name}")
 
 

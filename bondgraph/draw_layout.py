@@ -4,12 +4,12 @@ Everything here works in inches of the figure at its natural size (1 layout
 unit = 1 inch) and returns plain numbers; nothing here draws.  The rendering
 module :mod:`bondgraph.draw` calls:
 
-- :func:`_box`: half-size of an element's label (text measured with
+- :func:`element_box`: half-size of an element's label (text measured with
   matplotlib's font metrics, padding included);
-- :func:`_positions`: the centre of every element's label for one of
+- :func:`node_positions`: the centre of every element's label for one of
   :data:`bondgraph.draw.LAYOUTS`;
-- :class:`_Free` with :func:`_subscript_spots`, :func:`_label_spots` and
-  :func:`_port_spots`: collision-avoiding placement of junction names, bond
+- :class:`FreeSpace` with :func:`subscript_spots`, :func:`label_spots` and
+  :func:`port_spots`: collision-avoiding placement of junction names, bond
   names and port names.
 
 Layered layout
@@ -35,7 +35,7 @@ Small texts
 -----------
 Each small text goes to the first candidate spot, in the order the ``*_spots``
 functions list them, that collides least with the label boxes, lines, barbs,
-strokes and small texts already placed (:meth:`_Free.place`).
+strokes and small texts already placed (:meth:`FreeSpace.place`).
 """
 from __future__ import annotations
 
@@ -49,7 +49,7 @@ _TWO_PORTS = ("TF", "GY", "MTF", "MGY")
 _PREFIX = {"CField": "C", "IField": "I"}
 
 # Sizes, inches at the natural figure size (1 layout unit = 1 inch) and points.
-_FONT = {"element": 10.0, "junction": 13.0, "subscript": 7.0, "bond": 6.5, "port": 6.5}
+FONT_SIZES = {"element": 10.0, "junction": 13.0, "subscript": 7.0, "bond": 6.5, "port": 6.5}
 _PAD = 0.045          # gap between a label and the bond end, in
 _JPAD = 0.075         # the same around a junction digit, in
 _BOND = 0.5           # length of a hanging element's bond, in
@@ -58,7 +58,7 @@ _CLEAR = 0.03         # clearance kept around small texts (bond and junction nam
 
 
 # -- labels -------------------------------------------------------------------
-def _label(element) -> str:
+def element_label(element) -> str:
     if element.ports is None or element.kind == "Eq":
         return element.kind if element.ports is None else element.name
     return f"{_PREFIX.get(element.kind, element.kind)}:{element.name}"
@@ -74,10 +74,10 @@ def _text_size(text: str, size: float, *, bold=False) -> tuple:
     return width / 72.0, 1.2 * size / 72.0
 
 
-def _box(element) -> tuple:
+def element_box(element) -> tuple:
     """Half-width and half-height of an element's label, padding included, in."""
     junction = element.ports is None
-    w, h = _text_size(_label(element), _FONT["junction" if junction else "element"], bold=junction)
+    w, h = _text_size(element_label(element), FONT_SIZES["junction" if junction else "element"], bold=junction)
     if junction:
         return w / 2 + _JPAD, h / 2 - 0.01
     pad = 0.09 if element.kind == "Eq" else _PAD
@@ -254,14 +254,14 @@ def _layered(graph, boxes) -> dict:
 
 
 # -- layout selection ---------------------------------------------------------
-def _positions(graph, boxes, layout) -> dict:
+def node_positions(graph, boxes, layout) -> dict:
     """Centre of every element's label for `layout`.
 
     Parameters
     ----------
     graph : BondGraph
     boxes : dict str -> (float, float)
-        Half-width and half-height of each element's label (:func:`_box`), in.
+        Half-width and half-height of each element's label (:func:`element_box`), in.
     layout : {"auto", "layered", "kamada_kawai", "spring"}
         ``"auto"`` is ``"layered"`` unless labels overlap there and fewer
         pairs overlap with ``"kamada_kawai"``.
@@ -308,7 +308,7 @@ def _align(o) -> tuple:
     return ha, va
 
 
-def _subscript_spots(xy, box, others) -> list:
+def subscript_spots(xy, box, others) -> list:
     """Candidate (anchor, ha, va) for a junction's name: diagonals clear of its bonds first, nearest first."""
     angles = [math.degrees(math.atan2(y - xy[1], x - xy[0])) % 360 for x, y in others]
 
@@ -324,7 +324,7 @@ def _subscript_spots(xy, box, others) -> list:
     return spots
 
 
-def _label_spots(start, end, n) -> list:
+def label_spots(start, end, n) -> list:
     """Candidate (anchor, ha, va) for a bond name: beside the bond, middle first, right side first."""
     spots = []
     for gap in (0.04, 0.15):  # next to the line, then a little further out
@@ -336,7 +336,7 @@ def _label_spots(start, end, n) -> list:
     return spots
 
 
-def _port_spots(graph, bond, start, end, d, n) -> list:
+def port_spots(graph, bond, start, end, d, n) -> list:
     """Port names at the ends of a bond that belong to multiport elements (fields, Eq)."""
     out = []
     for port, p, sign in ((bond.tail, start, 1), (bond.head, end, -1)):
@@ -366,7 +366,7 @@ def _overlap(a, b, tol=0.005) -> bool:
     return a[0] < b[2] - tol and b[0] < a[2] - tol and a[1] < b[3] - tol and b[1] < a[3] - tol
 
 
-class _Free:
+class FreeSpace:
     """What is already on the page (label boxes, points along lines); finds free spots for small labels."""
 
     def __init__(self, rects, segments):

@@ -23,6 +23,8 @@ parameters.  The derivation
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import networkx as nx
 import sympy as sp
 from sympy.solvers.solveset import NonlinearError
@@ -31,10 +33,12 @@ from .assignments import readable_form
 from .causality import assign_causality
 from .elements.base import PortVars
 from .errors import DerivationError, ExpressionError
-from .graph import BondGraph, _prepare_all
 from .guards import DerivedGuard
 from .symbols import STEP, TIME, as_expression, sym
 from .system import CausalityReport, StateEquations
+
+if TYPE_CHECKING:   # annotations only: graph.py imports this module (BondGraph.equations)
+    from .graph import BondGraph
 
 __all__ = ["derive"]
 
@@ -43,7 +47,7 @@ def derive(graph: BondGraph) -> StateEquations:
     """Derive the state equations of `graph` (see the module docstring)."""
     graph.validate()
     names = graph.names()
-    _prepare_all(graph, names)
+    graph.prepare_expressions(names)
     assignment = assign_causality(graph)
 
     defs: dict[sp.Symbol, sp.Expr] = {}

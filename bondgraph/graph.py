@@ -336,13 +336,30 @@ class BondGraph:
             seen[decl.name] = decl
         return list(seen.values())
 
+    def prepare_expressions(self, names=None) -> None:
+        """Parse every element's expressions against `names` (default: :meth:`names`),
+        collecting every problem before raising one :class:`ExpressionError`."""
+        names = self.names() if names is None else names
+        problems = []
+        for e in self.elements.values():
+            try:
+                e.prepare(names)
+            except ExpressionError as exc:
+                problems.append(exc)
+        if len(problems) == 1:
+            raise problems[0]
+        if problems:
+            raise ExpressionError("several expressions are wrong:\n  - " + "\n  - ".join(str(p) for p in problems),
+                                  owner=", ".join(p.owner for p in problems),
+                                  unknown=[u for p in problems for u in p.unknown])
+
     # -- derived results -----------------------------------------------------
     def causality(self):
         """Assign causality (SCAP) and return the :class:`~bondgraph.causality.CausalAssignment`."""
         from .causality import assign_causality
         self.validate()
         names = self.names()
-        _prepare_all(self, names)
+        self.prepare_expressions(names)
         return assign_causality(self)
 
     def equations(self):
@@ -383,20 +400,10 @@ class BondGraph:
         return buffer.getvalue()
 
     def to_dict(self) -> dict:
-        """JSON-ready description (see docs/json-schema.md)."""
-        from .io_json import graph_to_dict
+        """JSON-ready description (see docs/json-schema.md); :func:`bondgraph.io_json.save`
+        writes it to a file and :func:`bondgraph.io_json.load` reads it back."""
+        from .json_form import graph_to_dict
         return graph_to_dict(self)
-
-    def save(self, path) -> None:
-        """Write the graph as JSON to `path`."""
-        from .io_json import save
-        save(self, path)
-
-    @classmethod
-    def load(cls, path) -> "BondGraph":
-        """Read a graph from a JSON file written by :meth:`save`."""
-        from .io_json import load
-        return load(path)
 
     def __repr__(self) -> str:
         return f"BondGraph({self.name!r}, {len(self.elements)} elements, {len(self.bonds)} bonds)"
@@ -409,21 +416,3 @@ class BondGraph:
         for b in self.bonds.values():
             lines.append(f"  bond {b}")
         return "\n".join(lines)
-
-
-def _prepare_all(graph: BondGraph, names) -> None:
-    """Parse every element's expressions, collecting all problems before raising."""
-    problems = []
-    for e in graph.elements.values():
-        try:
-            e.prepare(names)
-        except ExpressionError as exc:
-            problems.append(exc)
-    if len(problems) == 1:
-        raise problems[0]
-    if problems:
-        exc = ExpressionError("several expressions are wrong:\n  - " + "\n  - ".join(str(p) for p in problems),
-                              owner=", ".join(p.owner for p in problems),
-                              unknown=[u for p in problems for u in p.unknown])
-        raise exc
-

@@ -27,22 +27,18 @@ import difflib
 import inspect
 import json
 import math
-import numbers
 import os
 from typing import Any
 
 from .elements.base import ELEMENT_KINDS
 from .errors import BondcosimError, SchemaError, UnknownElementKindError
 from .graph import BondGraph
+from .json_form import FORMAT, VERSION, graph_to_dict
 from .guards import guard_from_dict
 from .params import DOMAINS, Param
 
 __all__ = ["ELEMENT_KEYS", "FORMAT", "VERSION", "dumps", "graph_from_dict", "graph_to_dict", "load", "save"]
 
-#: Value of the top-level ``"format"`` key.
-FORMAT = "bondcosim-graph"
-#: Version of the format this module writes and reads.
-VERSION = 1
 
 # Type tags of values in the file (``map:<tag>`` is an object of name -> <tag>).
 _WHAT = {
@@ -120,38 +116,7 @@ class _Problems:
         raise error
 
 
-# -- writing -------------------------------------------------------------------
-def graph_to_dict(graph: BondGraph) -> dict:
-    """The JSON-ready description of `graph` (see ``docs/json-schema.md``).
-
-    Parameters
-    ----------
-    graph : BondGraph
-
-    Returns
-    -------
-    dict
-        Plain dicts, lists, strings and numbers, keys in the documented order.
-    """
-    return {
-        "format": FORMAT,
-        "version": VERSION,
-        "name": graph.name,
-        "description": graph.description,
-        "elements": [element.to_dict() for element in graph.elements.values()],
-        "bonds": [{"name": b.name, "tail": [b.tail.element, b.tail.port], "head": [b.head.element, b.head.port]}
-                  for b in graph.bonds.values()],
-        "inputs": [{"name": d.name, "default": d.default, "unit": d.unit, "description": d.description}
-                   for d in graph.extra_inputs.values()],
-        "parameters": [p.to_dict() for p in graph.extra_params.values()],
-        "outputs": [{"name": o.name, "expression": str(o.expression), "unit": o.unit,
-                     "description": o.description} for o in graph.outputs.values()],
-        "operating_point": {k: _plain_number(v) for k, v in graph.operating_point.items()},
-        **({"guards": {g.name: g.to_dict() for g in graph.extra_guards.values()}}
-           if graph.extra_guards else {}),
-    }
-
-
+# -- writing (the dict form is :mod:`bondgraph.json_form`) ----------------------
 def dumps(graph: BondGraph) -> str:
     """The text :func:`save` writes: :func:`graph_to_dict` as JSON, indented by 2, plus a newline.
 
@@ -200,11 +165,6 @@ def save(graph: BondGraph, path) -> None:
     text = dumps(graph)
     with open(path, "w", encoding="utf-8", newline="\n") as stream:
         stream.write(text)
-
-
-def _plain_number(value):
-    is_real = isinstance(value, numbers.Real) and not isinstance(value, bool)
-    return float(value) if is_real else value
 
 
 # -- reading -------------------------------------------------------------------

@@ -75,7 +75,7 @@ from __future__ import annotations
 
 import math
 import weakref
-from typing import Mapping
+from typing import TYPE_CHECKING, Mapping
 
 import numpy as np
 import sympy as sp
@@ -84,7 +84,9 @@ from .derivatives import NotDifferentiable, diff_almost_everywhere
 from .errors import DerivationError, ParameterError
 from .linear_model import EQUILIBRIUM_ATOL, LinearModel
 from .linearization_numeric import kinks_at, not_finite_columns, one_sided_column, set_column, solve_algebraic
-from .system import StateEquations
+
+if TYPE_CHECKING:   # annotations only: system.py imports this module (StateEquations.linearize)
+    from .system import StateEquations
 
 __all__ = ["linearize", "LinearModel"]
 
@@ -286,7 +288,7 @@ def linearize(eqs: StateEquations, operating_point: Mapping[str, float] | None =
     >>> lin.A.tolist(), lin.B.tolist(), lin.C.tolist(), lin.is_equilibrium
     ([[0.0, 0.5], [-8.0, -0.5]], [[0.0], [1.0]], [[0.0, 0.5]], True)
     """
-    if not isinstance(eqs, StateEquations):
+    if not all(hasattr(eqs, a) for a in ("f", "h", "states", "inputs", "params")):   # duck-typed: system.py
         raise ParameterError(f"linearize expects StateEquations, got {type(eqs).__name__}", name="eqs")
     if _number(t) is None:
         raise ParameterError(f"t must be a finite time in s, got {t!r}", name="t")

@@ -434,7 +434,7 @@ def _joint_refit(graph, effects, exp, train, held, mask, x0, reference, floor, u
     (whole-recording simulations as for every round), ``kept`` (the held-out excess error
     beyond the noise floor did not grow), ``graph`` and ``y`` of the refitted model.
     """
-    from .fit import _excess, fit_candidate
+    from .fit import excess_error, fit_candidate
     from .residuals import OutputSimulator, residuals
 
     names = [p.name for e in effects for p in e.candidate.params] + list(uncertain)
@@ -448,6 +448,6 @@ def _joint_refit(graph, effects, exp, train, held, mask, x0, reference, floor, u
     better = _with_values(graph, fit.values)
     improved, y = _holdout_nrmse(OutputSimulator(better, exp), None, x0, exp, mask)
     outputs = list(reference)
-    kept = _excess(improved, floor, outputs) <= _excess(reference, floor, outputs)
+    kept = excess_error(improved, floor, outputs) <= excess_error(reference, floor, outputs)
     out.update(improved=improved, kept=kept, graph=better, y=y)
     return out

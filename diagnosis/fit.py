@@ -354,7 +354,7 @@ def noise_floor(holdout, noise_sigma: dict | None = None) -> dict:
     return out
 
 
-def _excess(nrmse: dict, floor: dict, names) -> float:
+def excess_error(nrmse: dict, floor: dict, names) -> float:
     """Held-out error beyond the noise floor: sum over outputs of max(NRMSE^2 - floor^2, 0)."""
     return float(sum(max(nrmse[o] ** 2 - floor.get(o, 0.0) ** 2, 0.0) for o in names))
 
@@ -428,7 +428,7 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
         return None
 
     def score(f):
-        return (_excess(f.holdout_nrmse, floor, names) + 1e-4 * e0) * (1 + PARAMETER_PRICE) ** f.n_params
+        return (excess_error(f.holdout_nrmse, floor, names) + 1e-4 * e0) * (1 + PARAMETER_PRICE) ** f.n_params
 
     def order(f):
         return KINDS.index(f.candidate.kind) if f.candidate is not None else -1
@@ -468,8 +468,8 @@ def usable_fits(fits, names) -> list:
 def _reference_excess(nominal_holdout: dict, floor: dict, significant) -> float:
     """:math:`E_0` of :func:`choose`; for a diverging nominal (infinite error) that of predicting
     each output's mean (NRMSE 1)."""
-    e0 = _excess(nominal_holdout, floor, significant)
-    return e0 if np.isfinite(e0) else _excess({o: 1.0 for o in nominal_holdout}, floor, significant)
+    e0 = excess_error(nominal_holdout, floor, significant)
+    return e0 if np.isfinite(e0) else excess_error({o: 1.0 for o in nominal_holdout}, floor, significant)
 
 
 def acceptance(nominal_holdout: dict, fit, floor: dict) -> tuple[float, float]:
@@ -480,7 +480,7 @@ def acceptance(nominal_holdout: dict, fit, floor: dict) -> tuple[float, float]:
     if not significant:
         return 0.0, 0.0
     e0 = _reference_excess(nominal_holdout, floor, significant)
-    share = 1.0 - _excess(fit.holdout_nrmse, floor, significant) / e0
+    share = 1.0 - excess_error(fit.holdout_nrmse, floor, significant) / e0
     before = sum(nominal_holdout[o] ** 2 for o in significant)
     after = sum(fit.holdout_nrmse[o] ** 2 for o in significant)
     gain = 1.0 - np.sqrt(after / before) if np.isfinite(before) and before > 0 else 1.0

@@ -159,7 +159,8 @@ class DiagnosisReport:
         """
         os.makedirs(directory, exist_ok=True)
         paths = {"model": os.path.join(directory, "improved_model.json")}
-        self.improved_graph.save(paths["model"])
+        from bondgraph.io_json import save
+        save(self.improved_graph, paths["model"])
         self.improved_model = paths["model"]
         paths["json"] = os.path.join(directory, "diagnosis.json")
         with open(paths["json"], "w") as fh:

@@ -42,7 +42,7 @@ import numpy as np
 from estimators.errors import EstimatorError
 
 from ._linalg import as_matrix, as_vector
-from .lqr import _solve, _weights
+from .lqr import solve_riccati, check_weights
 
 __all__ = ["LQIGain", "lqi", "dlqi", "augment_integral", "augment_integral_discrete", "LQIController"]
 
@@ -192,8 +192,8 @@ def _aug_names(state_names, n, nz, order):
 
 
 def _lqi(Aa, Ba, Ea, Cz, Dz, Q, R, N, order, n, nz, *, discrete, dt, owner, state_names):
-    Aa, Ba, Q, R, N = _weights(Aa, Ba, Q, R, N, owner)
-    g = _solve(Aa, Ba, Q, R, N, discrete=discrete, owner=owner,
+    Aa, Ba, Q, R, N = check_weights(Aa, Ba, Q, R, N, owner)
+    g = solve_riccati(Aa, Ba, Q, R, N, discrete=discrete, owner=owner,
                state_names=_aug_names(state_names, n, nz, order))
     K = g.K
     return LQIGain(K, K[:, :n], K[:, n:n + nz], K[:, n + nz:] if order == 2 else None, g.S, g.poles,

@@ -42,7 +42,10 @@ class LQRGain:
     discrete: bool
 
 
-def _weights(A, B, Q, R, N, owner):
+def check_weights(A, B, Q, R, N, owner):
+    """`A`, `B`, `Q`, `R`, `N` as float matrices of matching shapes, checked (square `A`, `Q`
+    symmetric PSD, `R` positive definite, the joint cost convex); `N` defaults to zeros.
+    Errors name `owner` (the calling function)."""
     A = as_matrix(A, "A", (None, None), owner=owner)
     n = A.shape[0]
     if A.shape != (n, n):
@@ -60,7 +63,9 @@ def _weights(A, B, Q, R, N, owner):
     return A, B, Q, R, N
 
 
-def _solve(A, B, Q, R, N, *, discrete, owner, state_names=None) -> LQRGain:
+def solve_riccati(A, B, Q, R, N, *, discrete, owner, state_names=None) -> LQRGain:
+    """The LQR gain of checked weights (:func:`check_weights`): the continuous or discrete
+    algebraic Riccati equation's solution `S`, the gain `K` and the closed-loop poles."""
     check_stabilizable(A, B, discrete=discrete, state_names=state_names, owner=owner)
     if discrete:
         S = riccati_call(scipy.linalg.solve_discrete_are, A, B, Q, R, None, N, what=owner)
@@ -106,8 +111,8 @@ def lqr(A, B, Q, R, *, N=None, state_names: Sequence[str] | None = None) -> LQRG
     LQRGain
         ``K`` and ``S`` equal python-control's ``lqr(A, B, Q, R)``.
     """
-    A, B, Q, R, N = _weights(A, B, Q, R, N, "lqr")
-    return _solve(A, B, Q, R, N, discrete=False, owner="lqr", state_names=state_names)
+    A, B, Q, R, N = check_weights(A, B, Q, R, N, "lqr")
+    return solve_riccati(A, B, Q, R, N, discrete=False, owner="lqr", state_names=state_names)
 
 
 def dlqr(F, G, Q, R, *, N=None, state_names: Sequence[str] | None = None) -> LQRGain:
@@ -120,5 +125,5 @@ def dlqr(F, G, Q, R, *, N=None, state_names: Sequence[str] | None = None) -> LQR
 
     Parameters and returns as :func:`lqr` (python-control's ``dlqr``).
     """
-    F, G, Q, R, N = _weights(F, G, Q, R, N, "dlqr")
-    return _solve(F, G, Q, R, N, discrete=True, owner="dlqr", state_names=state_names)
+    F, G, Q, R, N = check_weights(F, G, Q, R, N, "dlqr")
+    return solve_riccati(F, G, Q, R, N, discrete=True, owner="dlqr", state_names=state_names)

@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 from bondgraph import BondGraph, C, I, One, R, Se
+from bondgraph.io_json import save
 from bondgraph.numerics import simulate
 
 
@@ -38,7 +39,7 @@ def main(output_dir="."):
     result.to_csv(out / "quickstart.csv")
     result.plot(["x"]).savefig(out / "quickstart.png", dpi=120)
     graph.draw(out / "quickstart_graph.png")
-    graph.save(out / "quickstart_graph.json")
+    save(graph, out / "quickstart_graph.json")
     return result
 
 

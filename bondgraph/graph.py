@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 import sympy as sp
 
+from .editing import GraphEditing
 from .elements import Element
 from .elements.base import InputDecl
 from .errors import DuplicateNameError, ExpressionError, GraphError, JunctionError, PortError
@@ -53,7 +54,7 @@ class Output:
     description: str = ""
 
 
-class BondGraph:
+class BondGraph(GraphEditing):
     """A bond graph: elements, bonds, declared inputs/parameters and outputs.
 
     Parameters
@@ -62,6 +63,10 @@ class BondGraph:
         Model name (an identifier: it names FMUs and generated code).
     description : str
         One line for listings.
+
+    Each editing call (:meth:`copy`, :meth:`with_params`, :meth:`insert`,
+    :meth:`insert_on_bond`, :meth:`replace`, :meth:`remove`; :mod:`bondgraph.editing`)
+    returns a new graph and leaves this one as it is.
 
     Examples
     --------

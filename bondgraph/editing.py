@@ -1,0 +1,197 @@
+"""The editing API of :class:`~bondgraph.graph.BondGraph`: each call returns a new graph.
+
+:meth:`~GraphEditing.copy`, :meth:`~GraphEditing.with_params`, :meth:`~GraphEditing.insert`
+(a one-port element bonded to a junction), :meth:`~GraphEditing.insert_on_bond` (a junction
+or a two-port put into a bond), :meth:`~GraphEditing.replace` (an element swapped, its bonds
+kept) and :meth:`~GraphEditing.remove` (an element and its bonds, or a bond).  The graph they
+are called on is never changed, so a model and its variants (the diagnosis catalogue's
+candidates, a sweep's plants) can live side by side.
+
+>>> from bondgraph import BondGraph, C, I, One, R, Se
+>>> g = BondGraph("msd")
+>>> for e in (Se("F"), One("v"), I("m", 2.0), C("c", 0.5), R("b", 0.4)):
+...     _ = g.add(e)
+>>> for e in ("m", "c", "b"):
+...     _ = g.connect("v", e)
+>>> _ = g.connect("F", "v")
+>>> stiffer = g.with_params(c=0.25)
+>>> stiffer.parameters()["c"].value, g.parameters()["c"].value
+(0.25, 0.5)
+>>> print(g.insert(R("b2", 0.1), at="v").equations().f[0])
+F - b*p_m/m - b2*p_m/m - q_c/c
+"""
+from __future__ import annotations
+
+import copy as _copy
+import dataclasses
+from collections.abc import Mapping
+
+from .elements import Element
+from .errors import GraphError, PortError, UnknownNameError
+from .params import Param
+
+__all__ = ["GraphEditing"]
+
+
+class GraphEditing:
+    """Editing methods mixed into :class:`~bondgraph.graph.BondGraph` (each returns a new graph)."""
+
+    def copy(self, name: str | None = None):
+        """An independent copy (elements, bonds, declarations), optionally renamed to `name`."""
+        new = _copy.deepcopy(self, {id(self._cache): None})   # derived equations are not copied
+        if name is not None:
+            if not isinstance(name, str) or not name.isidentifier():
+                raise GraphError(f"graph name {name!r} is not a valid identifier")
+            new.name = name
+        new._changed()
+        return new
+
+    def with_params(self, values: Mapping[str, float] | None = None, /, **more: float):
+        """A copy whose parameters `values` (and `more`) have new values, SI as declared.
+
+        Every element sharing a parameter name gets the new value.  An unknown name is an
+        :class:`UnknownNameError` listing the graph's parameters; a value outside the
+        parameter's range a :class:`ParameterError`.
+        """
+        changes = {**dict(values or {}), **more}
+        known = self.parameters()
+        for key in changes:
+            if key not in known:
+                raise UnknownNameError("parameter", key, known, model=self.name)
+        new = self.copy()
+        replaced = {key: dataclasses.replace(known[key], value=value) for key, value in changes.items()}
+        for element in new.elements.values():
+            _swap_params(vars(element), replaced)
+        _swap_params(new.extra_params, replaced)
+        new._changed()
+        return new
+
+    def insert(self, element: Element, *, at: str, bond: str | None = None):
+        """A copy with the one-port `element` added and bonded to junction `at`.
+
+        The bond's half-arrow follows the element's natural direction: into a storage or
+        resistor, out of a source.  `bond` names the new bond (default ``bondN``).
+        """
+        self._junction(at)
+        if element.ports != ("",):
+            raise PortError(f"insert() bonds one-port elements; {element.kind} {element.name!r} has ports "
+                            f"{', '.join(map(repr, element.ports or ()))}: use add() and connect()",
+                            element=element.name)
+        new = self.copy()
+        new.add(element)
+        if element.direction("") == "in":
+            new.connect(at, element.name, name=bond)
+        else:
+            new.connect(element.name, at, name=bond)
+        return new
+
+    def insert_on_bond(self, bond: str, element: Element, *, name: str | None = None):
+        """A copy with `element` (a junction, or a two-port: TF, GY, MTF, MGY) put into `bond`.
+
+        ``tail -> head`` becomes ``tail -> element -> head``: the first half keeps the name
+        `bond` (so ``e_<bond>``, ``f_<bond>`` still name the tail side), the second is `name`
+        (default ``<bond>_<element>``).  A two-port takes the tail on port ``"1"`` and gives
+        the head from port ``"2"``.
+        """
+        old = self._bond(bond)
+        if element.ports is None:
+            middle_in, middle_out = element.name, element.name
+        elif tuple(element.ports) == ("1", "2"):
+            middle_in, middle_out = (element.name, "1"), (element.name, "2")
+        else:
+            raise PortError(f"insert_on_bond() takes a junction or a two-port; {element.kind} {element.name!r} "
+                            f"has ports {', '.join(map(repr, element.ports))}", element=element.name)
+        new = self.copy()
+        order = list(new.bonds)
+        del new.bonds[bond]
+        new.add(element)
+        first = new.connect(_end(old.tail), middle_in, name=bond)
+        second = new.connect(middle_out, _end(old.head), name=name or f"{bond}_{element.name}")
+        at = order.index(bond)
+        names = order[:at] + [first.name, second.name] + order[at + 1:]
+        new.bonds = {n: new.bonds[n] for n in names}
+        new._changed()
+        return new
+
+    def replace(self, name: str, element: Element):
+        """A copy with element `name` replaced by `element`, which keeps its bonds.
+
+        `element` must have the same ports (both junctions, or the same port names); it may
+        have another name, and the bonds follow it.
+        """
+        old = self._element(name)
+        if (old.ports is None) != (element.ports is None) or (
+                old.ports is not None and tuple(old.ports) != tuple(element.ports)):
+            raise PortError(f"{_kind(element)} {element.name!r} cannot replace {_kind(old)} {name!r}: ports "
+                            f"{_ports(element)} instead of {_ports(old)}", element=element.name)
+        if element.name != name and (element.name in self.elements or element.name in self.bonds):
+            raise GraphError(f"cannot replace {name!r} by {element.name!r}: the graph already has that name")
+        new = self.copy()
+        new.elements = {(element.name if n == name else n): (element if n == name else e)
+                        for n, e in new.elements.items()}
+        new.bonds = {n: dataclasses.replace(b, tail=_renamed(b.tail, name, element.name),
+                                            head=_renamed(b.head, name, element.name))
+                     for n, b in new.bonds.items()}
+        new._changed()
+        return new
+
+    def remove(self, name: str):
+        """A copy without element `name` and its bonds, or without bond `name`."""
+        new = self.copy()
+        if name in self.bonds:
+            del new.bonds[name]
+        else:
+            self._element(name)
+            del new.elements[name]
+            new.bonds = {n: b for n, b in new.bonds.items() if name not in (b.tail.element, b.head.element)}
+        new._changed()
+        return new
+
+    # -- lookups naming what exists ----------------------------------------
+    def _element(self, name: str) -> Element:
+        if name not in self.elements:
+            raise UnknownNameError("element", name, self.elements, model=self.name)
+        return self.elements[name]
+
+    def _junction(self, name: str) -> Element:
+        element = self._element(name)
+        if element.ports is not None:
+            junctions = [n for n, e in self.elements.items() if e.ports is None]
+            raise GraphError(f"{_kind(element)} {name!r} is not a junction; the junctions are "
+                             f"{', '.join(junctions) or '(none)'}")
+        return element
+
+    def _bond(self, name: str):
+        if name not in self.bonds:
+            raise UnknownNameError("bond", name, self.bonds, model=self.name)
+        return self.bonds[name]
+
+
+def _swap_params(container, replaced: dict[str, Param]) -> None:
+    """Replace, in place, every Param named in `replaced` inside `container` (a dict, list or
+    the attributes of an element), however deep: elements keep a parameter both in ``params``
+    and as an attribute (``value``, the modulus)."""
+    items = container.items() if isinstance(container, dict) else enumerate(container)
+    for key, item in list(items):
+        if isinstance(item, Param) and item.name in replaced:
+            container[key] = replaced[item.name]
+        elif isinstance(item, (dict, list)):
+            _swap_params(item, replaced)
+
+
+def _end(port):
+    return (port.element, port.port) if port.port else port.element
+
+
+def _renamed(port, old: str, new: str):
+    return dataclasses.replace(port, element=new) if port.element == old else port
+
+
+def _kind(element: Element) -> str:
+    return f"{element.kind}-junction" if element.ports is None else element.kind
+
+
+def _ports(element: Element) -> str:
+    if element.ports is None:
+        return "(any number: a junction)"
+    return "(one port)" if tuple(element.ports) == ("",) else ", ".join(map(repr, element.ports))

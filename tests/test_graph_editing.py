@@ -1,0 +1,152 @@
+"""The graph-editing API (copy, with_params, insert, insert_on_bond, replace, remove): each edit
+gives a new graph whose state equations equal the ones derived by hand for the edited circuit,
+and leaves the original graph and its equations untouched."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from bondgraph import (C, GraphError, I, One, ParameterError, PortError, R, Se, TF, UnknownNameError, Zero,
+                       BondGraph)
+from bondgraph.symbols import sym
+from plants import library
+
+F, m, c, b, p, q = (sym(n) for n in ("F", "m", "c", "b", "p_m", "q_c"))
+
+
+def msd() -> BondGraph:
+    """Force F on mass m, spring of compliance c, damper b, all on one 1-junction ``v``:
+    dp/dt = F - b p/m - q/c, dq/dt = p/m."""
+    g = BondGraph("msd")
+    for e in (Se("F"), One("v"), I("m", 2.0), C("c", 0.5), R("b", 0.4)):
+        g.add(e)
+    g.connect("v", "m", name="to_m")
+    g.connect("v", "c", name="to_c")
+    g.connect("v", "b", name="to_b")
+    g.connect("F", "v", name="from_F")
+    return g
+
+
+def assert_equations(graph, states, f):
+    eqs = graph.equations()
+    assert [str(s) for s in eqs.states] == states
+    assert len(eqs.f) == len(f)
+    for got, want in zip(eqs.f, f):
+        assert sp.simplify(got - want) == 0, (got, want)
+
+
+@pytest.fixture
+def graph():
+    g = msd()
+    assert_equations(g, ["p_m", "q_c"], [F - b * p / m - q / c, p / m])
+    return g
+
+
+def unchanged(g):
+    assert list(g.elements) == ["F", "v", "m", "c", "b"]
+    assert list(g.bonds) == ["to_m", "to_c", "to_b", "from_F"]
+    assert g.parameters()["b"].value == 0.4
+    assert_equations(g, ["p_m", "q_c"], [F - b * p / m - q / c, p / m])
+
+
+def test_copy_is_independent(graph):
+    twin = graph.copy(name="twin")
+    twin.add(R("extra", 1.0))
+    assert twin.name == "twin" and "extra" not in graph.elements
+    unchanged(graph)
+
+
+def test_with_params_changes_values_not_equations(graph):
+    stiff = graph.with_params({"c": 0.125}, b=1.5)
+    assert stiff.equations().param_values == {"m": 2.0, "c": 0.125, "b": 1.5}
+    # A = [[-b/m, -1/c], [1/m, 0]] at the new values
+    np.testing.assert_allclose(np.asarray(stiff.equations().linearize().A, float),
+                               [[-1.5 / 2.0, -1 / 0.125], [1 / 2.0, 0.0]], rtol=1e-12)
+    unchanged(graph)
+
+
+def test_with_params_reaches_every_copy_of_a_shared_parameter():
+    pam = library.build("pam")
+    name, param = next(iter(pam.parameters().items()))
+    new = pam.with_params({name: param.value * 1.5})
+    assert new.parameters()[name].value == pytest.approx(param.value * 1.5)
+    assert new.equations().param_values[name] == pytest.approx(param.value * 1.5)
+    assert pam.parameters()[name].value == param.value
+
+
+def test_with_params_rejects_unknown_names_and_bad_values(graph):
+    with pytest.raises(UnknownNameError, match=r"unknown parameter 'k' of model 'msd'; known parameters are m, c, b"):
+        graph.with_params(k=1.0)
+    with pytest.raises(ParameterError, match="'m'"):
+        graph.with_params(m=-1.0)
+    unchanged(graph)
+
+
+def test_insert_a_second_damper_on_the_junction(graph):
+    r2 = sym("b2")
+    assert_equations(graph.insert(R("b2", 0.1), at="v"), ["p_m", "q_c"],
+                     [F - (b + r2) * p / m - q / c, p / m])
+    unchanged(graph)
+
+
+def test_insert_a_source_points_its_bond_out_of_it(graph):
+    new = graph.insert(Se("G"), at="v", bond="from_G")
+    assert new.bonds["from_G"].tail.element == "G"
+    assert_equations(new, ["p_m", "q_c"], [F + sym("G") - b * p / m - q / c, p / m])
+
+
+def test_insert_on_bond_a_zero_junction_puts_a_leak_across_the_spring(graph):
+    """0-junction in the spring's bond, R:r on it: the spring's effort q/c drives q/(c r)
+    through r, so dq/dt = p/m - q/(c r)."""
+    leaky = graph.insert_on_bond("to_c", Zero("z")).insert(R("r", 3.0), at="z")
+    assert list(leaky.bonds)[:3] == ["to_m", "to_c", "to_c_z"]
+    assert_equations(leaky, ["p_m", "q_c"], [F - b * p / m - q / c, p / m - q / (c * sym("r"))])
+    unchanged(graph)
+
+
+def test_insert_on_bond_a_one_junction_puts_a_damper_in_series(graph):
+    """1-junction in the damper's bond, R:b2 on it: same flow p/m, efforts add."""
+    series = graph.insert_on_bond("to_b", One("w")).insert(R("b2", 0.1), at="w")
+    assert_equations(series, ["p_m", "q_c"], [F - (b + sym("b2")) * p / m - q / c, p / m])
+
+
+def test_insert_on_bond_a_transformer_scales_the_force(graph):
+    """TF:n in the source's bond: e1 = n e2, so the junction sees F/n."""
+    geared = graph.insert_on_bond("from_F", TF("n", 2.0))
+    assert_equations(geared, ["p_m", "q_c"], [F / sym("n") - b * p / m - q / c, p / m])
+    unchanged(graph)
+
+
+def test_replace_keeps_the_bonds_and_follows_a_new_name(graph):
+    """The damper becomes a second spring c2: a new state q_c2 with dq_c2/dt = p/m."""
+    springs = graph.replace("b", C("c2", 0.25))
+    assert springs.bonds["to_b"].head.element == "c2" and list(springs.elements)[-1] == "c2"
+    q2, c2 = sym("q_c2"), sym("c2")
+    assert_equations(springs, ["p_m", "q_c", "q_c2"], [F - q / c - q2 / c2, p / m, p / m])
+    unchanged(graph)
+
+
+def test_remove_an_element_or_a_bond(graph):
+    assert_equations(graph.remove("b"), ["p_m", "q_c"], [F - q / c, p / m])
+    without_bond = graph.remove("to_b")
+    assert "to_b" not in without_bond.bonds and "b" in without_bond.elements
+    with pytest.raises(GraphError, match=r"R 'b': its port has no bond"):
+        without_bond.equations()
+    unchanged(graph)
+
+
+def test_editing_errors_name_the_culprit(graph):
+    with pytest.raises(GraphError, match=r"I 'm' is not a junction; the junctions are v"):
+        graph.insert(R("b2", 0.1), at="m")
+    with pytest.raises(UnknownNameError, match=r"unknown element 'nope' of model 'msd'; known elements are F, v"):
+        graph.remove("nope")
+    with pytest.raises(UnknownNameError, match=r"unknown bond 'nope'.*to_m, to_c, to_b, from_F"):
+        graph.insert_on_bond("nope", One("w"))
+    with pytest.raises(PortError, match=r"R 'v' cannot replace 1-junction 'v': ports \(one port\) instead of \(any number: a junction\)"):
+        graph.replace("v", R("v", 1.0))
+    with pytest.raises(PortError, match=r"insert\(\) bonds one-port elements; TF 'n'"):
+        graph.insert(TF("n", 2.0), at="v")
+    with pytest.raises(PortError, match=r"insert_on_bond\(\) takes a junction or a two-port; R 'r'"):
+        graph.insert_on_bond("to_b", R("r", 1.0))
+    unchanged(graph)

@@ -1,6 +1,7 @@
 """diagnosis: when simulation and recordings differ, locate the mismatch, name the missing physics.
 
-Layer 5 of the design (may import bondgraph, fmus, estimators, cosim).
+Above ``reproductions`` in the layer order of ``docs/architecture.md`` (may import bondgraph, plants,
+fmus, estimators, cosim, reproductions).
 
 Pipeline (:func:`diagnosis.diagnose.diagnose`)
 ----------------------------------------------

@@ -1,6 +1,6 @@
 """estimators: UKF, Kalman filter / steady-state observer, KPID, LQR/LQI design, PI.
 
-Layer 3 of the design (imports ``bondgraph`` and ``fmus``).
+Above ``fmus`` in the layer order of ``docs/architecture.md`` (imports ``bondgraph``, ``plants``, ``fmus``).
 
 Unscented Kalman filter
 -----------------------

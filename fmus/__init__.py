@@ -1,6 +1,6 @@
 """fmus: bond graph -> FMU (generated C, compiled) and FMU loading helpers.
 
-Layer 2 of the design (imports only ``bondgraph``).
+Above ``plants`` in the layer order of ``docs/architecture.md`` (imports ``bondgraph``, ``plants``).
 
 >>> import plants.library as library
 >>> from fmus import export

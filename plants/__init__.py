@@ -1,6 +1,6 @@
 """plants: the plant library, the papers' block-diagram twins and the one model loader.
 
-Layer 2 (imports :mod:`bondgraph` only).
+Just above :mod:`bondgraph` in the layer order of ``docs/architecture.md`` (imports it only).
 
 :func:`load`
     A built-in name, a ``.json`` graph file, a ``.py`` file with ``build()``, or a graph

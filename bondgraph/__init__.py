@@ -1,14 +1,14 @@
 """bondgraph: the modelling language of bondcosim.
 
 Build a :class:`BondGraph` from elements (``Se, Sf, MSe, MSf, I, C, R, TF,
-GY, MTF, MGY, Zero, One, CField, IField, EquationElement``), connect them with
+GY, MTF, MGY, Zero, One, CField, IField, PneumaticChamber, EquationElement``), connect them with
 bonds, state physical-domain conditions with :class:`Guard`, and derive explicit state equations with :meth:`BondGraph.equations`
 (a :class:`StateEquations`), and linearise them (``linearize``, a :class:`LinearModel`).
 The numerics (C generation, compiled evaluation, ``simulate``, results) are in
 :mod:`bondgraph.numerics`, which imports this language and is never imported by it.
 """
-from .elements import (C, CField, EquationElement, GY, I, IField, MGY, MSe, MSf, MTF, One, R, Se, Sf, TF,
-                       Zero, Element, ELEMENT_KINDS)
+from .elements import (C, CField, EquationElement, GY, I, IField, MGY, MSe, MSf, MTF, One, PneumaticChamber, R,
+                       Se, Sf, TF, Zero, Element, ELEMENT_KINDS)
 from .errors import (BondcosimError, CausalityError, DerivationError, DuplicateNameError, ExpressionError,
                      DomainError, GraphError, JunctionError, ParameterError, PortError, SchemaError,
                      UnknownElementKindError, UnknownNameError)
@@ -20,7 +20,7 @@ from .system import CausalityReport, StateEquations
 __all__ = [
     "BondGraph", "Bond", "Port", "Output", "Param", "DOMAINS", "StateEquations", "CausalityReport",
     "Element", "ELEMENT_KINDS", "Se", "Sf", "MSe", "MSf", "I", "C", "R", "TF", "GY", "MTF", "MGY",
-    "Zero", "One", "CField", "IField", "EquationElement", "Guard", "DomainError",
+    "Zero", "One", "CField", "IField", "EquationElement", "PneumaticChamber", "Guard", "DomainError",
     "BondcosimError", "GraphError", "CausalityError", "DerivationError", "DuplicateNameError",
     "ExpressionError", "JunctionError", "ParameterError", "PortError", "SchemaError",
     "UnknownElementKindError", "UnknownNameError", "linearize", "LinearModel",

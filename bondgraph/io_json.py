@@ -81,6 +81,10 @@ ELEMENT_KEYS: dict[str, dict[str, str]] = {
     "Eq": {"ports": "portdirs", "outputs": "map:expr", "states": "map:expr", "initial": "map:num",
            "units": "map:str", "held": "map:expr", "fixed_step": "pos", "params": "params",
            "descriptions": "map:str", "locals": "map:expr", "guards": "guards", "description": "str"},
+    "PneumaticC": {"pressure": "id", "length": "expr", "volume": "expr", "force": "expr", "flow_index": "expr",
+                   "volume_index": "expr", "gas_constant": "expr", "temperature": "expr", "heat": "map:expr",
+                   "initial_pressure": "num", "initial_temperature": "num", "guards": "guards", "params": "params",
+                   "description": "str"},
 }
 
 # Top-level key -> type tag (None: checked by _check_header), and the keys a file must have.

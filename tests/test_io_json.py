@@ -15,8 +15,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bondgraph import (BondGraph, C, CField, ELEMENT_KINDS, EquationElement, GraphError, GY, I, IField, MGY, MSe,
-                       MSf, MTF, One, Param, ParameterError, R, SchemaError, Se, Sf, TF, Zero)
+from bondgraph import (BondGraph, C, CField, ELEMENT_KINDS, EquationElement, GraphError, Guard, GY, I, IField, MGY, MSe,
+                       MSf, MTF, One, Param, ParameterError, PneumaticChamber, R, SchemaError, Se, Sf, TF, Zero)
 from bondgraph.io_json import ELEMENT_KEYS, dumps, graph_from_dict, graph_to_dict, load, save
 from plants.library.chain import mass_spring_chain
 from plants.library.textbook import coupled_tanks, dc_motor, mass_spring_damper, resistor_loop
@@ -143,7 +143,28 @@ def equation_element():
     return g
 
 
-ALL_BUILDERS = [msd_forms, law_forms, two_ports, fields, equation_element,
+def pneumatic_chamber():
+    """PneumaticChamber (thermal form) on a 0-junction with a leak R, guards and its own parameter."""
+    g = BondGraph("cylinder", description="piston chamber with wall heat exchange and a leak")
+    for name, value, unit in (("A", 2e-3, "m^2"), ("k1", 1.0, "1"), ("k2", 1.0, "1"), ("R", 287.0, "J/(kg K)"),
+                              ("T", 293.0, "K"), ("gamma", 1.4, "1")):
+        g.add_parameter(Param(name, value, unit))
+    g.add(Sf("feed", 1e-3, domain="pneumatic"))
+    g.add(Sf("stroke", 0.0, domain="translation"))
+    g.add(Zero("gas"))
+    g.add(R("leak", flow="1e-9*(e - 101325)", domain="pneumatic"))
+    g.add(PneumaticChamber("cyl", pressure="P", length="0.1", volume="A*l", force="-(P - 101325)*A",
+                           heat={"tau": "tau_th", "gamma": "gamma"}, initial_pressure=2e5,
+                           initial_temperature=300.0, params={"tau_th": Param("tau_th", 0.05, "s")},
+                           guards=[Guard("P_abs", "P", min=0.0, unit="Pa")], description="piston chamber"))
+    g.connect("feed", "gas")
+    g.connect("gas", "leak")
+    g.connect("gas", ("cyl", "pn"))
+    g.connect("stroke", ("cyl", "mech"))
+    return g
+
+
+ALL_BUILDERS = [msd_forms, law_forms, two_ports, fields, equation_element, pneumatic_chamber,
                 mass_spring_damper, dc_motor, coupled_tanks, resistor_loop, lambda: resistor_loop(nonlinear=True)]
 
 

@@ -9,8 +9,8 @@ follows ``docs/pam-conventions.md``, the project's reference conventions.
 
 Structure (full variant)::
 
-    MSf:valve1 -> Eq:muscle1 [pn | mech] <- MTF:arm1 (dl1/dpsi = -r cos psi) <- 1:seesaw
-    MSf:valve2 -> Eq:muscle2 [pn | mech] <- MTF:arm2 (dl2/dpsi = +r cos psi) <- 1:seesaw
+    MSf:valve1 -> 0:chamber1 -> PneumaticC:muscle1 [pn | mech] <- MTF:arm1 (dl1/dpsi = -r cos psi) <- 1:seesaw
+    MSf:valve2 -> 0:chamber2 -> PneumaticC:muscle2 [pn | mech] <- MTF:arm2 (dl2/dpsi = +r cos psi) <- 1:seesaw
     1:seesaw -> I:J, C:k_s (state q_psi = psi), Eq:friction (held T_f)
 
 * ``valve<i>`` (MSf, eq. (5)): ``m = A0 (alpha m_in - (1 - alpha) m_out)``
@@ -19,7 +19,11 @@ Structure (full variant)::
   critical pressure ratio), signed so that a reversed pressure difference
   reverses the flow; ``A0 = A1`` when the net flux is positive, ``A2``
   otherwise.
-* ``muscle<i>`` (equation element): state ``P_<i>`` with eq. (4)
+* ``chamber<i>`` 0-junction: the chamber's mass balance (common effort: the
+  pressure ``P_<i>``); a leak or any other flow out of the chamber is a
+  bond on it.
+* ``muscle<i>`` (:class:`~bondgraph.elements.PneumaticChamber`, a two-port
+  pneumatic C-field): state ``P_<i>`` with eq. (4)
   :math:`\\dot P = k_1 R T m / V - k_2 (\\dot V / V) P`, volume eq. (3)
   :math:`V = D_1 l^2 + D_2 l + D_3` of the length eq. (2)
   :math:`l_{1,2} = L_0 \\mp r \\sin\\psi`.  Its port ``pn`` receives the
@@ -60,7 +64,7 @@ from __future__ import annotations
 from types import MappingProxyType
 from typing import Literal, Mapping
 
-from bondgraph.elements import C, EquationElement, I, MSf, MTF, One
+from bondgraph.elements import C, EquationElement, I, MSf, MTF, One, PneumaticChamber, Zero
 from bondgraph.graph import BondGraph
 from bondgraph.guards import Guard
 from bondgraph.params import Param, values_with_overrides
@@ -232,23 +236,17 @@ def _torque(psi: str) -> str:
     return f"(r*cos({psi})*({_force(1, psi)} - {_force(2, psi)}))"
 
 
-def _muscle(i: int, psi: str) -> EquationElement:
-    l = _length(i, psi)
-    volume = f"(D1*{l}**2 + D2*{l} + D3)"   # the guards see graph names, not the element's locals
+def _muscle(i: int, psi: str) -> PneumaticChamber:
+    volume = f"(D1*{_length(i, psi)}**2 + D2*{_length(i, psi)} + D3)"   # guards see graph names, not locals
     guards = [Guard(f"V_{i}", volume, min=0.0, unit="m^3",
                     description=f"chamber volume of muscle {i}, eq. (3)"),
               Guard(f"P_{i}_abs", f"P_{i}", min=0.0, unit="Pa",
                     description=f"absolute pressure in muscle {i}")]
-    return EquationElement(
-        f"muscle{i}", ports={"pn": "in", "mech": "in"},
-        # length eq. (2), volume eq. (3), contraction force eqs. (6)-(7)
-        locals={"l": _length(i, psi), "V": "D1*l**2 + D2*l + D3",
-                "F": f"(p_v1{i}*l + p_v2{i})*P_{i} + p_w1{i}*l + p_w2{i}"},
-        outputs={"e_pn": f"P_{i}", "e_mech": "F"},
-        # eq. (4), with dV/dt = (2 D1 l + D2) dl/dt and dl/dt = f_mech (elongation rate)
-        states={f"P_{i}": f"k1*R*T*f_pn/V - k2*(2*D1*l + D2)*f_mech*P_{i}/V"},
-        initial={f"P_{i}": PARAMETERS["P_out"].value}, units={f"P_{i}": "Pa"},
-        descriptions={f"P_{i}": f"absolute pressure in muscle {i}"}, guards=guards,
+    # a two-port pneumatic C-field: chamber eq. (4) on length eq. (2), volume eq. (3), force eqs. (6)-(7)
+    return PneumaticChamber(
+        f"muscle{i}", pressure=f"P_{i}", length=_length(i, psi), volume="D1*l**2 + D2*l + D3",
+        force=f"(p_v1{i}*l + p_v2{i})*P_{i} + p_w1{i}*l + p_w2{i}", flow_index="k1", volume_index="k2",
+        initial_pressure=PARAMETERS["P_out"].value, guards=guards,
         description=f"muscle {i}: chamber eq. (4), volume eq. (3), contraction force eqs. (6)-(7); "
                     "port pn: pressure / mass flow in, port mech: force / elongation rate")
 
@@ -332,10 +330,12 @@ def pam(variant: Variant = "full", *, params: Mapping[str, float] | None = None)
     for i in (1, 2):
         g.add(MSf(f"valve{i}", VALVE_FLOW, locals=valve_locals(f"u{i}", f"P_{i}"), domain="pneumatic",
                   description=f"valve {i}, eq. (5): mass flow into muscle {i}"))
+        g.add(Zero(f"chamber{i}", description=f"mass balance of muscle {i}'s chamber (common pressure P_{i})"))
         g.add(_muscle(i, psi))
         g.add(MTF(f"arm{i}", f"{'-' if i == 1 else ''}r*cos({psi})",
                   description=f"lever of muscle {i}: dl{i}/dpsi (eq. (2)); torque eq. (9)"))
-        g.connect(f"valve{i}", (f"muscle{i}", "pn"))
+        g.connect(f"valve{i}", f"chamber{i}")
+        g.connect(f"chamber{i}", (f"muscle{i}", "pn"))
         g.connect("seesaw", f"arm{i}")
         g.connect(f"arm{i}", (f"muscle{i}", "mech"))
     if locked:

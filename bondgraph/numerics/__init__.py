@@ -8,8 +8,20 @@ results (:class:`SimulationResult`, :mod:`.results_export`) and the progress lin
 (:class:`~.progress.Progress`).  This package imports the language
 (:mod:`bondgraph`); the language never imports it (``docs/architecture.md``).
 """
-from .evaluate import CompiledModel, compile_model
-from .results import SimulationResult
-from .simulation import simulate
-
 __all__ = ["simulate", "compile_model", "CompiledModel", "SimulationResult"]
+
+_LAZY = {  # imported on first use: `import bondgraph.numerics.progress` stays cheap (fast CLI start)
+    "simulate": "simulation",
+    "compile_model": "evaluate",
+    "CompiledModel": "evaluate",
+    "SimulationResult": "results",
+}
+
+
+def __getattr__(name):
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+    value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+    globals()[name] = value
+    return value

@@ -33,8 +33,8 @@ from typing import Any
 from .elements.base import ELEMENT_KINDS
 from .errors import BondcosimError, SchemaError, UnknownElementKindError
 from .graph import BondGraph
-from .json_form import FORMAT, VERSION, graph_to_dict
 from .guards import guard_from_dict
+from .json_form import FORMAT, VERSION, graph_to_dict
 from .params import DOMAINS, Param
 
 __all__ = ["ELEMENT_KEYS", "FORMAT", "VERSION", "dumps", "graph_from_dict", "graph_to_dict", "load", "save"]

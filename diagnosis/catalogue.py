@@ -218,7 +218,7 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None) -
 
     Examples
     --------
-    >>> from bondgraph import library
+    >>> from plants import library
     >>> msd = library.build("mass-spring-damper")
     >>> [c.kind for c in candidates(msd, Place("output", "x"))]
     ['saturation', 'sensor_offset', 'sensor_gain']

@@ -134,7 +134,7 @@ def candidate_places(model, *, experiment=None) -> list[Place]:
 
     Examples
     --------
-    >>> from bondgraph import library
+    >>> from plants import library
     >>> [str(p) for p in candidate_places(library.build("rlc"))]
     ['junction i_loop', 'input V', 'output v_C', 'output i']
     """

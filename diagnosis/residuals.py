@@ -119,7 +119,7 @@ class OutputSimulator:
     Examples
     --------
     >>> import numpy as np
-    >>> from bondgraph import library
+    >>> from plants import library
     >>> from diagnosis.recording import Experiment
     >>> t = np.linspace(0.0, 2.0, 201)
     >>> exp = Experiment(t, {"F": np.ones_like(t)}, {"x": t}, {"F": "N", "x": "m"})

@@ -7,7 +7,7 @@ Just above :mod:`bondgraph` in the layer order of ``docs/architecture.md`` (impo
     (:mod:`plants.loading`); the command line and the diagnosis load models through it.
 :func:`names`, :func:`describe`, :func:`build`
     The built-in models (:mod:`plants.library`: textbook graphs, the seed plants
-    ``pam*`` and ``exoskeleton``, machines); ``docs/models.md`` documents how each
+    ``pam*`` and ``exoskeleton``, machines); ``plants/models.md`` documents how each
     was reconstructed from its paper.
 :mod:`plants.blockdiagram`
     The papers' equation / block-diagram models, written independently of the bond

@@ -3,7 +3,7 @@
 Rodrigues-Carvalho et al.'s exoskeleton drive (seed 004: BLDC motor ->
 harmonic drive -> torque sensor -> human trunk), eq. (1) with the gear
 friction as in the matrix eq. (3) (``b_g / r_g^2`` at the motor: R:b_g sits
-on the gear-output junction, docs/models.md) and the project's parameter
+on the gear-output junction, plants/models.md) and the project's parameter
 sheet (``exo-parameters.md``; ``b_f`` kept at its PAPER value as in the
 library graph).  States (eq. (2)):
 ``x = (theta_m, w_m, theta_sint, w_sint, theta_sext, w_sext, theta_h)``

@@ -3,7 +3,7 @@
 Shin, Ibayashi, Kogiso, "Detailed dynamic model of antagonistic PAM system
 and its experimental validation: sensor-less angle and torque control with
 UKF" -- eqs. (2)-(11), Table II -- read as the project's PAM conventions
-prescribe (docs/models.md, "Antagonistic PAM joint").  State
+prescribe (plants/models.md, "Antagonistic PAM joint").  State
 ``x = (psi [rad], dpsi [rad/s], P1 [Pa abs], P2 [Pa abs])``; inputs ``u1``,
 ``u2`` (V, clipped to [0, 10]); outputs ``psi`` (deg), ``P1``, ``P2`` (Pa,
 absolute) and ``tau`` (N m), eq. (11b).

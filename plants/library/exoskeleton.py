@@ -16,7 +16,7 @@ Structure (junction names are the flows / efforts they carry)::
     1:w_sext -> 0:tau_eh -> 1:dw_eh {C:k_eh, R:d_eh}
                 0:tau_eh -> 1:w_h {R:b_h, C:theta_h}  <- Sf:w_h
 
-Reconstruction choices (``docs/models.md`` gives the reasons):
+Reconstruction choices (``plants/models.md`` gives the reasons):
 
 * **Gear.** ``TF r_g`` (modulus 160, the paper's Fig. 6 label) is bonded
   with port 1 on the gear-output side and port 2 on the motor side, so

@@ -23,7 +23,7 @@ import numpy as np
 
 from .engine import ExecutionStats, execute
 from .errors import SweepError
-from .runners import RunSpec, load_graph
+from .runners import RunSpec
 from .store import RunStore
 
 __all__ = ["diagnose_batch", "FleetResult", "DiagnosisRunner", "fleet_summary"]
@@ -213,7 +213,8 @@ def diagnose_batch(model, recordings, out, *, inputs, outputs, time=None, holdou
         The pattern matches no file.
     """
     if isinstance(model, str):
-        model = load_graph(model)
+        from plants import load as load_model
+        model = load_model(model)
     files = sorted(_glob.glob(recordings)) if isinstance(recordings, str) else [str(r) for r in recordings]
     if not files:
         raise SweepError(f"no recording matches {recordings!r}")

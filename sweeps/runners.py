@@ -34,7 +34,7 @@ from .distributions import Distribution, Grid
 from .errors import MetricError, SpecError
 from .spec import OUTPUT_STATS, ModelTarget, ScenarioTarget, SweepSpec
 
-__all__ = ["RunSpec", "ScenarioRunner", "ModelRunner", "make_runner", "plan_runs", "run_chunk", "flatten", "load_graph"]
+__all__ = ["RunSpec", "ScenarioRunner", "ModelRunner", "make_runner", "plan_runs", "run_chunk", "flatten"]
 
 
 @dataclass(frozen=True)
@@ -201,23 +201,8 @@ class ModelRunner:
 def _equations(model: str, graph):
     if graph is not None:
         return graph if hasattr(graph, "param_values") else graph.equations()
-    return load_graph(model).equations()
-
-
-def load_graph(model: str):
-    """The bond graph of a built-in model name or a ``.json`` graph file."""
-    from plants import library
-    from bondgraph.errors import GraphError
-    path = Path(model)
-    if path.suffix == ".json":
-        if not path.is_file():
-            raise GraphError(f"model file {model!r} does not exist")
-        from bondgraph.io_json import load
-        return load(path)
-    if model not in library.names():
-        raise GraphError(f"unknown model {model!r}: not a built-in model ({', '.join(library.names())}) "
-                         "nor a .json graph file")
-    return library.build(model)
+    from plants import load as load_model
+    return load_model(model).equations()
 
 
 def make_runner(spec: SweepSpec, *, graph=None):

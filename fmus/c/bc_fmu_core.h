@@ -139,6 +139,21 @@ static int bc_check_outputs(const bc_snapshot *s, char *msg) {
   return 0;
 }
 
+/* Model Exchange: derivatives and outputs at the point the importer set (time,
+   states, inputs), with the same checks as a Co-Simulation sub-step: states
+   finite and inside every guard, the algebraic loops solved, derivatives and
+   outputs finite.  BC_OK; BC_DISCARD where the point is outside the model's
+   domain but the FMU is fine -- the importer may set other states (a smaller
+   integrator step, FMI 2.0 sec. 2.1.3 / FMI 3.0 sec. 2.2.3 "Discard"); the
+   values are still written.  Before initialisation ends nothing is checked. */
+static int bc_me_evaluate(bc_snapshot *s, char *msg) {
+  if (s->phase != BC_RUNNING) return bc_refresh(s, msg) ? BC_ERROR : BC_OK;
+  if (bc_check_states(s, msg) || bc_refresh(s, msg) || bc_check_domain(s, s->time, msg)
+      || bc_check_outputs(s, msg))
+    return BC_DISCARD;
+  return BC_OK;
+}
+
 #include "bc_adaptive.h"   /* bc_dopri: the variable-step solver */
 
 /* Co-simulation step.  solver = 1: bc_dopri (variable step).  solver = 0:

@@ -259,9 +259,13 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
   (void)noSetFMUStatePriorToCurrentPoint;
   *enterEventMode = fmi2False;
   *terminateSimulation = fmi2False;
-  if (bc_check_domain(&m->s, m->s.time, m->msg)) {   /* the integrator left the physical domain */
+  /* The integrator left the physical domain: Discard (FMI 2.0 sec. 2.1.3, "outside of
+     its domain"), the FMU itself is fine and takes other states; an importer that
+     cannot go back to a smaller step must stop, hence terminateSimulation. */
+  int r = bc_me_evaluate(&m->s, m->msg);
+  if (r) {
     *terminateSimulation = fmi2True;
-    return fail(m, fmi2Error, "fmi2CompletedIntegratorStep");
+    return fail(m, r == BC_DISCARD ? fmi2Discard : fmi2Error, "fmi2CompletedIntegratorStep");
   }
   return fmi2OK;
 }
@@ -294,8 +298,9 @@ fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t nx) {
   INSTANCE;
   if (nx != BC_NX) { snprintf(m->msg, BC_MSG, "asked for %zu derivatives, the model has %d", nx, BC_NX);
                      return fail(m, fmi2Error, "fmi2GetDerivatives"); }
-  CHECK(bc_refresh(&m->s, m->msg), "fmi2GetDerivatives");
+  int r = bc_me_evaluate(&m->s, m->msg);   /* Discard: outside the domain, try other states */
   memcpy(dx, m->s.v + BC_VR_DX, sizeof(double) * nx);
+  if (r) return fail(m, r == BC_DISCARD ? fmi2Discard : fmi2Error, "fmi2GetDerivatives");
   return fmi2OK;
 }
 

@@ -461,9 +461,13 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance c, fmi3Boolean noSetFMUState
   (void)noSetFMUStatePriorToCurrentPoint;
   *enterEventMode = fmi3False;
   *terminateSimulation = fmi3False;
-  if (bc_check_domain(&m->s, m->s.time, m->msg)) {   /* the integrator left the physical domain */
+  /* The integrator left the physical domain: Discard (FMI 3.0 sec. 2.2.3), the FMU
+     itself is fine and takes other states; an importer that cannot go back to a
+     smaller step must stop, hence terminateSimulation. */
+  int r = bc_me_evaluate(&m->s, m->msg);
+  if (r) {
     *terminateSimulation = fmi3True;
-    return fail(m, fmi3Error, "fmi3CompletedIntegratorStep");
+    return fail(m, r == BC_DISCARD ? fmi3Discard : fmi3Error, "fmi3CompletedIntegratorStep");
   }
   return fmi3OK;
 }
@@ -496,8 +500,9 @@ fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance c, fmi3Float64 dx[], s
   INSTANCE;
   if (nx != BC_NX) { snprintf(m->msg, BC_MSG, "asked for %zu derivatives, the model has %d", nx, BC_NX);
                      return fail(m, fmi3Error, "fmi3GetContinuousStateDerivatives"); }
-  CHECK(bc_refresh(&m->s, m->msg), "fmi3GetContinuousStateDerivatives");
+  int r = bc_me_evaluate(&m->s, m->msg);   /* Discard: outside the domain, try other states */
   memcpy(dx, m->s.v + BC_VR_DX, sizeof(double) * nx);
+  if (r) return fail(m, r == BC_DISCARD ? fmi3Discard : fmi3Error, "fmi3GetContinuousStateDerivatives");
   return fmi3OK;
 }
 

@@ -155,6 +155,7 @@ static int bc_me_evaluate(bc_snapshot *s, char *msg) {
 }
 
 #include "bc_adaptive.h"   /* bc_dopri: the variable-step solver */
+#include "bc_partials.h"   /* event indicators, directional derivatives */
 
 /* Co-simulation step.  solver = 1: bc_dopri (variable step).  solver = 0:
    classic RK4 in m equal sub-steps no longer than the

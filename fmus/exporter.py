@@ -27,6 +27,7 @@ import dataclasses
 import hashlib
 import math
 import platform
+import re
 import sys
 import uuid
 import zipfile
@@ -271,6 +272,9 @@ def export(model, path, *, fmi_version: int = 2, solver: str = "rk4",
         raise FMUError(f"tolerance must be a positive number, got {tolerance!r}")
     folder = binary_platform(fmi_version)
     ident = identifier or model_identifier(eqs.name)
+    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", ident):
+        raise FMUError(f"identifier must be a C identifier (letters, digits, _; not first a digit), "
+                       f"it names the shared library; got {ident!r}")
     model_exchange = eqs.is_smooth
     indicators = event_indicators(eqs)
     variables = variable_layout(eqs, step, fmi_version=fmi_version, max_substeps=float(max_substeps),

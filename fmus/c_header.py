@@ -25,7 +25,12 @@ def _guard_lines(eqs) -> list[str]:
         return default if x is None else repr(float(x))
     def strings(items):
         return ", ".join(map(_c_string, items)) if items else '""'
-    return [
+    stage = [] if not ng else [
+        "/* RK4 stage states are checked against the guards too (bc_stage_guard, bc_fmu_core.h) */",
+        "static int bc_stage_guard(double t, const double *x, const double *u, const double *z,",
+        "                          const double *d, const double *p);",
+        "#define BC_STAGE_CHECK(t, x, u, z, d, p) bc_stage_guard(t, x, u, z, d, p)"]
+    return stage + [
         f"#define BC_NG {ng}", f"#define BC_NGA {max(ng, 1)}",
         "static const double bc_guard_min[BC_NGA] = {"
         + (", ".join(bound(g.guard.min, "-HUGE_VAL") for g in gs) or "0.0") + "};",

@@ -122,6 +122,30 @@ static int bc_check_domain(bc_snapshot *s, double t, char *msg) {
   return 0;
 }
 
+#if BC_NG > 0
+/* The guard an RK4 stage state left, for the message of the step that stops there (one
+   doStep per thread at a time: FMI forbids concurrent calls on an instance). */
+static BC_THREAD_LOCAL struct { int guard; double value, time; } bc_stage_failure;
+enum { BC_STAGE_LEFT = 16 };   /* bc_rk4 status: BC_STAGE_LEFT + k, guard k left at a stage */
+
+/* BC_STAGE_CHECK of the RK4 kernel (model.h): 0 when the stage state (t, x, z) keeps
+   every guard (and every state finite), else BC_STAGE_LEFT + the guard's index. */
+static int bc_stage_guard(double t, const double *x, const double *u, const double *z,
+                          const double *d, const double *p) {
+  double g[BC_NGA];
+  guard_row(t, x, u, z, d, p, 0.0, g);
+  for (int k = 0; k < BC_NG; ++k) {
+    if (!(g[k] >= bc_guard_min[k] && g[k] <= bc_guard_max[k])) {
+      bc_stage_failure.guard = k;
+      bc_stage_failure.value = g[k];
+      bc_stage_failure.time = t;
+      return BC_STAGE_LEFT + k;
+    }
+  }
+  return 0;
+}
+#endif
+
 /* Derivatives and outputs finite (after bc_refresh). */
 static int bc_check_outputs(const bc_snapshot *s, char *msg) {
   for (int i = BC_VR_DX; i < BC_VR_DX + BC_NX; ++i) {
@@ -160,7 +184,10 @@ static int bc_me_evaluate(bc_snapshot *s, char *msg) {
 /* Co-simulation step.  solver = 1: bc_dopri (variable step).  solver = 0:
    classic RK4 in m equal sub-steps no longer than the
    solver step, inputs held, held variables updated at each sub-step start
-   (bc_rk4, one sub-step per call so that the domain is checked after each).
+   (bc_rk4, one sub-step per call so that the domain is checked after each;
+   its stage states are checked too, bc_stage_guard: a sub-step can jump
+   across a region where the model is undefined and land inside the domain
+   again -- a chamber volume through zero -- with every end point fine).
    m is computed in double and bounded by max_substeps: a step that needs
    more is discarded before any work, never an int overflow or a hang.
    BC_DISCARD (the state restored to the step's start, msg naming the cause):
@@ -205,6 +232,16 @@ static int bc_do_step(bc_snapshot *s, double t, double H, char *msg) {
                      v + BC_VR_P, 0, &status);
     if (bad) {
       *s = old;
+#if BC_NG > 0
+      if (bad > 0 && status >= BC_STAGE_LEFT) {   /* a stage between two sub-step ends */
+        int k = bc_stage_failure.guard;
+        snprintf(msg, BC_MSG, "%s = %.6g%s%s left its physical domain (%s) at an RK4 stage at "
+                 "t = %.17g s, inside the sub-step from t = %.17g s", bc_guard_names[k],
+                 bc_stage_failure.value, bc_guard_units[k][0] ? " " : "", bc_guard_units[k],
+                 bc_guard_text[k], bc_stage_failure.time, t + j * h);
+        return BC_DISCARD;
+      }
+#endif
       snprintf(msg, BC_MSG, "step from t = %.17g s failed at t = %.17g s: %s", t, t + j * h,
                bad < 0 ? "out of memory" : bc_newton_messages[status > 0 && status < 4 ? status : 0]);
       return bad < 0 ? BC_ERROR : BC_DISCARD;

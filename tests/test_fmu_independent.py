@@ -4,6 +4,8 @@ where its package is absent:
 
 * FMU Manipulation Toolbox's checker (``fmu-manipulation-toolbox`` 2.0, ``fmutool -check``):
   the official FMI 2.0/3.0 XSD schemas and its semantic rules;
+* ``fmi-bd2cmake`` 0.1.0 and CMake: a build of the FMI 3.0 source FMU from its
+  ``buildDescription.xml`` alone;
 * libcosim (``libcosimpy`` 0.0.6, FMI 2.0) and Ecos (``ecospy`` 0.7.2, FMI 2.0 and 3.0,
   needs the system's ``libtbb12``): co-simulation masters that must reproduce fmpy's run
   of the same FMU to rounding.
@@ -12,6 +14,11 @@ from __future__ import annotations
 
 import importlib.util
 import logging
+import os
+import shutil
+import subprocess
+import sys
+import zipfile
 
 import numpy as np
 import pytest
@@ -117,3 +124,30 @@ def test_ecos_runs_the_fmu_as_fmpy_does(fmus, model, options, version):
         got = np.array([sim.get_real(f"plant::{n}") for n in names])
     ref = _fmpy_reference(path, names)
     assert np.allclose(got, ref, rtol=1e-13, atol=0) and got[0] > 1.1e5
+
+
+@pytest.mark.skipif(importlib.util.find_spec("fmi_bd2cmake") is None or shutil.which("cmake") is None,
+                    reason="fmi-bd2cmake or cmake not installed")
+def test_fmi_bd2cmake_builds_the_fmi3_source_fmu(fmus, tmp_path):
+    # fmi-bd2cmake (PyPI) writes a CMakeLists.txt from sources/buildDescription.xml alone;
+    # CMake builds it with its own flags; the rebuilt FMU runs as the shipped one.
+    path = fmus("pam-locked", 3, solver="dopri", tolerance=1e-9)
+    root = tmp_path / "unzipped"
+    with zipfile.ZipFile(path) as z:
+        z.extractall(root)
+    env = {"PATH": os.environ["PATH"]}
+    steps = ([sys.executable, "-m", "fmi_bd2cmake.cli"],
+             ["cmake", "-B", "build", f"-DFMI_HEADERS_DIR={root / 'sources'}", "."],
+             ["cmake", "--build", "build"])
+    for cmd in steps:
+        proc = subprocess.run(cmd, cwd=root, env=env, capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, (cmd, proc.stdout[-2000:], proc.stderr[-2000:])
+    built = root / "build" / "binaries" / "x86_64-linux" / "pam_locked.so"
+    shutil.copy(built, root / "binaries" / "x86_64-linux" / "pam_locked.so")
+    rebuilt = tmp_path / "rebuilt.fmu"
+    with zipfile.ZipFile(rebuilt, "w") as z:
+        for f in root.rglob("*"):
+            if f.is_file() and "build" not in f.relative_to(root).parts:
+                z.write(f, f.relative_to(root).as_posix())
+    names = ["P_1", "P_2"]
+    assert np.allclose(_fmpy_reference(rebuilt, names), _fmpy_reference(path, names), rtol=1e-12, atol=0)

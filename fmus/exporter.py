@@ -17,9 +17,13 @@ from them alone.
 Co-Simulation integrates with classic RK4 in equal sub-steps no longer than
 the ``solver_step`` parameter, inputs held over the communication step and
 held variables updated at each sub-step start -- exactly
-:func:`bondgraph.simulate`'s fixed-step scheme.  Model Exchange is offered
-only for smooth models (no held variables, no ``fixed_step``): a model that
-needs a fixed step cannot honour an external integrator's steps.
+:func:`bondgraph.simulate`'s fixed-step scheme (``solver = 0``), or with the
+embedded Dormand-Prince 5(4) (``solver = 1``).  Model Exchange is offered only
+for smooth models (no held variables, no ``fixed_step``): a model that needs a
+fixed step cannot honour an external integrator's steps.  It has an event
+indicator per switching surface of the laws (:func:`event_indicators`), and
+both interfaces give directional derivatives from the symbolic partials
+(``fmus/c/bc_partials.h``).
 """
 from __future__ import annotations
 
@@ -169,9 +173,11 @@ def _partials(eqs) -> str:
         return ""
 
 
-def _switch_text(switch) -> str:
-    text = str(switch)
-    return text if len(text) <= 120 else text[:117] + "..."
+def _switch_text(g, switch) -> str:
+    """``"P_1 - P_out = 0 (a switch of sign)"``, at most 160 characters."""
+    text = str(g)
+    text = text if len(text) <= 120 else text[:117] + "..."
+    return f"{text} = 0 (a switch of {type(switch).__name__})"
 
 
 def _equations_of(model):
@@ -279,7 +285,7 @@ def export(model, path, *, fmi_version: int = 2, solver: str = "rk4",
     indicators = event_indicators(eqs)
     variables = variable_layout(eqs, step, fmi_version=fmi_version, max_substeps=float(max_substeps),
                                 tolerance=float(tolerance), solver=SOLVERS[solver],
-                                indicators=tuple(_switch_text(sw) for _, sw in indicators))
+                                indicators=tuple(_switch_text(g, sw) for g, sw in indicators))
     partials = _partials(eqs)
     kernels = "\n".join([generate_source(eqs, part="main"), guard_source(eqs),
                          indicator_source(eqs, [g for g, _ in indicators]) if indicators else "",

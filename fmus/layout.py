@@ -170,7 +170,7 @@ def variable_layout(eqs, solver_step: float, *, fmi_version: int = 2,
     solver : {0, 1}
         Start value of the ``solver`` parameter (0 fixed-step RK4, 1 Dormand-Prince).
     indicators : sequence of str
-        The switch of each event indicator (text for its description); FMI 3.0
+        The surface of each event indicator (text for its description); FMI 3.0
         declares a variable ``event_indicator_<k>`` for each, after ``time``.
     fmi_version : {2, 3}
         3 appends the ``time`` variable (and the event indicators).
@@ -260,7 +260,7 @@ def variable_layout(eqs, solver_step: float, *, fmi_version: int = 2,
         for k, text in enumerate(indicators, start=1):   # FMI 3.0 names its event indicators
             out.append(FmuVariable(f"event_indicator_{k}", out[-1].vr + 1, "indicator", "local",
                                    "continuous", "calculated", None, "1",
-                                   f"event indicator: zero where {text} switches"))
+                                   f"event indicator: {text}"))
 
     seen: dict[str, FmuVariable] = {}
     for v in out:

@@ -7,9 +7,9 @@
    BC_VR_TIME, read-only, not part of v[]) and one variable per event indicator
    after it (calculated).  No clocks, intermediate updates or early return:
    Co-Simulation never asks for Event Mode; in Model Exchange the event
-   indicators locate the laws' switches and event mode has nothing to update.  Every function of fmi3Functions.h is
-   defined (importers bind them all); those the FMU does not support return
-   fmi3Error with a logged message. */
+   indicators locate the laws' switches and event mode has nothing to update.
+   Every function of fmi3Functions.h is defined (importers bind them all);
+   those the FMU does not support return fmi3Error with a logged message. */
 #include "bc_platform.h"   /* first: glibc symbol versions */
 #include <stdlib.h>
 

@@ -33,6 +33,7 @@ typedef struct {
   double h_adapt;     /* last step size of the variable-step solver, s (0: none yet) */
   int phase;
   int dirty;          /* derivatives and outputs are stale */
+  struct { int guard; double value, time; } stage;   /* the guard an RK4 stage left (message) */
 } bc_snapshot;
 
 #define BC_MSG 512
@@ -123,22 +124,23 @@ static int bc_check_domain(bc_snapshot *s, double t, char *msg) {
 }
 
 #if BC_NG > 0
-/* The guard an RK4 stage state left, for the message of the step that stops there (one
-   doStep per thread at a time: FMI forbids concurrent calls on an instance). */
-static BC_THREAD_LOCAL struct { int guard; double value, time; } bc_stage_failure;
 enum { BC_STAGE_LEFT = 16 };   /* bc_rk4 status: BC_STAGE_LEFT + k, guard k left at a stage */
 
 /* BC_STAGE_CHECK of the RK4 kernel (model.h): 0 when the stage state (t, x, z) keeps
-   every guard (and every state finite), else BC_STAGE_LEFT + the guard's index. */
+   every guard, else BC_STAGE_LEFT + the guard's index, with the guard, its value and
+   the time kept in the instance's snapshot for the message.  bc_do_step passes the
+   kernel p = s->v + BC_VR_P, and v is the snapshot's first member, so the snapshot is
+   found from p (no global, no thread-local storage: those would need GLIBC_2.3). */
 static int bc_stage_guard(double t, const double *x, const double *u, const double *z,
                           const double *d, const double *p) {
   double g[BC_NGA];
   guard_row(t, x, u, z, d, p, 0.0, g);
   for (int k = 0; k < BC_NG; ++k) {
     if (!(g[k] >= bc_guard_min[k] && g[k] <= bc_guard_max[k])) {
-      bc_stage_failure.guard = k;
-      bc_stage_failure.value = g[k];
-      bc_stage_failure.time = t;
+      bc_snapshot *s = (bc_snapshot *)(void *)(p - BC_VR_P);
+      s->stage.guard = k;
+      s->stage.value = g[k];
+      s->stage.time = t;
       return BC_STAGE_LEFT + k;
     }
   }
@@ -231,17 +233,18 @@ static int bc_do_step(bc_snapshot *s, double t, double H, char *msg) {
     int bad = bc_rk4(1, t + j * h, h, 1, v + BC_VR_X, v + BC_VR_U, 0, s->z, bc_zinit, v + BC_VR_D,
                      v + BC_VR_P, 0, &status);
     if (bad) {
-      *s = old;
 #if BC_NG > 0
       if (bad > 0 && status >= BC_STAGE_LEFT) {   /* a stage between two sub-step ends */
-        int k = bc_stage_failure.guard;
+        int k = s->stage.guard;
         snprintf(msg, BC_MSG, "%s = %.6g%s%s left its physical domain (%s) at an RK4 stage at "
                  "t = %.17g s, inside the sub-step from t = %.17g s", bc_guard_names[k],
-                 bc_stage_failure.value, bc_guard_units[k][0] ? " " : "", bc_guard_units[k],
-                 bc_guard_text[k], bc_stage_failure.time, t + j * h);
+                 s->stage.value, bc_guard_units[k][0] ? " " : "", bc_guard_units[k],
+                 bc_guard_text[k], s->stage.time, t + j * h);
+        *s = old;
         return BC_DISCARD;
       }
 #endif
+      *s = old;
       snprintf(msg, BC_MSG, "step from t = %.17g s failed at t = %.17g s: %s", t, t + j * h,
                bad < 0 ? "out of memory" : bc_newton_messages[status > 0 && status < 4 ? status : 0]);
       return bad < 0 ? BC_ERROR : BC_DISCARD;

@@ -23,11 +23,4 @@ __asm__(".symver log2,log2@GLIBC_2.2.5");
 __asm__(".symver pow,pow@GLIBC_2.2.5");
 #endif
 
-/* Thread-local storage (C11, or MSVC's spelling). */
-#if defined(_MSC_VER)
-#define BC_THREAD_LOCAL __declspec(thread)
-#else
-#define BC_THREAD_LOCAL _Thread_local
-#endif
-
 #endif

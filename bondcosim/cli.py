@@ -9,6 +9,7 @@ Examples
   bondcosim simulate rlc --stop-time 0.2 --input "V=sin(100*t)" -o rlc.csv --plot rlc.png
   bondcosim compare exoskeleton --json --plot figures
   bondcosim export-fmu pam -o pam.fmu --fmi 3
+  bondcosim export-fmu exoskeleton -o exo.fmu --solver dopri --tolerance 1e-6 --max-substeps 1e4
   bondcosim fmu-info pam.fmu
   bondcosim cosim pam-pi --json --plot figures
   bondcosim diagnose mass-spring-damper rec.csv --input F=force:N --output x=pos:mm --report out --json
@@ -95,10 +96,30 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("model")
     p.add_argument("-o", "--output", required=True, help="output .fmu file")
     p.add_argument("--fmi", type=int, choices=[2, 3], default=2, help="FMI version (default 2)")
-    p.add_argument("--solver-step", type=float, default=None,
-                   help="largest internal RK4 sub-step of Co-Simulation, s (default from the model)")
+    p.add_argument("--solver", choices=["rk4", "dopri"], default="rk4",
+                   help="Co-Simulation solver the FMU starts with: fixed-step RK4 or variable-step "
+                        "Dormand-Prince 5(4) (models without held variables); an importer may change "
+                        "its 'solver' parameter (default rk4)")
+    p.add_argument("--solver-step", type=float, default=None, metavar="S",
+                   help="largest internal RK4 sub-step (Dormand-Prince: first step tried), s "
+                        "(default from the model)")
+    p.add_argument("--tolerance", type=float, default=1e-8,
+                   help="relative tolerance of Dormand-Prince (default 1e-8)")
+    p.add_argument("--max-substeps", type=float, default=1e6, metavar="N",
+                   help="most internal sub-steps one doStep may take before it returns Discard "
+                        "(default 1e6)")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                    help="parameter start value (repeatable)")
+    p.add_argument("--stop-time", type=float, default=None, metavar="S",
+                   help="DefaultExperiment stop time, s (default from the model's time constants)")
+    p.add_argument("--step-size", type=float, default=None, metavar="S",
+                   help="DefaultExperiment communication step, s (default stop time / 1000)")
+    p.add_argument("--identifier", default=None, help="modelIdentifier (default from the model name)")
+    p.add_argument("--description", default=None, help="model description text")
+    for flag, default, what in (("--author", "bondcosim", "author"), ("--fmu-version", "1.0", "version"),
+                                ("--license", "MIT", "license"), ("--copyright", "", "copyright")):
+        p.add_argument(flag, default=default, help=f"{what} written into modelDescription.xml "
+                       f"(default {default!r}; empty: left out)")
 
     p = sub.add_parser("fmu-info", help="list an FMU's variables with causality, units and start values")
     p.add_argument("fmu", help=".fmu file (any FMI 2.0/3.0 FMU)")
@@ -253,8 +274,12 @@ def _cmd_export_fmu(args) -> int:
     from fmus import export
     from fmus.info import fmu_info
     from plants import load as load_model
-    path = export(load_model(args.model), args.output, fmi_version=args.fmi,
-                  solver_step=args.solver_step, params=_numbers(args.param) or None)
+    path = export(load_model(args.model), args.output, fmi_version=args.fmi, solver=args.solver,
+                  solver_step=args.solver_step, tolerance=args.tolerance,
+                  max_substeps=args.max_substeps, params=_numbers(args.param) or None,
+                  stop_time=args.stop_time, step_size=args.step_size, identifier=args.identifier,
+                  description=args.description, author=args.author, version=args.fmu_version,
+                  license=args.license, copyright=args.copyright)
     info = fmu_info(path)
     print(f"wrote {path} (FMI {info['fmi_version']}: {', '.join(info['interfaces'])}; "
           f"{len(info['variables'])} variables)")

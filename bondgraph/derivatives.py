@@ -18,7 +18,7 @@ import sympy as sp
 
 from .errors import DerivationError
 
-__all__ = ["diff_almost_everywhere", "kinks", "Kink", "SWITCHES", "NotDifferentiable"]
+__all__ = ["diff_almost_everywhere", "kinks", "Kink", "SWITCHES", "NotDifferentiable", "switching_surfaces"]
 
 #: Functions treated as locally constant when differentiating.
 SWITCHES = (sp.sign, sp.Heaviside, sp.floor, sp.ceiling)
@@ -102,6 +102,41 @@ def _surfaces(node) -> list:
                 out += [r.lhs - r.rhs for r in cond.atoms(sp.core.relational.Relational)]
         return out
     return []
+
+
+_SWITCH_TYPES = (sp.sign, sp.Abs, sp.Heaviside, sp.Max, sp.Min, sp.floor, sp.ceiling, sp.Piecewise)
+
+
+def switching_surfaces(exprs, varying) -> list[tuple]:
+    """Every switching surface of `exprs`: ``(g, switch)`` with ``g`` zero on the surface
+    and changing sign across it (``sign(g)``, ``Abs(g)``, ``Heaviside(g)``; ``a - b`` for
+    ``Max(a, b)``/``Min(a, b)``; ``lhs - rhs`` for each inequality of a ``Piecewise``;
+    ``sin(pi g)`` for ``floor(g)``), the zero crossings of a Model Exchange event indicator.
+
+    Parameters
+    ----------
+    exprs : iterable of sympy.Expr
+    varying : set of sympy.Symbol
+        Symbols that change during a simulation (time, states, inputs, algebraic
+        unknowns, assignment names); a surface over none of them never moves.
+
+    Returns
+    -------
+    list of (sympy.Expr, sympy.Expr)
+        Each surface once (``g`` and ``-g`` are one), in the order found.
+    """
+    seen_nodes, seen, out = set(), set(), []
+    for expr in exprs:
+        for node in sp.preorder_traversal(sp.sympify(expr)):
+            if node in seen_nodes or not isinstance(node, _SWITCH_TYPES):
+                continue
+            seen_nodes.add(node)
+            for g in _surfaces(node):
+                if not (g.free_symbols & varying) or g in seen or -g in seen:
+                    continue
+                seen.add(g)
+                out.append((g, node))
+    return out
 
 
 def kinks(exprs, point, *, rtol: float = 1e-9) -> list[Kink]:

@@ -6,7 +6,11 @@ and backlash of a C element at a junction.
   flow proportional to the pressure difference.  :math:`P_{amb}` is fixed:
   101325 Pa for a pneumatic junction whose mean pressure exceeds 50 kPa
   (absolute pressures), else 0 (gauge pressures, other domains).
-* ``heat_transfer`` (pneumatic / thermal 0-junctions only): the gas in a chamber
+* ``heat_transfer`` at a 0-junction holding a
+  :class:`~bondgraph.elements.PneumaticChamber`: the chamber's thermal form (the
+  gas temperature becomes a state exchanging heat with the wall; fitted: the
+  time constant :math:`\tau = m c_v/(h A)` and the ratio of specific heats).
+* ``heat_transfer`` at other pneumatic / thermal 0-junctions: the gas in a chamber
   is compressed nearly adiabatically in fast transients and nearly
   isothermally in slow ones.  Newtonian heat exchange with the walls is
   represented, to first order in the temperature excursion, by an extra
@@ -64,7 +68,10 @@ def make_storage(graph, place, scales, taken, values=None) -> list[dict]:
                            params=[ParamSpec(fresh_name(taken, f"c_leak_{j}"), 0.1 * F / dev, 0.0, 100 * F / dev,
                                              f"({f_unit})/({e_unit})" if e_unit else "",
                                              f"leak conductance at {j}")]))
-        if dom in ("pneumatic", "thermal"):
+        chambers = [el for el, _ in junction_elements(graph, j) if el.kind == "PneumaticC" and el.heat is None]
+        for chamber in chambers:
+            protos.append(_chamber_heat(graph, j, chamber, scales, taken))
+        if dom in ("pneumatic", "thermal") and not chambers:
             c_unit = DOMAINS[dom].compliance
             c_th = F * scales.span / max(E, 1e-12) * 0.05
             protos.append(dict(kind="heat_transfer", constants=[(fresh_name(taken, f"P_th0_{j}"), e0, e_unit,
@@ -93,6 +100,20 @@ def make_storage(graph, place, scales, taken, values=None) -> list[dict]:
         if q is not None and np.ptp(q) > 0 and element.state:
             protos.append(_content_limit(graph, j, element, q, k_lin, scales, taken, q_unit))
     return protos
+
+
+def _chamber_heat(graph, j, chamber, scales, taken) -> dict:
+    """The ``heat_transfer`` prototype of a pneumatic chamber: its thermal form (gas temperature state)."""
+    temperature = graph.parameters().get(chamber.temperature)
+    t_wall = temperature.value if temperature is not None else 293.0
+    tau, gamma = fresh_name(taken, f"tau_th_{chamber.name}"), fresh_name(taken, f"gamma_{chamber.name}")
+    return dict(kind="heat_transfer", target=chamber.name, constants=[],
+                initial={chamber.gas_state: t_wall},
+                starts=[{tau: scales.span / 100, gamma: 1.4}, {tau: scales.span, gamma: 1.4}],
+                params=[ParamSpec(tau, scales.span / 10, scales.dt / 2, scales.span * 100, "s",
+                                  f"heat-exchange time constant m c_v/(h A) of {chamber.name}"),
+                        ParamSpec(gamma, 1.4, 1.0, 1.67, "1",
+                                  f"ratio of specific heats of the gas in {chamber.name}")])
 
 
 def _content_limit(graph, j, element, q, k_lin, scales, taken, q_unit) -> dict:
@@ -146,6 +167,12 @@ def build_storage(data: dict, graph, cand, values: dict) -> None:
                                  "description": f"limits of the content of {cand.target}"})
         data["bonds"].append({"name": f"b_{name}", "tail": [j, ""], "head": [name, ""]})
         return
+    if cand.kind == "heat_transfer" and cand.target is not None:   # the chamber's own thermal form
+        entry = next(e for e in data["elements"] if e["name"] == cand.target)
+        entry["heat"] = {"tau": p[0], "gamma": p[1]}
+        entry["initial_temperature"] = float(next(iter(cand.initial.values())))
+        entry["description"] = (entry.get("description", "") + " (with wall heat exchange)").strip()
+        return
     if cand.kind == "heat_transfer":
         branch, r_th, c_th = f"heat_{j}", f"R_th_{j}", f"C_th_el_{j}"
         data["elements"] += [
@@ -188,6 +215,10 @@ def explain_storage(cand, values: dict, show) -> str:
     p = [spec.name for spec in cand.params]
     if cand.kind == "leak":
         return f"the chamber at {j} loses {show(p[0])} of flow per unit of pressure above ambient: a leak at {j}"
+    if cand.kind == "heat_transfer" and cand.target is not None:
+        return (f"the gas in {cand.target} heats up when compressed or filled and exchanges heat with its "
+                f"walls with a time constant of {show(p[0])} (ratio of specific heats {show(p[1])}): "
+                f"heat transfer in {cand.target} at {j}")
     if cand.kind == "heat_transfer":
         return (f"the pressure at {j} relaxes with a time constant of {show(p[1])} after each change as the "
                 f"gas exchanges heat with its walls (thermal compliance {show(p[0])}): heat transfer at {j}")

@@ -34,9 +34,10 @@ FMI_HEADERS = {2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.
 
 def fixed_sources(fmi_version: int) -> dict[str, str]:
     """The hand-written C files of an FMU of `fmi_version`: name -> text (the wrapper,
-    ``bc_fmu_core.h``, ``bc_adaptive.h``, ``bc_platform.h``)."""
+    ``bc_fmu_core.h``, ``bc_adaptive.h``, ``bc_partials.h``, ``bc_platform.h``)."""
     return {name: (C_DIR / name).read_text()
-            for name in ("bc_platform.h", "bc_fmu_core.h", "bc_adaptive.h", WRAPPERS[fmi_version])}
+            for name in ("bc_platform.h", "bc_fmu_core.h", "bc_adaptive.h", "bc_partials.h",
+                         WRAPPERS[fmi_version])}
 
 
 def fmi_header_files(fmi_version: int) -> dict[str, str]:

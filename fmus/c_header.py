@@ -25,7 +25,12 @@ def _guard_lines(eqs) -> list[str]:
         return default if x is None else repr(float(x))
     def strings(items):
         return ", ".join(map(_c_string, items)) if items else '""'
-    return [
+    stage = [] if not ng else [
+        "/* RK4 stage states are checked against the guards too (bc_stage_guard, bc_fmu_core.h) */",
+        "static int bc_stage_guard(double t, const double *x, const double *u, const double *z,",
+        "                          const double *d, const double *p);",
+        "#define BC_STAGE_CHECK(t, x, u, z, d, p) bc_stage_guard(t, x, u, z, d, p)"]
+    return stage + [
         f"#define BC_NG {ng}", f"#define BC_NGA {max(ng, 1)}",
         "static const double bc_guard_min[BC_NGA] = {"
         + (", ".join(bound(g.guard.min, "-HUGE_VAL") for g in gs) or "0.0") + "};",
@@ -40,7 +45,8 @@ def _guard_lines(eqs) -> list[str]:
     ]
 
 
-def model_header(eqs, variables, *, token: str, model_exchange: bool) -> str:
+def model_header(eqs, variables, *, token: str, model_exchange: bool, n_indicators: int = 0,
+                 directional: bool = False) -> str:
     """C text of ``model.h`` for `eqs` with the layout `variables`.
 
     Parameters
@@ -53,6 +59,10 @@ def model_header(eqs, variables, *, token: str, model_exchange: bool) -> str:
         GUID / instantiation token.
     model_exchange : bool
         Compile the Model Exchange functions in.
+    n_indicators : int
+        Number of event indicators (``indicator_row`` in the kernels).
+    directional : bool
+        The kernels have ``partials_F_row`` / ``partials_r_row`` (directional derivatives).
 
     Returns
     -------
@@ -86,6 +96,7 @@ def model_header(eqs, variables, *, token: str, model_exchange: bool) -> str:
         f"#define BC_MODEL_NAME {_c_string(eqs.name)}",
         f"#define BC_TOKEN {_c_string(token)}",
         f"#define BC_HAS_ME {1 if model_exchange else 0}",
+        f"#define BC_NEI {n_indicators}", f"#define BC_HAS_DD {1 if directional else 0}",
         f"#define BC_NX {nx}", f"#define BC_NU {nu}", f"#define BC_NP {np_}",
         f"#define BC_NZ {nz}", f"#define BC_ND {nd}", f"#define BC_NY {ny}",
         f"#define BC_NZA {max(nz, 1)}", f"#define BC_NXA {max(nx, 1)}",

@@ -7,10 +7,10 @@ re-exported here; modules of this package import their errors from here.
 """
 from __future__ import annotations
 
-from bondgraph.errors import (ArgumentError, ArgumentTypeError, BondcosimError, CompilationError, FMUError,
-                              MissingFileError, ParameterError, UnitError, UnknownNameError)
+from bondgraph.errors import (ArgumentError, ArgumentTypeError, BondcosimError, CompilationError, DerivationError,
+                              FMUError, MissingFileError, ParameterError, UnitError, UnknownNameError)
 
-__all__ = ["BondcosimError", "FMUError", "CompilationError", "FMUFileNotFoundError", "FMUModelTypeError",
+__all__ = ["BondcosimError", "FMUError", "CompilationError", "DerivationError", "FMUFileNotFoundError", "FMUModelTypeError",
            "ArgumentError", "ArgumentTypeError", "MissingFileError", "ParameterError", "UnitError",
            "UnknownNameError"]
 

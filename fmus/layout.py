@@ -50,7 +50,8 @@ class FmuVariable:
         Value reference (= index into the C array ``v[]``).
     kind : str
         ``"state"``, ``"derivative"``, ``"input"``, ``"parameter"``, ``"held"``,
-        ``"output"`` or ``"solver_step"``.
+        ``"output"``, ``"solver_step"``, ``"max_substeps"``, ``"solver"``, ``"tolerance"``,
+        ``"time"`` or ``"indicator"`` (FMI 3.0 event indicator).
     causality, variability : str
         FMI attributes.
     initial : str or None
@@ -61,7 +62,8 @@ class FmuVariable:
     state_vr : int or None
         For a derivative, the value reference of its state.
     dependencies : tuple of int or None
-        For an output, value references of the states and inputs it depends on.
+        For an output or a derivative, value references of the states and inputs
+        it depends on.
     min, max : float or None
         Physical range (parameter bounds, single-variable guards), in `unit`.
     nominal : float or None
@@ -151,21 +153,27 @@ def _with_ranges(eqs, variables) -> list[FmuVariable]:
 
 def variable_layout(eqs, solver_step: float, *, fmi_version: int = 2,
                     max_substeps: float = DEFAULT_MAX_SUBSTEPS,
-                    tolerance: float = 1e-8) -> list[FmuVariable]:
+                    tolerance: float = 1e-8, solver: int = 0,
+                    indicators: tuple = ()) -> list[FmuVariable]:
     """Every variable of the FMU of `eqs`, in value-reference order.
 
     Parameters
     ----------
     eqs : StateEquations
-        With no inputs given as functions of time (see :func:`fmus.export.export`).
+        With no inputs given as functions of time (see :func:`fmus.exporter.export`).
     solver_step : float
         Start value of the ``solver_step`` parameter, s.
     max_substeps : float
         Start value of the ``max_substeps`` parameter (dimensionless).
     tolerance : float
         Start value of the ``tolerance`` parameter (variable-step solver).
+    solver : {0, 1}
+        Start value of the ``solver`` parameter (0 fixed-step RK4, 1 Dormand-Prince).
+    indicators : sequence of str
+        The surface of each event indicator (text for its description); FMI 3.0
+        declares a variable ``event_indicator_<k>`` for each, after ``time``.
     fmi_version : {2, 3}
-        3 appends the ``time`` variable.
+        3 appends the ``time`` variable (and the event indicators).
 
     Returns
     -------
@@ -201,9 +209,11 @@ def variable_layout(eqs, solver_step: float, *, fmi_version: int = 2,
             float(eqs.initial_state.get(s.name, 0.0)), units.get(s.name, ""),
             desc.get(s.name, "") or "state", dependencies=(i,) if is_out else None))
     for i, s in enumerate(eqs.states):
+        deps = tuple(sorted(dep_vr[x] for x in _output_dependencies(eqs, eqs.f[i])))
         out.append(FmuVariable(
             f"der({s.name})", nx + i, "derivative", "local", "continuous", "calculated", None,
-            derivative_unit(units.get(s.name, "")), f"time derivative of {s.name}", state_vr=i))
+            derivative_unit(units.get(s.name, "")), f"time derivative of {s.name}", state_vr=i,
+            dependencies=deps))
     for i, s in enumerate(eqs.inputs):
         out.append(FmuVariable(
             s.name, vr_u + i, "input", "input", "continuous", None,
@@ -234,7 +244,7 @@ def variable_layout(eqs, solver_step: float, *, fmi_version: int = 2,
         "returns Discard (never a silent hang)", min=1.0))
     smooth = not eqs.held
     out.append(FmuVariable(
-        SOLVER, vr_y + len(eqs.outputs) + 2, "solver", "parameter", "fixed", "exact", 0.0, "1",
+        SOLVER, vr_y + len(eqs.outputs) + 2, "solver", "parameter", "fixed", "exact", float(solver), "1",
         "Co-Simulation solver: 0 fixed-step RK4 (solver_step), 1 variable-step Dormand-Prince 5(4)"
         + ("" if smooth else " (not offered: held variables need the fixed step)"),
         min=0.0, max=1.0 if smooth else 0.0))
@@ -247,6 +257,10 @@ def variable_layout(eqs, solver_step: float, *, fmi_version: int = 2,
     if fmi_version == 3:
         out.append(FmuVariable("time", out[-1].vr + 1, "time", "independent", "continuous",
                                None, None, "s", "simulation time"))
+        for k, text in enumerate(indicators, start=1):   # FMI 3.0 names its event indicators
+            out.append(FmuVariable(f"event_indicator_{k}", out[-1].vr + 1, "indicator", "local",
+                                   "continuous", "calculated", None, "1",
+                                   f"event indicator: {text}"))
 
     seen: dict[str, FmuVariable] = {}
     for v in out:

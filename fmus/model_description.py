@@ -30,7 +30,7 @@ def _num(x: float) -> str:
 
 
 def _common_root(version: int, name: str, token: str, description: str, date: str | None,
-                 meta: dict) -> ET.Element:
+                 meta: dict, n_indicators: int) -> ET.Element:
     attrs = {"fmiVersion": "2.0" if version == 2 else "3.0", "modelName": name}
     attrs["guid" if version == 2 else "instantiationToken"] = token
     attrs["description"] = description
@@ -40,14 +40,17 @@ def _common_root(version: int, name: str, token: str, description: str, date: st
                   .replace(microsecond=0).isoformat().replace("+00:00", "Z"),
                   "variableNamingConvention": "flat"})
     if version == 2:
-        attrs["numberOfEventIndicators"] = "0"
+        attrs["numberOfEventIndicators"] = str(n_indicators)
     return ET.Element("fmiModelDescription", attrs)
 
 
-def _interfaces(root, version: int, identifier: str, model_exchange: bool, sources: list) -> None:
+def _interfaces(root, version: int, identifier: str, model_exchange: bool, sources: list,
+                directional: bool) -> None:
     state = "canGetAndSetFMUstate" if version == 2 else "canGetAndSetFMUState"
     serial = "canSerializeFMUstate" if version == 2 else "canSerializeFMUState"
     flags = {state: "true", serial: "true"}
+    if directional:
+        flags["providesDirectionalDerivative" if version == 2 else "providesDirectionalDerivatives"] = "true"
     if version == 2:
         flags["canNotUseMemoryManagementFunctions"] = "true"
     elements = []
@@ -141,7 +144,10 @@ def _fmi2_structure(root, variables, index) -> None:
     if derivatives:
         el = ET.SubElement(ms, "Derivatives")
         for v in derivatives:
-            ET.SubElement(el, "Unknown", {"index": str(index[v.vr])})
+            attrs = {"index": str(index[v.vr])}
+            if v.dependencies is not None:
+                attrs["dependencies"] = " ".join(str(index[d]) for d in v.dependencies)
+            ET.SubElement(el, "Unknown", attrs)
     initial = sorted(index[v.vr] for v in variables
                      if v.initial == "calculated" and v.kind in ("output", "derivative"))
     if initial:
@@ -173,16 +179,23 @@ def _fmi3_structure(root, variables) -> None:
                                          "dependencies": " ".join(map(str, v.dependencies))})
     for v in variables:
         if v.kind == "derivative":
-            ET.SubElement(ms, "ContinuousStateDerivative", {"valueReference": str(v.vr)})
+            attrs = {"valueReference": str(v.vr)}
+            if v.dependencies is not None:
+                attrs["dependencies"] = " ".join(map(str, v.dependencies))
+            ET.SubElement(ms, "ContinuousStateDerivative", attrs)
     for v in variables:
         if v.initial == "calculated" and v.kind in ("output", "derivative"):
             ET.SubElement(ms, "InitialUnknown", {"valueReference": str(v.vr)})
+    for v in variables:
+        if v.kind == "indicator":
+            ET.SubElement(ms, "EventIndicator", {"valueReference": str(v.vr)})
 
 
 def model_description_xml(variables, *, version: int, name: str, identifier: str, token: str,
                           description: str = "", model_exchange: bool = True,
                           date: str | None = None, experiment: dict | None = None,
-                          meta: dict | None = None, sources: list | None = None) -> str:
+                          meta: dict | None = None, sources: list | None = None,
+                          n_indicators: int = 0, directional: bool = False) -> str:
     """The ``modelDescription.xml`` text.
 
     Parameters
@@ -207,13 +220,18 @@ def model_description_xml(variables, *, version: int, name: str, identifier: str
         ``author``, ``version``, ``copyright``, ``license`` (written when not empty).
     sources : list of str, optional
         C files under ``sources/`` to list in FMI 2.0's ``<SourceFiles>``.
+    n_indicators : int
+        Event indicators of Model Exchange (FMI 2.0's ``numberOfEventIndicators``;
+        FMI 3.0 lists the ``indicator`` variables of `variables` instead).
+    directional : bool
+        Declare ``providesDirectionalDerivative(s)``.
 
     Returns
     -------
     str
     """
-    root = _common_root(version, name, token, description, date, meta or {})
-    _interfaces(root, version, identifier, model_exchange, sources or [])
+    root = _common_root(version, name, token, description, date, meta or {}, n_indicators)
+    _interfaces(root, version, identifier, model_exchange, sources or [], directional)
     _units_and_categories(root, variables, experiment or {"startTime": 0.0})
     if version == 2:
         _fmi2_structure(root, variables, _fmi2_variables(root, variables))

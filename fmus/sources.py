@@ -4,7 +4,7 @@ An exported FMU is a *source* FMU as well as a binary one.  ``sources/`` holds
 
 * the FMI wrapper of its version (``fmi2_wrapper.c`` / ``fmi3_wrapper.c``) -- the one
   translation unit to compile; it includes the others;
-* ``bc_platform.h``, ``bc_fmu_core.h``, ``bc_adaptive.h`` (fixed, hand-written), ``model.h`` and
+* ``bc_platform.h``, ``bc_fmu_core.h``, ``bc_adaptive.h``, ``bc_partials.h`` (fixed, hand-written), ``model.h`` and
   ``model_kernels.c`` (generated for the model; included, not compiled alone);
 * the official FMI headers of its version (BSD-2-Clause, Modelica Association),
   so that nothing outside the FMU is needed;

@@ -140,8 +140,8 @@ def test_registry_names_match_and_mirror_library_models():
 def test_pam_doors_leak_lowers_the_chamber_and_torque_turns_the_joint():
     class Leak(NoEffect):
         def extra(self, sig, u, z):
-            ambient = plant.laws["chamber"](np.array([0.0, 0.0, sig["P1"], sig["P2"]]))["muscle1"]["ambient"]
-            return {"muscle1": -1e-10 * (sig["muscle1"] - ambient)}, np.zeros(0)
+            ambient = plant.laws["chamber"](np.array([0.0, 0.0, sig["P1"], sig["P2"]]))["chamber1"]["ambient"]
+            return {"chamber1": -1e-10 * (sig["chamber1"] - ambient)}, np.zeros(0)
 
     class Torque(NoEffect):
         def extra(self, sig, u, z):

@@ -26,3 +26,12 @@ def test_sweep_scaling_benchmark_runs(capsys, load_script):
     assert [r["engine"] for r in result["rows"]] == ["serial", "local:1"] and result["rows"][1]["failed"] == 0
     assert [c["chunk_size"] for c in result["chunking"]] == [1, 1]     # 4 runs, 1 worker: one each
     assert "speed-up" in capsys.readouterr().out
+
+
+def test_fmu_solvers_benchmark_runs(capsys, load_script):
+    bench = load_script("benchmarks/fmu_solvers.py")
+    rows = bench.main(["--horizon", "0.005", "--models", "pam-locked"])
+    assert {r["run"] for r in rows} == {"CS RK4", "CS DoPri", "ME CVode"}
+    # the finest RK4 and the tightest tolerances agree with the DOP853 reference
+    assert min(r["error"] for r in rows if r["run"] == "CS RK4") < 1e-9
+    assert "rel. error" in capsys.readouterr().out

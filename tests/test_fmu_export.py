@@ -189,7 +189,7 @@ def test_exported_file_is_reproducible_and_minimal(exported, tmp_path):
     with zipfile.ZipFile(a) as z:
         assert sorted(z.namelist()) == [
             "binaries/linux64/rlc_series.so", "modelDescription.xml", "sources/bc_adaptive.h",
-            "sources/bc_fmu_core.h",
+            "sources/bc_fmu_core.h", "sources/bc_partials.h",
             "sources/bc_platform.h", "sources/fmi2FunctionTypes.h", "sources/fmi2Functions.h",
             "sources/fmi2TypesPlatform.h", "sources/fmi2_wrapper.c", "sources/model.h",
             "sources/model_kernels.c"]
@@ -201,3 +201,31 @@ def test_setting_an_output_is_refused_with_its_name(exported, version):
         with pytest.raises(FMICallException):
             fmu.set(["v_C"], [1.0])
         assert any("v_C is calculated by the FMU" in m for m in fmu.messages), fmu.messages
+
+
+@pytest.mark.parametrize("version", VERSIONS)
+@pytest.mark.parametrize("model", library.names())
+def test_every_builtin_model_validates_with_its_partials_declared(exported, model, version):
+    path = exported(model, version)
+    assert validate_fmu(str(path)) == []
+    eqs = library.build(model).equations()
+    md = read_model_description(str(path))
+    with zipfile.ZipFile(path) as z:
+        xml = z.read("modelDescription.xml").decode()
+    # every library law has a symbolic derivative: both interfaces declare directional derivatives
+    flag = "providesDirectionalDerivative" + ("" if version == 2 else "s") + '="true"'
+    assert xml.count(flag) == (2 if eqs.is_smooth else 1)
+    if not eqs.is_smooth:
+        assert md.numberOfEventIndicators == 0
+
+
+def test_export_is_the_function_and_exporter_the_module():
+    # the module used to be fmus/export.py: importing it rebound fmus.export to the module
+    import importlib
+
+    import fmus
+    import fmus.exporter
+    module = importlib.import_module("fmus.exporter")
+    assert fmus.export is module.export and callable(fmus.export)
+    with pytest.raises(ModuleNotFoundError):
+        importlib.import_module("fmus.export")

@@ -98,7 +98,9 @@ class PneumaticChamber(EquationElement):
             states = {P: f"{self.flow_index}*{R}*{T}*f_pn/V - {self.volume_index}*dV*f_mech*{P}/V"}
         else:
             gas, tau, gamma = f"T_{name}", self.heat["tau"], self.heat["gamma"]
-            locals_["T_in"] = f"Piecewise(({T}, f_pn > 0), ({gas}, True))"   # inflow at the supply temperature
+            # inflow at the supply temperature, outflow at the gas's (a sign, not a Piecewise on the
+            # flow: sympy canonicalises a relational over the whole valve law recursively)
+            locals_["T_in"] = f"({T} + {gas})/2 + ({T} - {gas})/2*sign(f_pn)"
             locals_["dP"] = (f"{gamma}*{R}*T_in*f_pn/V - {gamma}*dV*f_mech*{P}/V "
                              f"+ {P}*({T} - {gas})/(({tau})*{gas})")
             states = {P: "dP", gas: f"{gas}*(dP/{P} + dV*f_mech/V - {R}*{gas}*f_pn/({P}*V))"}

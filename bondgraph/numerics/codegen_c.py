@@ -85,7 +85,8 @@ from ..derivatives import NotDifferentiable, diff_almost_everywhere
 from ..errors import ArgumentError, CompilationError
 
 __all__ = ["generate_source", "jacobian_entries", "prepare_expression", "symbol_names",
-           "SPLIT_STATEMENTS", "PARTS", "GENERATOR_VERSION", "guard_source"]
+           "SPLIT_STATEMENTS", "PARTS", "GENERATOR_VERSION", "guard_source", "indicator_source",
+           "partials_source"]
 
 #: Statements above which a block is split into several functions.
 SPLIT_STATEMENTS = 400
@@ -344,3 +345,47 @@ def guard_source(eqs) -> str:
     printer = _Printer(symbol_names(eqs))
     targets = list(enumerate(g.expr for g in eqs.guards))
     return "\n".join(_emit_block("guard_row", targets, printer, max(1, len(targets)))) + "\n"
+
+
+def indicator_source(eqs, surfaces) -> str:
+    """C text of ``static void indicator_row(t, x, u, z, d, p, step, out)``: the value of
+    each switching function in `surfaces` (expressions over the symbols of `eqs` and its
+    assignment names, e.g. from :func:`bondgraph.derivatives.switching_surfaces`) at one
+    point -- a Model Exchange FMU's event indicators.
+
+    Returns
+    -------
+    str
+    """
+    printer = _Printer(symbol_names(eqs))
+    targets = list(enumerate(surfaces))
+    return "\n".join(_emit_block("indicator_row", targets, printer, max(1, len(targets)),
+                                 eqs.assignments)) + "\n"
+
+
+def partials_source(eqs) -> str:
+    """C text of the two row functions partial derivatives are assembled from, over
+    :math:`w = (x, u, z)` (states, inputs, algebraic unknowns):
+
+    * ``partials_F_row(t, x, u, z, d, p, step, out)``: :math:`\\partial (f, h) / \\partial w`,
+      ``out`` of shape ``(NX + NY, NX + NU + NZ)`` row-major;
+    * ``partials_r_row(...)``: :math:`\\partial r / \\partial w`, shape ``(NZ, NX + NU + NZ)``,
+
+    each entry the derivative almost everywhere (switches frozen,
+    :func:`bondgraph.derivatives.diff_almost_everywhere`).  Eliminating ``z`` by the
+    implicit-function theorem (:mod:`bondgraph.linearization`) gives the Jacobian of the
+    derivatives and outputs with respect to states and inputs.
+
+    Raises
+    ------
+    CompilationError
+        An expression sympy cannot differentiate.
+    """
+    printer = _Printer(symbol_names(eqs))
+    wrt = [*eqs.states, *eqs.inputs, *eqs.algebraic]
+    n_f = len(eqs.f) + len(eqs.h)
+    lines = _emit_block("partials_F_row", jacobian_entries([*eqs.f, *eqs.h], wrt), printer,
+                        max(1, n_f * len(wrt)))
+    lines += _emit_block("partials_r_row", jacobian_entries(eqs.residuals, wrt), printer,
+                         max(1, len(eqs.residuals) * len(wrt)))
+    return "\n".join(lines) + "\n"

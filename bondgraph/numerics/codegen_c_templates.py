@@ -182,6 +182,12 @@ def rk4_source(dims: dict) -> list[str]:
     """C lines of ``bc_rk4``: m classic RK4 sub-steps of length h per row, u constant,
     held values updated at each sub-step start, z solved at every stage.
 
+    Where the including code defines ``BC_STAGE_CHECK(t, x, u, z, d, p)`` (the FMU core
+    does, over the model's guards), the states of stages 2-4 are checked with it: a
+    nonzero result ends the row with that status (above the Newton codes), so a
+    sub-step whose stages leave the physical domain is never accepted.  Without the
+    macro the code is the same as before (``bondgraph.numerics.simulate``).
+
     Parameters
     ----------
     dims : dict str -> int
@@ -202,7 +208,15 @@ def rk4_source(dims: dict) -> list[str]:
                 f"{indent}if (s) break;"]
 
     def stage(k, tt, xx):
-        return solve(tt, xx, "      ") + [f"      f_row({tt}, {xx}, ui, zi, di, pi, 0.0, {k});"]
+        # A stage state outside the model's domain (a chamber volume below 0 between two
+        # sub-step ends) makes the sub-step meaningless: with BC_STAGE_CHECK defined (the
+        # FMU defines it over its guards) the row stops with status BC_STAGE_LEFT + guard.
+        check = [] if xx == "xi" else [
+            "#ifdef BC_STAGE_CHECK",
+            f"      s = BC_STAGE_CHECK({tt}, {xx}, ui, zi, di, pi);",
+            "      if (s) break;",
+            "#endif"]
+        return solve(tt, xx, "      ") + check + [f"      f_row({tt}, {xx}, ui, zi, di, pi, 0.0, {k});"]
 
     lines = [
         "int bc_rk4(int n, double t0, double h, int m, double *x, const double *u, int su,",

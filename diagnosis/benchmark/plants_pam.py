@@ -13,17 +13,15 @@ Effect doors (names are the nominal graph's element names):
 * ``extra["seesaw"]`` (N m): a torque into the seesaw 1-junction (velocity
   ``dpsi``); it enters eq. (8) and, in :func:`pam`, the Kikuuwe predicted
   velocity too (so a stuck joint feels it).
-* ``extra["muscle1"]``, ``extra["muscle2"]`` (kg/s): a mass flow into
-  chamber i.  The nominal graph has no 0-junction there (the valve MSf bonds
-  straight to the muscle equation element), so the chambers are not in
-  :attr:`TruthPlant.junctions`; ``laws["chamber"](x)`` gives, per chamber
-  door, its pressure, volume and the ambient pressure, which is what a leak
-  (``-Q(P - P_out)``) or a heat exchange (an equivalent mass flow
-  ``(k - 1) Qdot / (k1 R T)``) needs.
+* ``extra["chamber1"]``, ``extra["chamber2"]`` (kg/s): a mass flow into
+  chamber i, the nominal graph's 0-junction ``chamber<i>`` between the valve
+  and the muscle (common effort: the pressure, ambient ``P_out``): a leak
+  (``-Q(P - P_out)``) or a constant flow.  ``laws["chamber"](x)`` gives, per
+  chamber, its pressure, volume and the ambient pressure.
 * storage ``k_s`` (C of the seesaw, content ``psi``).
 
 Signals: ``seesaw`` (dpsi, rad/s), ``P1``, ``P2`` (Pa, for pressure-dependent
-friction), ``muscle1``/``muscle2`` (the chamber pressures), ``k_s`` (psi, rad).
+friction), ``chamber1``/``chamber2`` (the chamber pressures), ``k_s`` (psi, rad).
 """
 from __future__ import annotations
 
@@ -129,8 +127,8 @@ class _Pam:
             return np.full(4, np.nan)
         l1, l2, _, _, tau = self.mechanics(psi, P1, P2)
         ld = p["r"] * math.cos(psi) * dpsi                   # dl2/dt = -dl1/dt
-        m1 = self.mass_flow(u["u1"], P1) + extra.get("muscle1", 0.0)
-        m2 = self.mass_flow(u["u2"], P2) + extra.get("muscle2", 0.0)
+        m1 = self.mass_flow(u["u1"], P1) + extra.get("chamber1", 0.0)
+        m2 = self.mass_flow(u["u2"], P2) + extra.get("chamber2", 0.0)
         ddpsi = (tau - p["k_s"] * psi - u.get("T_f", 0.0) + extra.get("seesaw", 0.0)) / p["J"]   # eq. (8)
         return np.array([dpsi, ddpsi, self.chamber(P1, m1, l1, -ld), self.chamber(P2, m2, l2, ld)])
 
@@ -161,15 +159,15 @@ def _build(name: str, model: str, friction: bool) -> TruthPlant:
     p = j.p
 
     def signals(x, u):
-        return {"seesaw": x[1], "P1": x[2], "P2": x[3], "muscle1": x[2], "muscle2": x[3], "k_s": x[0]}
+        return {"seesaw": x[1], "P1": x[2], "P2": x[3], "chamber1": x[2], "chamber2": x[3], "k_s": x[0]}
 
     def measure(x, u):
         return {"psi": math.degrees(x[0]), "P1": x[2], "P2": x[3], "tau": j.mechanics(x[0], x[2], x[3])[-1]}
 
     def chamber(x):
         s = p["r"] * math.sin(x[0])
-        return {"muscle1": {"P": x[2], "V": j.volume(p["L0"] - s), "ambient": p["P_out"]},
-                "muscle2": {"P": x[3], "V": j.volume(p["L0"] + s), "ambient": p["P_out"]}}
+        return {"chamber1": {"P": x[2], "V": j.volume(p["L0"] - s), "ambient": p["P_out"]},
+                "chamber2": {"P": x[3], "V": j.volume(p["L0"] + s), "ambient": p["P_out"]}}
 
     def hold(x, u, extra, h):
         return {"T_f": j.kikuuwe(x, extra.get("seesaw", 0.0), h)}
@@ -189,7 +187,9 @@ def _build(name: str, model: str, friction: bool) -> TruthPlant:
         # joint (from there it swings past the muscles' range on a valve step and the run fails)
         x0=x0, nominal_x0={"q_psi": x0[0], "p_J": p["J"] * x0[1], "P_1": x0[2], "P_2": x0[3]},
         rhs=j.rhs, signals=signals, measure=measure,
-        junctions=(JunctionSpec("seesaw", "1", "rotation", pressures=("P1", "P2")),),
+        junctions=(JunctionSpec("seesaw", "1", "rotation", pressures=("P1", "P2")),
+                   JunctionSpec("chamber1", "0", "pneumatic", ambient=p["P_out"]),
+                   JunctionSpec("chamber2", "0", "pneumatic", ambient=p["P_out"])),
         storages=(StorageSpec("k_s", "seesaw", p["k_s"], content_range=(-0.6, 0.6)),),
         rate=1000.0, duration=15.0, substeps=_SUBSTEPS, method="rk4",
         drifts=False, laws={"chamber": chamber}, hold=hold if friction else None,

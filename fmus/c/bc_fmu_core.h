@@ -33,6 +33,7 @@ typedef struct {
   double h_adapt;     /* last step size of the variable-step solver, s (0: none yet) */
   int phase;
   int dirty;          /* derivatives and outputs are stale */
+  struct { int guard; double value, time; } stage;   /* the guard an RK4 stage left (message) */
 } bc_snapshot;
 
 #define BC_MSG 512
@@ -122,6 +123,31 @@ static int bc_check_domain(bc_snapshot *s, double t, char *msg) {
   return 0;
 }
 
+#if BC_NG > 0
+enum { BC_STAGE_LEFT = 16 };   /* bc_rk4 status: BC_STAGE_LEFT + k, guard k left at a stage */
+
+/* BC_STAGE_CHECK of the RK4 kernel (model.h): 0 when the stage state (t, x, z) keeps
+   every guard, else BC_STAGE_LEFT + the guard's index, with the guard, its value and
+   the time kept in the instance's snapshot for the message.  bc_do_step passes the
+   kernel p = s->v + BC_VR_P, and v is the snapshot's first member, so the snapshot is
+   found from p (no global, no thread-local storage: those would need GLIBC_2.3). */
+static int bc_stage_guard(double t, const double *x, const double *u, const double *z,
+                          const double *d, const double *p) {
+  double g[BC_NGA];
+  guard_row(t, x, u, z, d, p, 0.0, g);
+  for (int k = 0; k < BC_NG; ++k) {
+    if (!(g[k] >= bc_guard_min[k] && g[k] <= bc_guard_max[k])) {
+      bc_snapshot *s = (bc_snapshot *)(void *)(p - BC_VR_P);
+      s->stage.guard = k;
+      s->stage.value = g[k];
+      s->stage.time = t;
+      return BC_STAGE_LEFT + k;
+    }
+  }
+  return 0;
+}
+#endif
+
 /* Derivatives and outputs finite (after bc_refresh). */
 static int bc_check_outputs(const bc_snapshot *s, char *msg) {
   for (int i = BC_VR_DX; i < BC_VR_DX + BC_NX; ++i) {
@@ -139,12 +165,31 @@ static int bc_check_outputs(const bc_snapshot *s, char *msg) {
   return 0;
 }
 
+/* Model Exchange: derivatives and outputs at the point the importer set (time,
+   states, inputs), with the same checks as a Co-Simulation sub-step: states
+   finite and inside every guard, the algebraic loops solved, derivatives and
+   outputs finite.  BC_OK; BC_DISCARD where the point is outside the model's
+   domain but the FMU is fine -- the importer may set other states (a smaller
+   integrator step, FMI 2.0 sec. 2.1.3 / FMI 3.0 sec. 2.2.3 "Discard"); the
+   values are still written.  Before initialisation ends nothing is checked. */
+static int bc_me_evaluate(bc_snapshot *s, char *msg) {
+  if (s->phase != BC_RUNNING) return bc_refresh(s, msg) ? BC_ERROR : BC_OK;
+  if (bc_check_states(s, msg) || bc_refresh(s, msg) || bc_check_domain(s, s->time, msg)
+      || bc_check_outputs(s, msg))
+    return BC_DISCARD;
+  return BC_OK;
+}
+
 #include "bc_adaptive.h"   /* bc_dopri: the variable-step solver */
+#include "bc_partials.h"   /* event indicators, directional derivatives */
 
 /* Co-simulation step.  solver = 1: bc_dopri (variable step).  solver = 0:
    classic RK4 in m equal sub-steps no longer than the
    solver step, inputs held, held variables updated at each sub-step start
-   (bc_rk4, one sub-step per call so that the domain is checked after each).
+   (bc_rk4, one sub-step per call so that the domain is checked after each;
+   its stage states are checked too, bc_stage_guard: a sub-step can jump
+   across a region where the model is undefined and land inside the domain
+   again -- a chamber volume through zero -- with every end point fine).
    m is computed in double and bounded by max_substeps: a step that needs
    more is discarded before any work, never an int overflow or a hang.
    BC_DISCARD (the state restored to the step's start, msg naming the cause):
@@ -188,6 +233,17 @@ static int bc_do_step(bc_snapshot *s, double t, double H, char *msg) {
     int bad = bc_rk4(1, t + j * h, h, 1, v + BC_VR_X, v + BC_VR_U, 0, s->z, bc_zinit, v + BC_VR_D,
                      v + BC_VR_P, 0, &status);
     if (bad) {
+#if BC_NG > 0
+      if (bad > 0 && status >= BC_STAGE_LEFT) {   /* a stage between two sub-step ends */
+        int k = s->stage.guard;
+        snprintf(msg, BC_MSG, "%s = %.6g%s%s left its physical domain (%s) at an RK4 stage at "
+                 "t = %.17g s, inside the sub-step from t = %.17g s", bc_guard_names[k],
+                 s->stage.value, bc_guard_units[k][0] ? " " : "", bc_guard_units[k],
+                 bc_guard_text[k], s->stage.time, t + j * h);
+        *s = old;
+        return BC_DISCARD;
+      }
+#endif
       *s = old;
       snprintf(msg, BC_MSG, "step from t = %.17g s failed at t = %.17g s: %s", t, t + j * h,
                bad < 0 ? "out of memory" : bc_newton_messages[status > 0 && status < 4 ? status : 0]);

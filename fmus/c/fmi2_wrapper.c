@@ -57,6 +57,11 @@ static fmi2Status unsupported(fmi2Component c, const char *function) {
   return fail(m, fmi2Error, function);
 }
 
+/* A core result as a status: BC_DISCARD -> fmi2Discard, BC_ERROR -> fmi2Error (logged). */
+static fmi2Status status_of(Instance *m, int r, const char *function) {
+  return r == BC_OK ? fmi2OK : fail(m, r == BC_DISCARD ? fmi2Discard : fmi2Error, function);
+}
+
 #define INSTANCE Instance *m = (Instance *)c; if (!m) return fmi2Error
 #define REQUIRE(cond, fn) if (!(cond)) return wrong_state(m, fn)
 #define CHECK(call, fn) if (call) { return fail(m, fmi2Error, fn); }
@@ -228,14 +233,18 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte in[], size_t 
   return fmi2OK;
 }
 
+/* Partial derivatives of derivatives and outputs by states and inputs (bc_partials.h). */
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
                                         size_t nUnknown, const fmi2ValueReference vKnown_ref[],
                                         size_t nKnown, const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
-  (void)vUnknown_ref; (void)nUnknown; (void)vKnown_ref; (void)nKnown; (void)dvKnown; (void)dvUnknown;
-  return unsupported(c, "fmi2GetDirectionalDerivative");
+  INSTANCE;
+  REQUIRE(m->s.phase != BC_INSTANTIATED, "fmi2GetDirectionalDerivative");
+  return status_of(m, bc_directional(&m->s, vUnknown_ref, nUnknown, vKnown_ref, nKnown, dvKnown,
+                                     dvUnknown, m->msg), "fmi2GetDirectionalDerivative");
 }
 
-/* -- Model Exchange: no events, states through the v[] array ---------------------- */
+/* -- Model Exchange: states through the v[] array; event indicators locate the switches
+   of the laws (bc_partials.h), event mode has nothing to update --------------------- */
 
 fmi2Status fmi2EnterEventMode(fmi2Component c) { INSTANCE; (void)m; return fmi2OK; }
 
@@ -259,9 +268,13 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
   (void)noSetFMUStatePriorToCurrentPoint;
   *enterEventMode = fmi2False;
   *terminateSimulation = fmi2False;
-  if (bc_check_domain(&m->s, m->s.time, m->msg)) {   /* the integrator left the physical domain */
+  /* The integrator left the physical domain: Discard (FMI 2.0 sec. 2.1.3, "outside of
+     its domain"), the FMU itself is fine and takes other states; an importer that
+     cannot go back to a smaller step must stop, hence terminateSimulation. */
+  int r = bc_me_evaluate(&m->s, m->msg);
+  if (r) {
     *terminateSimulation = fmi2True;
-    return fail(m, fmi2Error, "fmi2CompletedIntegratorStep");
+    return fail(m, r == BC_DISCARD ? fmi2Discard : fmi2Error, "fmi2CompletedIntegratorStep");
   }
   return fmi2OK;
 }
@@ -294,14 +307,15 @@ fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t nx) {
   INSTANCE;
   if (nx != BC_NX) { snprintf(m->msg, BC_MSG, "asked for %zu derivatives, the model has %d", nx, BC_NX);
                      return fail(m, fmi2Error, "fmi2GetDerivatives"); }
-  CHECK(bc_refresh(&m->s, m->msg), "fmi2GetDerivatives");
+  int r = bc_me_evaluate(&m->s, m->msg);   /* Discard: outside the domain, try other states */
   memcpy(dx, m->s.v + BC_VR_DX, sizeof(double) * nx);
+  if (r) return fail(m, r == BC_DISCARD ? fmi2Discard : fmi2Error, "fmi2GetDerivatives");
   return fmi2OK;
 }
 
 fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real indicators[], size_t ni) {
-  (void)indicators;
-  return ni == 0 ? fmi2OK : unsupported(c, "fmi2GetEventIndicators (the model has none)");
+  INSTANCE;
+  return status_of(m, bc_event_indicators(&m->s, indicators, ni, m->msg), "fmi2GetEventIndicators");
 }
 
 fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real nominals[], size_t nx) {

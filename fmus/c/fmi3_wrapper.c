@@ -4,11 +4,12 @@
    "bc_fmu_core.h".  Model Exchange is compiled in only when BC_HAS_ME.
 
    Every variable is a Float64 scalar; FMI 3.0 adds "time" (value reference
-   BC_VR_TIME, read-only, not part of v[]).  No events, clocks, intermediate
-   updates or early return: Co-Simulation never asks for Event Mode, Model
-   Exchange has no event indicators.  Every function of fmi3Functions.h is
-   defined (importers bind them all); those the FMU does not support return
-   fmi3Error with a logged message. */
+   BC_VR_TIME, read-only, not part of v[]) and one variable per event indicator
+   after it (calculated).  No clocks, intermediate updates or early return:
+   Co-Simulation never asks for Event Mode; in Model Exchange the event
+   indicators locate the laws' switches and event mode has nothing to update.
+   Every function of fmi3Functions.h is defined (importers bind them all);
+   those the FMU does not support return fmi3Error with a logged message. */
 #include "bc_platform.h"   /* first: glibc symbol versions */
 #include <stdlib.h>
 
@@ -57,6 +58,11 @@ static fmi3Status unsupported(fmi3Instance c, const char *function) {
   if (!m) return fmi3Error;
   snprintf(m->msg, BC_MSG, "not supported by this FMU");
   return fail(m, fmi3Error, function);
+}
+
+/* A core result as a status: BC_DISCARD -> fmi3Discard, BC_ERROR -> fmi3Error (logged). */
+static fmi3Status status_of(Instance *m, int r, const char *function) {
+  return r == BC_OK ? fmi3OK : fail(m, r == BC_DISCARD ? fmi3Discard : fmi3Error, function);
 }
 
 #define INSTANCE Instance *m = (Instance *)c; if (!m) return fmi3Error
@@ -197,6 +203,12 @@ fmi3Status fmi3GetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t 
   }
   for (size_t i = 0; i < nvr; ++i) {   /* outputs are refreshed once, on the first */
     if (vr[i] == BC_VR_TIME) values[i] = m->s.time;
+    else if (vr[i] > BC_VR_TIME && vr[i] <= BC_VR_TIME + BC_NEI) {   /* event indicator variables */
+      double z[BC_NEI > 0 ? BC_NEI : 1];
+      int r = bc_event_indicators(&m->s, z, BC_NEI, m->msg);
+      if (r) return status_of(m, r, "fmi3GetFloat64");
+      values[i] = z[vr[i] - BC_VR_TIME - 1];
+    }
     else CHECK(bc_get_real(&m->s, vr + i, 1, values + i, m->msg), "fmi3GetFloat64");
   }
   return fmi3OK;
@@ -213,6 +225,11 @@ fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t 
   for (size_t i = 0; i < nvr; ++i) {
     if (vr[i] == BC_VR_TIME) {
       snprintf(m->msg, BC_MSG, "time is the independent variable and cannot be set");
+      return fail(m, fmi3Error, "fmi3SetFloat64");
+    }
+    if (vr[i] > BC_VR_TIME && vr[i] <= BC_VR_TIME + BC_NEI) {
+      snprintf(m->msg, BC_MSG, "event indicator %u is calculated by the FMU and cannot be set",
+               vr[i] - BC_VR_TIME);
       return fail(m, fmi3Error, "fmi3SetFloat64");
     }
   }
@@ -334,15 +351,21 @@ fmi3Status fmi3DeserializeFMUState(fmi3Instance c, const fmi3Byte in[], size_t s
   return fmi3OK;
 }
 
-/* -- partial derivatives: not provided ----------------------------------------------- */
+/* -- partial derivatives: directional (bc_partials.h), not adjoint ---------------------- */
 
 fmi3Status fmi3GetDirectionalDerivative(fmi3Instance c, const fmi3ValueReference unknowns[], size_t nUnknowns,
                                         const fmi3ValueReference knowns[], size_t nKnowns,
                                         const fmi3Float64 seed[], size_t nSeed,
                                         fmi3Float64 sensitivity[], size_t nSensitivity) {
-  (void)unknowns; (void)nUnknowns; (void)knowns; (void)nKnowns; (void)seed; (void)nSeed;
-  (void)sensitivity; (void)nSensitivity;
-  return unsupported(c, "fmi3GetDirectionalDerivative");
+  INSTANCE;
+  REQUIRE(m->s.phase != BC_INSTANTIATED, "fmi3GetDirectionalDerivative");
+  if (nSeed != nKnowns || nSensitivity != nUnknowns) {
+    snprintf(m->msg, BC_MSG, "%zu seeds for %zu knowns, %zu sensitivities for %zu unknowns "
+             "(all scalar)", nSeed, nKnowns, nSensitivity, nUnknowns);
+    return fail(m, fmi3Error, "fmi3GetDirectionalDerivative");
+  }
+  return status_of(m, bc_directional(&m->s, unknowns, nUnknowns, knowns, nKnowns, seed, sensitivity,
+                                     m->msg), "fmi3GetDirectionalDerivative");
 }
 
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance c, const fmi3ValueReference unknowns[], size_t nUnknowns,
@@ -451,7 +474,8 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance c, fmi3Boolean *discreteStatesN
   return fmi3OK;
 }
 
-/* -- Model Exchange: no events, states through the v[] array ---------------------- */
+/* -- Model Exchange: states through the v[] array; event indicators locate the switches
+   of the laws (bc_partials.h), event mode has nothing to update --------------------- */
 
 fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance c) { INSTANCE; (void)m; return fmi3OK; }
 
@@ -461,9 +485,13 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance c, fmi3Boolean noSetFMUState
   (void)noSetFMUStatePriorToCurrentPoint;
   *enterEventMode = fmi3False;
   *terminateSimulation = fmi3False;
-  if (bc_check_domain(&m->s, m->s.time, m->msg)) {   /* the integrator left the physical domain */
+  /* The integrator left the physical domain: Discard (FMI 3.0 sec. 2.2.3), the FMU
+     itself is fine and takes other states; an importer that cannot go back to a
+     smaller step must stop, hence terminateSimulation. */
+  int r = bc_me_evaluate(&m->s, m->msg);
+  if (r) {
     *terminateSimulation = fmi3True;
-    return fail(m, fmi3Error, "fmi3CompletedIntegratorStep");
+    return fail(m, r == BC_DISCARD ? fmi3Discard : fmi3Error, "fmi3CompletedIntegratorStep");
   }
   return fmi3OK;
 }
@@ -496,14 +524,15 @@ fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance c, fmi3Float64 dx[], s
   INSTANCE;
   if (nx != BC_NX) { snprintf(m->msg, BC_MSG, "asked for %zu derivatives, the model has %d", nx, BC_NX);
                      return fail(m, fmi3Error, "fmi3GetContinuousStateDerivatives"); }
-  CHECK(bc_refresh(&m->s, m->msg), "fmi3GetContinuousStateDerivatives");
+  int r = bc_me_evaluate(&m->s, m->msg);   /* Discard: outside the domain, try other states */
   memcpy(dx, m->s.v + BC_VR_DX, sizeof(double) * nx);
+  if (r) return fail(m, r == BC_DISCARD ? fmi3Discard : fmi3Error, "fmi3GetContinuousStateDerivatives");
   return fmi3OK;
 }
 
 fmi3Status fmi3GetEventIndicators(fmi3Instance c, fmi3Float64 indicators[], size_t ni) {
-  (void)indicators;
-  return ni == 0 ? fmi3OK : unsupported(c, "fmi3GetEventIndicators (the model has none)");
+  INSTANCE;
+  return status_of(m, bc_event_indicators(&m->s, indicators, ni, m->msg), "fmi3GetEventIndicators");
 }
 
 fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance c, fmi3Float64 nominals[], size_t nx) {
@@ -516,7 +545,7 @@ fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance c, fmi3Float64 nominal
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance c, size_t *n) {
   INSTANCE;
   (void)m;
-  *n = 0;
+  *n = BC_NEI;
   return fmi3OK;
 }
 

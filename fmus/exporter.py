@@ -17,9 +17,13 @@ from them alone.
 Co-Simulation integrates with classic RK4 in equal sub-steps no longer than
 the ``solver_step`` parameter, inputs held over the communication step and
 held variables updated at each sub-step start -- exactly
-:func:`bondgraph.numerics.simulate`'s fixed-step scheme.  Model Exchange is offered
-only for smooth models (no held variables, no ``fixed_step``): a model that
-needs a fixed step cannot honour an external integrator's steps.
+:func:`bondgraph.numerics.simulate`'s fixed-step scheme (``solver = 0``), or with the
+embedded Dormand-Prince 5(4) (``solver = 1``).  Model Exchange is offered only
+for smooth models (no held variables, no ``fixed_step``): a model that needs a
+fixed step cannot honour an external integrator's steps.  It has an event
+indicator per switching surface of the laws (:func:`event_indicators`), and
+both interfaces give directional derivatives from the symbolic partials
+(``fmus/c/bc_partials.h``).
 """
 from __future__ import annotations
 
@@ -27,6 +31,7 @@ import dataclasses
 import hashlib
 import math
 import platform
+import re
 import sys
 import uuid
 import zipfile
@@ -35,9 +40,11 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
-from bondgraph.numerics.codegen_c import generate_source, guard_source
+from bondgraph.numerics.codegen_c import generate_source, guard_source, indicator_source, partials_source
+from bondgraph.derivatives import switching_surfaces
 from bondgraph.guards import check_param_bounds
-from fmus.errors import FMUError, FMUModelTypeError, ParameterError
+from fmus.errors import (BondcosimError, CompilationError, DerivationError, FMUError, FMUModelTypeError,
+                         ParameterError)
 
 from .build import compile_fmu_binary
 from .c_header import model_header
@@ -45,7 +52,11 @@ from .layout import DEFAULT_MAX_SUBSTEPS, model_identifier, variable_layout
 from .sources import compiled_sources, source_files
 from .model_description import model_description_xml
 
-__all__ = ["export", "default_solver_step", "default_experiment", "fmu_equations", "binary_platform"]
+__all__ = ["export", "default_solver_step", "default_experiment", "fmu_equations", "binary_platform",
+           "event_indicators", "SOLVERS"]
+
+#: Co-Simulation solvers an FMU can start with: name -> value of its ``solver`` parameter.
+SOLVERS = {"rk4": 0, "dopri": 1}
 
 #: Fixed date stamped into exported files, so the same model gives the same bytes.
 _EPOCH = (1980, 1, 1, 0, 0, 0)
@@ -100,8 +111,8 @@ def default_solver_step(eqs) -> float:
     try:
         a = np.asarray(eqs.linearize().A, dtype=float)
         rho = float(np.max(np.abs(np.linalg.eigvals(a)))) if a.size else 0.0
-    except Exception:   # noqa: BLE001 -- any failure: fall back to a safe small step
-        return 1e-4
+    except (BondcosimError, np.linalg.LinAlgError, ValueError, TypeError, ArithmeticError):
+        return 1e-4   # no linearisation at the default point: a safe small step
     if not math.isfinite(rho) or rho <= 0.0:
         return 1e-3
     h = 0.05 / rho
@@ -134,13 +145,39 @@ def default_experiment(eqs, solver_step: float) -> dict:
         rates = [-r for r in np.real(lam) if r < -1e-12 and math.isfinite(r)]
         if rates:
             stop = min(100.0, max(1e-3, _round_125(5.0 / min(rates), up=True)))
-    except Exception:   # noqa: BLE001 -- no linearisation: the 1 s default
-        pass
+    except (BondcosimError, np.linalg.LinAlgError, ValueError, TypeError, ArithmeticError):
+        pass   # no linearisation at the default point: the 1 s default
     step = _round_125(stop / 1000.0, up=True)
     if eqs.fixed_step:
         step = min(step, 1e-3)
     step = max(step, solver_step)
     return {"startTime": 0.0, "stopTime": stop, "stepSize": step}
+
+
+def event_indicators(eqs) -> list[tuple]:
+    """Model Exchange event indicators of `eqs`: every switching surface of its laws
+    (:func:`bondgraph.derivatives.switching_surfaces` of the assignments, f, h and the
+    loop residuals) as ``(g, switch)``; none for a model that offers Co-Simulation only."""
+    if not eqs.is_smooth:
+        return []
+    varying = {eqs.t, *eqs.states, *eqs.inputs, *eqs.algebraic, *(a for a, _ in eqs.assignments)}
+    return switching_surfaces([*(e for _, e in eqs.assignments), *eqs.f_short, *eqs.h_short,
+                               *eqs.residuals], varying)
+
+
+def _partials(eqs) -> str:
+    """C of the symbolic partials (directional derivatives), or "" when a law has none."""
+    try:
+        return partials_source(eqs)
+    except (CompilationError, DerivationError):
+        return ""
+
+
+def _switch_text(g, switch) -> str:
+    """``"P_1 - P_out = 0 (a switch of sign)"``, at most 160 characters."""
+    text = str(g)
+    text = text if len(text) <= 120 else text[:117] + "..."
+    return f"{text} = 0 (a switch of {type(switch).__name__})"
 
 
 def _equations_of(model):
@@ -151,7 +188,8 @@ def _equations_of(model):
     raise FMUModelTypeError(f"export needs a BondGraph or StateEquations, got {type(model).__name__}")
 
 
-def export(model, path, *, fmi_version: int = 2, solver_step: float | None = None,
+def export(model, path, *, fmi_version: int = 2, solver: str = "rk4",
+           solver_step: float | None = None, tolerance: float = 1e-8,
            max_substeps: float = DEFAULT_MAX_SUBSTEPS,
            params=None, identifier: str | None = None, description: str | None = None,
            stop_time: float | None = None, step_size: float | None = None,
@@ -165,13 +203,22 @@ def export(model, path, *, fmi_version: int = 2, solver_step: float | None = Non
     path : str or path-like
         Output ``.fmu`` file (parent directories are created).
     fmi_version : {2, 3}
+    solver : {"rk4", "dopri"}
+        Start value of the ``solver`` parameter: Co-Simulation integrates with
+        fixed-step RK4 (0) or variable-step Dormand-Prince 5(4) (1; models
+        without held variables only).  An importer may change it before
+        initialisation.
     solver_step : float, optional
         Start value of the ``solver_step`` parameter (largest internal RK4
-        sub-step of Co-Simulation), s.  Default :func:`default_solver_step`.
+        sub-step of Co-Simulation; the first step tried by Dormand-Prince), s.
+        Default :func:`default_solver_step`.
+    tolerance : float
+        Start value of the ``tolerance`` parameter: relative tolerance of
+        Dormand-Prince (absolute: tolerance times each state's nominal).
     max_substeps : float
         Start value of the ``max_substeps`` parameter: a doStep that needs
-        more internal sub-steps returns Discard instead of blocking
-        (default 1e6).
+        more internal sub-steps (or Dormand-Prince attempts) returns Discard
+        instead of blocking (default 1e6).
     params : mapping str -> float, optional
         Parameter start values replacing the model's defaults (each inside
         its declared range).
@@ -190,12 +237,16 @@ def export(model, path, *, fmi_version: int = 2, solver_step: float | None = Non
     Returns
     -------
     pathlib.Path
-        The FMU written.
+        The FMU written.  Model Exchange (smooth models) has an event
+        indicator per switching surface of the laws (:func:`event_indicators`);
+        both interfaces provide directional derivatives of derivatives and
+        outputs by states and inputs where every law has a symbolic derivative.
 
     Raises
     ------
     FMUError
-        Bad arguments (unknown parameter, version, step) or an unsupported platform.
+        Bad arguments (unknown parameter, version, solver, step, tolerance) or an
+        unsupported platform.
     CompilationError
         The C compiler failed.
     """
@@ -218,17 +269,34 @@ def export(model, path, *, fmi_version: int = 2, solver_step: float | None = Non
         raise FMUError(f"solver_step must be a positive number of seconds, got {solver_step!r}")
     if not (isinstance(max_substeps, (int, float)) and max_substeps >= 1 and math.isfinite(max_substeps)):
         raise FMUError(f"max_substeps must be a finite number >= 1, got {max_substeps!r}")
+    if solver not in SOLVERS:
+        raise FMUError(f"solver must be one of {', '.join(SOLVERS)}, got {solver!r}")
+    if SOLVERS[solver] and eqs.held:
+        raise FMUError(f"solver {solver!r} is not offered by {eqs.name!r}: its held variables "
+                       f"({', '.join(eqs.held_names)}) need the fixed-step solver rk4")
+    if not (isinstance(tolerance, (int, float)) and tolerance > 0 and math.isfinite(tolerance)):
+        raise FMUError(f"tolerance must be a positive number, got {tolerance!r}")
     folder = binary_platform(fmi_version)
     ident = identifier or model_identifier(eqs.name)
+    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", ident):
+        raise FMUError(f"identifier must be a C identifier (letters, digits, _; not first a digit), "
+                       f"it names the shared library; got {ident!r}")
     model_exchange = eqs.is_smooth
-    variables = variable_layout(eqs, step, fmi_version=fmi_version, max_substeps=float(max_substeps))
-    kernels = generate_source(eqs, part="main") + "\n" + guard_source(eqs)
+    indicators = event_indicators(eqs)
+    variables = variable_layout(eqs, step, fmi_version=fmi_version, max_substeps=float(max_substeps),
+                                tolerance=float(tolerance), solver=SOLVERS[solver],
+                                indicators=tuple(_switch_text(g, sw) for g, sw in indicators))
+    partials = _partials(eqs)
+    kernels = "\n".join([generate_source(eqs, part="main"), guard_source(eqs),
+                         indicator_source(eqs, [g for g, _ in indicators]) if indicators else "",
+                         partials])
     description = description or (f"{eqs.name}: {len(eqs.states)} states, {len(eqs.inputs)} inputs, "
                                   f"{len(eqs.outputs)} outputs (bond graph exported by bondcosim)")
     token = "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, "bondcosim:" + hashlib.sha256(
         "\0".join([kernels, repr(variables), str(fmi_version), ident, str(model_exchange)]).encode()
     ).hexdigest())) + "}"
-    header = model_header(eqs, variables, token=token, model_exchange=model_exchange)
+    header = model_header(eqs, variables, token=token, model_exchange=model_exchange,
+                          n_indicators=len(indicators), directional=bool(partials))
     experiment = default_experiment(eqs, step)
     for key, value in (("stopTime", stop_time), ("stepSize", step_size)):
         if value is not None:
@@ -241,7 +309,8 @@ def export(model, path, *, fmi_version: int = 2, solver_step: float | None = Non
                                 token=token, description=description,
                                 model_exchange=model_exchange, date="2000-01-01T00:00:00Z",
                                 experiment=experiment, meta=meta,
-                                sources=compiled_sources(fmi_version))
+                                sources=compiled_sources(fmi_version),
+                                n_indicators=len(indicators), directional=bool(partials))
     generated = {"model.h": header, "model_kernels.c": kernels}
     binary = compile_fmu_binary(generated, fmi_version=fmi_version, identifier=ident)
     path = Path(path)

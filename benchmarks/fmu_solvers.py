@@ -42,7 +42,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-import bondgraph as bg  # noqa: E402
+from bondgraph.numerics import simulate  # noqa: E402
 import plants.library as library  # noqa: E402
 from fmus import default_solver_step, export  # noqa: E402
 

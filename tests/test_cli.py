@@ -57,9 +57,10 @@ def test_equations_of_a_python_model_file(tmp_path, capsys):
 
 
 def test_equations_of_a_json_model_file(tmp_path, capsys):
+    from bondgraph.io_json import save
     from plants import library
     path = tmp_path / "rlc.json"
-    library.build("rlc").save(path)
+    save(library.build("rlc"), path)
     assert main(["equations", str(path), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["states"] == ["p_L", "q_Cs"]
 

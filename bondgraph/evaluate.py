@@ -38,7 +38,7 @@ import weakref
 import numpy as np
 import sympy as sp
 
-from .c_build import find_compiler
+from .c_build import c_available
 from .codegen_c_templates import NEWTON_STATUS
 from .errors import ArgumentError, ExpressionError, ParameterError, SimulationError
 from .evaluate_c import CKernels
@@ -96,7 +96,7 @@ def compile_model(eqs, *, backend: str = "auto") -> "CompiledModel":
     if backend not in BACKENDS:
         raise ArgumentError(f"backend must be one of {', '.join(map(repr, BACKENDS))}; found {backend!r}")
     if backend == "auto":
-        backend = "c" if find_compiler() else "numpy"
+        backend = "c" if c_available() else "numpy"
     per_eqs = _KERNEL_CACHE.setdefault(eqs, {})
     kernels = per_eqs.get(backend)
     if kernels is None:

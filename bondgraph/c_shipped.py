@@ -31,7 +31,8 @@ from functools import cached_property
 from pathlib import Path
 from types import MappingProxyType
 
-__all__ = ["KernelBundle", "Recording", "recording", "lookup", "installed", "shipped_dir", "PLATFORM"]
+__all__ = ["KernelBundle", "Recording", "recording", "recording_open", "note", "lookup", "installed", "shipped_dir",
+           "PLATFORM"]
 
 #: Where a library can run: operating system and machine (``linux-x86_64``).
 PLATFORM = f"{sys.platform}-{platform.machine()}"
@@ -55,6 +56,11 @@ def lookup(key: str) -> Path | None:
 def installed() -> MappingProxyType:
     """Lookup key -> library file of every library installed in this process (read-only)."""
     return MappingProxyType(_INSTALLED)
+
+
+def recording_open() -> bool:
+    """True inside a :func:`recording` (callers skip computing keys otherwise)."""
+    return bool(_RECORDINGS)
 
 
 def note(key: str, path) -> None:

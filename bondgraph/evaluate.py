@@ -103,6 +103,8 @@ def compile_model(eqs, *, backend: str = "auto") -> "CompiledModel":
         _check_symbols(eqs)
         kernels = CKernels(eqs) if backend == "c" else NumpyKernels(eqs)
         per_eqs[backend] = kernels
+    elif backend == "c":
+        kernels.note_libraries()        # cached here, yet an open recording must see them too
     return CompiledModel(eqs, kernels)
 
 

@@ -23,8 +23,9 @@ Backends
     :func:`sympy.lambdify` (``cse=True``) vectorised over the batch; Newton
     vectorised over rows with :func:`numpy.linalg.solve` on stacked Jacobians.
 ``"auto"``
-    ``"c"`` when a C compiler is on PATH (``$CC``, cc, gcc or clang), else
-    ``"numpy"``.  A compiler that is found but fails raises
+    ``"c"`` when a C compiler is on PATH (``$CC``, cc, gcc or clang) or
+    compiled libraries were shipped into this process (a sweep's worker,
+    :mod:`bondgraph.c_shipped`), else ``"numpy"``.  A compiler that is found but fails raises
     :class:`~bondgraph.errors.CompilationError`; it never silently falls back.
 
 Both backends run the same Newton iteration
@@ -62,7 +63,7 @@ def compile_model(eqs, *, backend: str = "auto") -> "CompiledModel":
     eqs : StateEquations
         The equations (or any object with an ``equations()`` method returning them).
     backend : {"auto", "c", "numpy"}
-        See the module docstring; ``"auto"`` is C when a compiler is on PATH.
+        See the module docstring; ``"auto"`` is C when a compiler is on PATH (or libraries were shipped in).
 
     Returns
     -------

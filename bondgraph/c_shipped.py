@@ -111,20 +111,28 @@ class KernelBundle:
         """
         if not self.keys or self.platform != PLATFORM or self.digest in _BUNDLES:
             return 0
-        directory = shipped_dir()
-        directory.mkdir(parents=True, exist_ok=True)
-        files = {}
-        for digest, data in self.libraries.items():
-            path = files[digest] = directory / f"bc_{digest}.so"
-            if not path.exists():           # the name is the content's hash: an existing file is this one
-                fd, tmp = tempfile.mkstemp(dir=directory, prefix=".ship-")
-                with os.fdopen(fd, "wb") as fh:
-                    fh.write(data)
-                os.replace(tmp, path)       # atomic: a concurrent worker never loads half a file
+        try:
+            files = _write_once(self.libraries, shipped_dir())
+        except OSError:                     # no writable temporary directory: compile here as before
+            return 0
         for key, digest in self.keys.items():
             _INSTALLED[key] = files[digest]
         _BUNDLES.add(self.digest)
         return len(self.keys)
+
+
+def _write_once(libraries: dict, directory: Path) -> dict:
+    """Digest -> file of each library, written unless a file of that name (its content's hash) exists."""
+    directory.mkdir(parents=True, exist_ok=True)
+    files = {}
+    for digest, data in libraries.items():
+        path = files[digest] = directory / f"bc_{digest}.so"
+        if not path.exists():
+            fd, tmp = tempfile.mkstemp(dir=directory, prefix=".ship-")
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(data)
+            os.replace(tmp, path)           # atomic: a concurrent worker never loads half a file
+    return files
 
 
 @dataclass

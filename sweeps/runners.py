@@ -14,7 +14,7 @@ What is cheap to ship, and so shipped instead of rebuilt:
 - a model's :class:`~bondgraph.equations.StateEquations` (some 17 kB,
   cloudpickled): deriving them takes ~1 s (``pam``);
 - the compiled C libraries (the model's evaluator, the UKF's kernels, the FMU
-  fast path; 15-45 kB each): :meth:`prepare` runs the target once on the
+  fast path; 15-29 kB each): :meth:`prepare` runs the target once on the
   client with its nominal values while :func:`bondgraph.c_shipped.recording`
   notes every library built or loaded, and ships their bytes as a
   :class:`~bondgraph.c_shipped.KernelBundle`.  A worker installs the bundle

@@ -8,8 +8,8 @@ missing), where they attach (``metric.places``), their fitted parameters
 (``metric.parameters``, JSON: a list of one dict per effect, in that order), the
 held-out NRMSE before and after (``metric.nominal_nrmse.OUTPUT``,
 ``metric.improved_nrmse.OUTPUT``), the improvement ``1 - improved / nominal``
-(``metric.improvement.OUTPUT``) and the whole report (``metric.report``, JSON of :meth:`DiagnosisReport.to_json`).
-Workers read the recordings by path: on a cluster the paths must be on storage
+(``metric.improvement.OUTPUT``) and the whole report (``metric.report``, JSON
+of :meth:`DiagnosisReport.to_json`).  Workers read the recordings by path: on a cluster the paths must be on storage
 every worker sees.
 """
 from __future__ import annotations

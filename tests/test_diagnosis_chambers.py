@@ -112,3 +112,26 @@ def test_wall_heat_exchange_is_found_in_an_isothermal_chambers_model(tmp_path):
     assert {f["attached_to"] for f in found} <= {"junction chamber1", "junction chamber2"}
     fit = report["fit"]
     assert fit["improved"]["P1"] < 0.5 * fit["nominal"]["P1"]
+
+
+def test_twin_places_are_the_repeated_components():
+    from bondgraph import library
+    from diagnosis.catalogue import candidates
+    from diagnosis.place import Place
+    from diagnosis.twins import CandidateGroup, twin_places
+    from diagnosis.graph_location import candidate_places
+
+    g = pam("locked")
+    places = candidate_places(g)
+    assert [p.name for p in twin_places(g, Place("junction", "chamber1"), places)] == ["chamber2"]
+    assert twin_places(g, Place("input", "u1"), places) == [Place("input", "u2")]
+    msd = library.build("mass-spring-damper")
+    assert twin_places(msd, Place("junction", "v_mass"), candidate_places(msd)) == []
+    leaks = [next(c for c in candidates(g, Place("junction", j)) if c.kind == "leak") for j in ("chamber1", "chamber2")]
+    group = CandidateGroup(tuple(leaks))
+    assert [p.name for p in group.params] == ["c_leak_chamber1", "c_leak_chamber2"]
+    built = group.build(g, {"c_leak_chamber1": 1e-11, "c_leak_chamber2": 2e-11})
+    assert {"leak_chamber1", "leak_chamber2"} <= set(built.elements)
+    assert built.parameters()["c_leak_chamber2"].value == 2e-11
+    assert str(group) == "leak at junction chamber1, junction chamber2"
+    assert group.explain().count("a leak at") == 2

@@ -16,7 +16,12 @@ a fresh results directory, wall clock:
     workers' warm-up (imports, deriving the model) and the idle tail;
 (e) chunking: `--model-runs` short runs (``mass-spring-damper``, 20 s, tens of
     ms each) on the local cluster, one run per task against the automatic chunk
-    size: the overhead per run, as a fraction of the run time.
+    size: the overhead per run, as a fraction of the run time;
+(f) shipping: the runner's pickled size (what each worker fetches once: FMUs
+    and compiled C libraries), the client's preparation (FMU export and the
+    recording run), and in a fresh process with an empty cache: unpickling the
+    runner and installing and loading its shipped libraries, against generating
+    and compiling them there.
 
 The machine load (1-min load average) is printed before and after each
 measurement: on a shared machine the speed-up is bounded by the free cores, not
@@ -93,6 +98,58 @@ def chunking(n_runs: int, workers: int) -> list:
     return rows
 
 
+_FRESH = """
+import ctypes, pickle, sys, time
+start = time.perf_counter()
+runner = pickle.loads(open(sys.argv[1], "rb").read())
+unpickled = time.perf_counter()
+from bondgraph.numerics import c_shipped
+runner.kernels.install()
+libs = [ctypes.CDLL(str(p)) for p in set(c_shipped.installed().values())]
+print(unpickled - start, time.perf_counter() - unpickled, len(libs))
+"""
+
+_FIRST_RUN = """
+import pickle, sys, time
+shipped = pickle.loads(open(sys.argv[1], "rb").read())
+if sys.argv[2] == "compile":
+    shipped.kernels = None        # as before shipping: this process derives, generates and compiles
+start = time.perf_counter()
+shipped({}, 0)
+print(time.perf_counter() - start)
+"""
+
+
+def shipping(spec) -> dict:
+    """(f): what a worker receives, and what loading it costs against compiling on the node."""
+    import cloudpickle
+
+    from sweeps.runners import make_runner
+    runner = make_runner(spec)
+    before, start = _load(), time.perf_counter()
+    runner.prepare()
+    prepare_s = time.perf_counter() - start
+    with tempfile.TemporaryDirectory() as tmp:
+        blob = Path(tmp) / "runner.pkl"
+        blob.write_bytes(cloudpickle.dumps(runner))
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(Path(__file__).resolve().parent.parent),
+                                                           os.environ.get("PYTHONPATH", "")]))
+
+        def fresh(script, *args):       # a new process with an empty C cache, like a fresh node's worker
+            env["BONDCOSIM_CACHE"] = tempfile.mkdtemp(dir=tmp)
+            return subprocess.run([sys.executable, "-c", script, str(blob), *args], env=env, capture_output=True,
+                                  text=True, check=True).stdout.split()
+
+        unpickle, install = fresh(_FRESH)[:2]
+        compiling, = fresh(_FIRST_RUN, "compile")
+        shipped, = fresh(_FIRST_RUN, "ship")
+        return {"runner_bytes": blob.stat().st_size, "fmu_bytes": sum(len(b) for b in runner.fmus.values()),
+                "kernel_bytes": runner.kernels.nbytes, "libraries": len(runner.kernels.libraries),
+                "prepare_s": prepare_s, "unpickle_s": float(unpickle), "install_load_s": float(install),
+                "first_run_compiling_s": float(compiling), "first_run_shipped_s": float(shipped),
+                "load_before": before, "load_after": _load()}
+
+
 def _noop(i):
     return i
 
@@ -161,6 +218,7 @@ def main(runs: int = 200, segment: float = 0.3, workers: int = 2, external: bool
                     p.wait(timeout=30)
         null = null_task_overhead(workers, null_tasks)
     chunks = chunking(model_runs, workers) if model_runs else []
+    ship = shipping(spec)
     serial = rows[0]["wall_s"]
     print(f"{runs} pam-ukf runs of 13 x {segment} s on {os.cpu_count()} cores")
     print(f"{'engine':<12} {'wall s':>8} {'setup s':>8} {'speed-up':>9} {'tasks':>6} {'ovh/task ms':>12} "
@@ -176,8 +234,14 @@ def main(runs: int = 200, segment: float = 0.3, workers: int = 2, external: bool
         print(f"{model_runs} model runs, {c['chunks']:<10} (chunk {c['chunk_size']:>3}, {c['tasks']:>4} tasks): "
               f"wall {c['wall_s']:.2f} s, run {c['mean_run_ms']:.1f} ms, overhead {c['overhead_per_run_ms']:.1f} ms "
               f"per run = {100 * c['overhead_fraction']:.1f} % of run time (load {c['load_before']:.2f})")
+    print(f"shipped once per worker: runner {ship['runner_bytes'] / 1e3:.0f} kB pickled (FMUs "
+          f"{ship['fmu_bytes'] / 1e3:.0f} kB, {ship['libraries']} C libraries {ship['kernel_bytes'] / 1e3:.0f} kB); "
+          f"client preparation {ship['prepare_s']:.2f} s; in a fresh process: unpickle {ship['unpickle_s']:.2f} s, "
+          f"install + load the libraries {1e3 * ship['install_load_s']:.1f} ms; first run with the libraries shipped "
+          f"{ship['first_run_shipped_s']:.2f} s, compiling them (empty cache) {ship['first_run_compiling_s']:.2f} s "
+          f"(load {ship['load_before']:.2f} -> {ship['load_after']:.2f})")
     result = {"runs": runs, "segment_s": segment, "cores": os.cpu_count(), "rows": rows, "null_tasks": null,
-              "chunking": chunks}
+              "chunking": chunks, "shipping": ship}
     if json_path:
         Path(json_path).write_text(json.dumps(result, indent=1))
     return result

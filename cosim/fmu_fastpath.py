@@ -64,20 +64,32 @@ int bc_advance3(void *set, void *step, void *get, void *c,
 """
 
 
-@functools.cache
 def _library():
+    """The bridge library, or None without a compiler; noted for a sweep's shipping on every call
+    (:mod:`bondgraph.numerics.c_shipped`: loaded once per process, it must still be recorded each time)."""
+    from bondgraph.numerics import c_shipped
+    from bondgraph.numerics.c_build import source_key
+    lib, path = _load()
+    if lib is not None:
+        c_shipped.note(source_key(_SOURCE), path)
+    return lib
+
+
+@functools.cache
+def _load():
     from bondgraph.numerics.c_build import compile_source
     from cosim.errors import CompilationError
     try:
-        lib = ctypes.CDLL(str(compile_source(_SOURCE)))
+        path = compile_source(_SOURCE)
+        lib = ctypes.CDLL(str(path))
     except CompilationError:
-        return None
+        return None, None
     for name in ("bc_advance2", "bc_advance3"):
         fn = getattr(lib, name)
         fn.argtypes = [c_void_p] * 5 + [c_size_t, c_void_p, c_void_p, c_size_t, c_void_p,
                                         c_void_p, c_double, c_double]
         fn.restype = c_int
-    return lib
+    return lib, path
 
 
 def _address(function) -> int:

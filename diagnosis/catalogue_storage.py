@@ -9,7 +9,7 @@ and backlash of a C element at a junction.
 * ``heat_transfer`` at a 0-junction holding a
   :class:`~bondgraph.elements.PneumaticChamber`: the chamber's thermal form (the
   gas temperature becomes a state exchanging heat with the wall; fitted: the
-  time constant :math:`\tau = m c_v/(h A)` and the ratio of specific heats).
+  wall conductance hA, W/K, and the ratio of specific heats).
 * ``heat_transfer`` at other pneumatic / thermal 0-junctions: the gas in a chamber
   is compressed nearly adiabatically in fast transients and nearly
   isothermally in slow ones.  Newtonian heat exchange with the walls is
@@ -70,7 +70,7 @@ def make_storage(graph, place, scales, taken, values=None) -> list[dict]:
                                              f"leak conductance at {j}")]))
         chambers = [el for el, _ in junction_elements(graph, j) if el.kind == "PneumaticC" and el.heat is None]
         for chamber in chambers:
-            protos.append(_chamber_heat(graph, j, chamber, scales, taken))
+            protos.append(_chamber_heat(graph, j, chamber, scales, taken, values))
         if dom in ("pneumatic", "thermal") and not chambers:
             c_unit = DOMAINS[dom].compliance
             c_th = F * scales.span / max(E, 1e-12) * 0.05
@@ -102,18 +102,37 @@ def make_storage(graph, place, scales, taken, values=None) -> list[dict]:
     return protos
 
 
-def _chamber_heat(graph, j, chamber, scales, taken) -> dict:
-    """The ``heat_transfer`` prototype of a pneumatic chamber: its thermal form (gas temperature state)."""
-    temperature = graph.parameters().get(chamber.temperature)
-    t_wall = temperature.value if temperature is not None else 293.0
-    tau, gamma = fresh_name(taken, f"tau_th_{chamber.name}"), fresh_name(taken, f"gamma_{chamber.name}")
+def _chamber_heat(graph, j, chamber, scales, taken, values) -> dict:
+    """The ``heat_transfer`` prototype of a pneumatic chamber: its thermal form (gas temperature state),
+    with the wall conductance hA (W/K) scaled so that the heat capacity of the gas at the junction's
+    mean pressure relaxes in a tenth of the record."""
+    params = {n: p.value for n, p in graph.parameters().items()}
+    t_wall = float(params.get(chamber.temperature, 293.0))
+    e = values.get(f"e_{graph.bonds_of(j)[0][0].name}")
+    pressure = float(np.mean(e)) if e is not None else chamber.initial_pressure
+    heat_capacity = pressure * _chamber_volume(graph, chamber, params) / (0.4 * t_wall)   # m c_v, J/K
+    h_a, gamma = fresh_name(taken, f"hA_{chamber.name}"), fresh_name(taken, f"gamma_{chamber.name}")
+    per_second = heat_capacity / scales.span          # hA that relaxes the gas over the whole record
     return dict(kind="heat_transfer", target=chamber.name, constants=[],
                 initial={chamber.gas_state: t_wall},
-                starts=[{tau: scales.span / 100, gamma: 1.4}, {tau: scales.span, gamma: 1.4}],
-                params=[ParamSpec(tau, scales.span / 10, scales.dt / 2, scales.span * 100, "s",
-                                  f"heat-exchange time constant m c_v/(h A) of {chamber.name}"),
+                starts=[{h_a: 100 * per_second, gamma: 1.4}, {h_a: per_second, gamma: 1.4}],
+                params=[ParamSpec(h_a, 10 * per_second, 0.01 * per_second, 2 * heat_capacity / scales.dt, "W/K",
+                                  f"heat conductance from the gas in {chamber.name} to its wall"),
                         ParamSpec(gamma, 1.4, 1.0, 1.67, "1",
                                   f"ratio of specific heats of the gas in {chamber.name}")])
+
+
+def _chamber_volume(graph, chamber, params) -> float:
+    """Volume of a pneumatic chamber at the model's initial state, m^3 (its volume law at its length)."""
+    import sympy as sp
+    from bondgraph.symbols import parse
+    initial = dict(graph.equations().initial_state)
+    table = {name: sym for name, sym in graph.names().items()}
+    numbers = {table[n]: v for n, v in {**params, **initial}.items() if n in table}
+    length = parse(chamber.length, table, owner=f"{chamber.name} length").xreplace(numbers)
+    volume = parse(chamber.volume, {**table, "l": sp.Symbol("l")}, owner=f"{chamber.name} volume")
+    value = complex(volume.xreplace(numbers).subs(sp.Symbol("l"), length).evalf())
+    return abs(value.real) if np.isfinite(value.real) and value.real != 0 else 1e-4
 
 
 def _content_limit(graph, j, element, q, k_lin, scales, taken, q_unit) -> dict:
@@ -169,7 +188,7 @@ def build_storage(data: dict, graph, cand, values: dict) -> None:
         return
     if cand.kind == "heat_transfer" and cand.target is not None:   # the chamber's own thermal form
         entry = next(e for e in data["elements"] if e["name"] == cand.target)
-        entry["heat"] = {"tau": p[0], "gamma": p[1]}
+        entry["heat"] = {"hA": p[0], "gamma": p[1]}
         entry["initial_temperature"] = float(next(iter(cand.initial.values())))
         entry["description"] = (entry.get("description", "") + " (with wall heat exchange)").strip()
         return
@@ -217,7 +236,7 @@ def explain_storage(cand, values: dict, show) -> str:
         return f"the chamber at {j} loses {show(p[0])} of flow per unit of pressure above ambient: a leak at {j}"
     if cand.kind == "heat_transfer" and cand.target is not None:
         return (f"the gas in {cand.target} heats up when compressed or filled and exchanges heat with its "
-                f"walls with a time constant of {show(p[0])} (ratio of specific heats {show(p[1])}): "
+                f"walls through a conductance of {show(p[0])} (ratio of specific heats {show(p[1])}): "
                 f"heat transfer in {cand.target} at {j}")
     if cand.kind == "heat_transfer":
         return (f"the pressure at {j} relaxes with a time constant of {show(p[1])} after each change as the "

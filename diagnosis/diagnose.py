@@ -330,6 +330,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         say("fitting", f"{cand} ({i}/{len(cands)})")
         fits.append(fit_candidate(graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0,
                                   through=train))
+    fits += _twin_fits(graph, fits, train, rv, lambda cand: fit_candidate(
+        graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0, through=train), say, "fitting")
     if uncertain:
         say("fitting", f"nominal parameters {', '.join(uncertain)} alone")
         fits.append(fit_candidate(graph, None, fit_part, held, uncertain=uncertain, x0=fit_x0,
@@ -378,6 +380,23 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                     locate_regime=locate_regime, timings=say.done, rounds=rounds)
 
 
+def _twin_fits(graph, fits, train, rv, fit, say, label) -> list:
+    """Fits of the same kind at all twins of the best single-place fits' places
+    (:mod:`diagnosis.twins`): an effect on every copy of a repeated component."""
+    from .catalogue import candidates
+    from .graph_location import candidate_places
+    from .twins import twin_groups
+
+    groups = twin_groups(graph, fits, candidate_places(graph, experiment=train),
+                         lambda place: candidates(graph, place, regime_variables=rv, experiment=train),
+                         experiment=train)
+    out = []
+    for i, group in enumerate(groups, 1):
+        say(label, f"{group} ({i}/{len(groups)}, twins)")
+        out.append(fit(group))
+    return out
+
+
 def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, *, top, say, label):
     """One more effect on `graph` (the improved graph so far) against its own residual.
 
@@ -404,8 +423,8 @@ def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, 
         return {"chosen": None, "fits": [], "reference": dict(reference), "improved": dict(reference),
                 "scores": [], "note": f"graph location failed: {type(exc).__name__}: {exc}"}
     places = [s for s in scores[:top] if s.explained >= MIN_PLACE_SHARE]
-    done = {(r["chosen"].candidate.kind, r["chosen"].candidate.place) for r in rounds
-            if r["chosen"] is not None and r["chosen"].candidate is not None}
+    done = {(c.kind, c.place) for r in rounds if r["chosen"] is not None and r["chosen"].candidate is not None
+            for c in getattr(r["chosen"].candidate, "members", (r["chosen"].candidate,))}
     cands = [c for s in places for c in candidates(graph, s.place, regime_variables=rv, experiment=train)
              if (c.kind, c.place) not in done]
     fit_part, fit_x0 = _fit_window(train, res.run, x0)
@@ -413,6 +432,8 @@ def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, 
     for i, cand in enumerate(cands, 1):
         say(f"{label}: fitting", f"{cand} ({i}/{len(cands)})")
         fits.append(fit_candidate(graph, cand, fit_part, held, x0=fit_x0, through=train))
+    fits += _twin_fits(graph, fits, train, rv, lambda cand: fit_candidate(
+        graph, cand, fit_part, held, x0=fit_x0, through=train), say, f"{label}: fitting")
     say(f"{label}: choosing")
     chosen = choose(reference, fits, noise=floor) if fits else None
     out = {"chosen": chosen, "fits": fits, "reference": dict(reference), "improved": dict(reference),

@@ -41,13 +41,18 @@ def _regime(chosen, scores, res, n_train, rv, locate_regime, units):
     return finding, values, signal, label
 
 
-def _effect(fit, refit=None) -> dict:
-    """One ``missing_physics`` entry of an accepted candidate fit (values of a kept joint
-    refit, dict name -> value, replace the round's)."""
-    names = {p.name for p in fit.candidate.params}
-    params = {k: float(v) for k, v in {**fit.values, **(refit or {})}.items() if k in names}
-    return {"kind": fit.candidate.kind, "attached_to": str(fit.candidate.place),
-            "parameters": params, "explanation": fit.candidate.explain(params)}
+def _effects(fit, refit=None) -> list[dict]:
+    """The ``missing_physics`` entries of an accepted candidate fit, one per place (a group of
+    twins gives one per member; values of a kept joint refit, dict name -> value, replace the
+    round's)."""
+    values = {**fit.values, **(refit or {})}
+    out = []
+    for cand in getattr(fit.candidate, "members", (fit.candidate,)):
+        names = {p.name for p in cand.params}
+        params = {k: float(v) for k, v in values.items() if k in names}
+        out.append({"kind": cand.kind, "attached_to": str(cand.place), "parameters": params,
+                    "explanation": cand.explain(params)})
+    return out
 
 
 def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, rv, scores, fits,
@@ -64,8 +69,8 @@ def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, r
         attached = place.name if place.kind == "junction" else str(place)
         joint = next((r["joint"] for r in rounds if "joint" in r), None)
         refit = joint["fit"].values if joint is not None and joint["kept"] else None
-        physics = [_effect(chosen, refit)]
-        physics += [_effect(r["chosen"], refit) for r in list(rounds)[1:] if r["chosen"] is not None]
+        physics = _effects(chosen, refit)
+        physics += [e for r in list(rounds)[1:] if r["chosen"] is not None for e in _effects(r["chosen"], refit)]
         location = {"junction": attached, "bond": place.bond or "",
                     "windows": windows, "regime": finding.description if finding else ""}
     else:
@@ -139,7 +144,9 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
         lines.append(f"Missing physics: none - {m['explanation']} "
                      f"({len(fits)} candidate fit(s) tried).")
     else:
-        lines.append(f"Missing physics: {m['kind']} at {m['attached_to']}. {m['explanation']}")
+        first = physics[:len(getattr(chosen.candidate, "members", (None,)))]   # round 1: one per twin place
+        lines.append(f"Missing physics: {m['kind']} at {', '.join(e['attached_to'] for e in first)}. "
+                     f"{'; '.join(e['explanation'] for e in first)}")
         if finding is not None and finding.variable is not None:
             share = ("" if finding.explained < _MIN_REGIME_SHARE
                      else f" (explains {100 * finding.explained:.0f} % of it)")
@@ -173,10 +180,11 @@ def _further_text(rounds, outputs):
             lines.append(f"Round {i}: nothing more - no further candidate improves the held-out error "
                          f"beyond the noise and the price of its parameters ({len(r['fits'])} tried).")
             continue
-        m = _effect(c)
+        found = _effects(c)
         gain = ", ".join(f"{o} {r['reference'][o]:.3g} -> {r['improved'][o]:.3g}" for o in outputs)
-        lines.append(f"Also missing (round {i}): {m['kind']} at {m['attached_to']}. {m['explanation']} "
-                     f"(held-out NRMSE {gain}).")
+        where = ", ".join(m["attached_to"] for m in found)
+        lines.append(f"Also missing (round {i}): {found[0]['kind']} at {where}. "
+                     f"{'; '.join(m['explanation'] for m in found)} (held-out NRMSE {gain}).")
     joint = next((r["joint"] for r in rounds if "joint" in r), None)
     if joint is not None:
         gain = ", ".join(f"{o} {joint['reference'][o]:.3g} -> {joint['improved'][o]:.3g}" for o in outputs)

@@ -184,6 +184,8 @@ def _started_mid_run(candidate, train, x0):
     """With a given start state (a window cut from a longer run), an added actuator state starts
     at the command recorded then (the actuator had followed it), not where the input rested before
     the experiment; the Pade states' derivatives start at 0."""
+    if hasattr(candidate, "members"):        # a group of twins: each member on its own
+        return candidate.with_members(lambda m: _started_mid_run(m, train, x0))
     if candidate is None or x0 is None or not candidate.initial or candidate.place.name not in train.inputs:
         return candidate
     from dataclasses import replace

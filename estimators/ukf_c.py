@@ -2,7 +2,9 @@
 
 :class:`CEngine` generates (:func:`estimators.ukf_c_source.ukf_source`),
 compiles and caches (:func:`bondgraph.numerics.c_build.compile_source`) and loads the
-step kernel of one model and filter configuration, owns its workspace (one
+step kernel of one model and filter configuration (or loads the library
+shipped in under :func:`kernel_key`, :mod:`bondgraph.numerics.c_shipped`, generating
+and compiling nothing), owns its workspace (one
 ``double`` array whose numpy views are the filter's state), and calls
 ``bc_ukf_predict`` / ``bc_ukf_update`` / ``bc_ukf_run`` through ctypes with
 pointers computed once.  It has the attributes and methods of the numpy
@@ -13,17 +15,22 @@ the time and the matrix.
 from __future__ import annotations
 
 import ctypes
+import functools
+import hashlib
 import weakref
+from pathlib import Path
 
 import numpy as np
 
-from bondgraph.numerics.c_build import compile_source, find_compiler
+from bondgraph.numerics import c_shipped
+from bondgraph.numerics.c_build import c_available, compile_source, equations_key
 from bondgraph.numerics.codegen_c import generate_source
 from estimators.errors import EstimatorError
 
+from . import ukf_c_source
 from .ukf_c_source import STATUS, layout, ukf_source
 
-__all__ = ["CEngine", "c_engine_available"]
+__all__ = ["CEngine", "c_engine_available", "kernel_key"]
 
 # generate_source per equations object (sympy cse is the slow part; equations are immutable)
 _MODEL_SOURCE: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
@@ -31,8 +38,8 @@ _MODEL_SOURCE: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 def c_engine_available(model) -> str | None:
     """None when the C engine can run `model`, else the reason it cannot."""
-    if find_compiler() is None:
-        return "no C compiler found ($CC, cc, gcc, clang)"
+    if not c_available():
+        return "no C compiler found ($CC, cc, gcc, clang) and no compiled library shipped in"
     if model.algebraic_names:
         return (f"model {model.equations.name!r} has algebraic unknowns "
                 f"({', '.join(model.algebraic_names)}), which the C kernel does not solve")
@@ -44,6 +51,34 @@ def _model_source(eqs) -> str:
     if src is None:
         src = _MODEL_SOURCE[eqs] = generate_source(eqs, part="main")
     return src
+
+
+@functools.cache
+def _template_hash() -> str:
+    return hashlib.sha256(Path(ukf_c_source.__file__).read_bytes()).hexdigest()
+
+
+def kernel_key(eqs, dims: dict, output_index, redraw: bool, has_map: bool) -> str:
+    """Compiler-independent lookup key of one UKF kernel (:mod:`bondgraph.numerics.c_shipped`).
+
+    Everything the source depends on, without generating it: the model's
+    :func:`~bondgraph.numerics.c_build.equations_key`, the template module's text, the
+    sizes and options.
+    """
+    text = "\0".join([equations_key(eqs, "main"), _template_hash(), repr(sorted(dims.items())),
+                      repr(tuple(int(i) for i in output_index)), repr(bool(redraw)), repr(bool(has_map))])
+    return "ukf:" + hashlib.sha256(text.encode()).hexdigest()[:40]
+
+
+def _library(eqs, dims, output_index, redraw, has_map):
+    """The UKF kernel's library: shipped in under :func:`kernel_key`, else generated and compiled."""
+    key = kernel_key(eqs, dims, output_index, redraw, has_map)
+    path = c_shipped.lookup(key)
+    if path is None:
+        path = compile_source(ukf_source(_model_source(eqs), **dims, output_index=output_index,
+                                         redraw=bool(redraw), has_map=has_map))
+    c_shipped.note(key, path)
+    return ctypes.CDLL(str(path))
 
 
 class CEngine:
@@ -80,9 +115,7 @@ class CEngine:
         dims = dict(nf=nf, nm=len(model.state_names), nu=len(model.input_names),
                     nd=len(model.held_names), npar=len(model.param_names),
                     nym_model=len(model.output_names))
-        source = ukf_source(_model_source(eqs), **dims, output_index=functions.output_index,
-                            redraw=bool(redraw), has_map=functions.state_map is not None)
-        self._lib = ctypes.CDLL(str(compile_source(source)))
+        self._lib = _library(eqs, dims, functions.output_index, redraw, functions.state_map is not None)
         vp, ci = ctypes.c_void_p, ctypes.c_int
         for name in ("bc_ukf_predict", "bc_ukf_update", "bc_ukf_step"):
             getattr(self._lib, name).argtypes = [vp, vp]

@@ -5,11 +5,11 @@ much it improved the held-out fit.
 Each recording is a run (``param.recording``: its path); its row holds the
 kinds found (``metric.kinds``, ``;``-separated, ``none`` when nothing is
 missing), where they attach (``metric.places``), their fitted parameters
-(``metric.parameters``, JSON), the held-out NRMSE before and after
-(``metric.nominal_nrmse.OUTPUT``, ``metric.improved_nrmse.OUTPUT``), the
-improvement ``1 - improved / nominal`` (``metric.improvement.OUTPUT``) and the
-whole report (``metric.report``, JSON of :meth:`DiagnosisReport.to_json`).
-Workers read the recordings by path: on a cluster the paths must be on storage
+(``metric.parameters``, JSON: a list of one dict per effect, in that order), the
+held-out NRMSE before and after (``metric.nominal_nrmse.OUTPUT``,
+``metric.improved_nrmse.OUTPUT``), the improvement ``1 - improved / nominal``
+(``metric.improvement.OUTPUT``) and the whole report (``metric.report``, JSON
+of :meth:`DiagnosisReport.to_json`).  Workers read the recordings by path: on a cluster the paths must be on storage
 every worker sees.
 """
 from __future__ import annotations
@@ -60,7 +60,8 @@ class DiagnosisRunner:
         found = [m for m in data["missing_physics"] if m["kind"] != "none"]
         out = {"n_effects": float(len(found)), "kinds": ";".join(m["kind"] for m in found) or "none",
                "places": ";".join(m["attached_to"] for m in found),
-               "parameters": json.dumps({m["kind"]: m["parameters"] for m in found}),
+               # one entry per effect, in the order of kinds and places: the same kind may be found twice
+               "parameters": json.dumps([m["parameters"] for m in found]),
                "junction": data["location"]["junction"], "report": json.dumps(data)}
         for o, v in data["fit"]["nominal"].items():
             out[f"nominal_nrmse.{o}"] = float(v) if v is not None else float("nan")
@@ -101,6 +102,15 @@ def _quantiles(v) -> dict:
     return {"n": int(v.size), "median": float(q50), "q05": float(q05), "q95": float(q95)}
 
 
+def _effects(row) -> list:
+    """``(kind, place, fitted parameters)`` of each effect found in one ok row."""
+    found = [k for k in row["metric.kinds"].split(";") if k != "none"]
+    fitted = json.loads(row["metric.parameters"])
+    if isinstance(fitted, dict):        # rows written before the list form: one entry per kind
+        fitted = [fitted.get(k, {}) for k in found]
+    return list(zip(found, row["metric.places"].split(";"), fitted))
+
+
 def fleet_summary(table) -> dict:
     """Counts of each kind found (and of recordings with none), where each attached, the
     distribution of each kind's fitted parameters, and the held-out improvement
@@ -109,15 +119,15 @@ def fleet_summary(table) -> dict:
     kinds, places, params, by_kind = {}, {}, {}, {}
     improvement_cols = [c for c in table.columns if c.startswith("metric.improvement.")]
     for _, row in ok.iterrows():
-        found = [k for k in row["metric.kinds"].split(";") if k != "none"]
-        if not found:
+        effects = _effects(row)
+        if not effects:
             kinds["none"] = kinds.get("none", 0) + 1
-        fitted = json.loads(row["metric.parameters"])
-        for kind, place in zip(found, row["metric.places"].split(";")):
-            kinds[kind] = kinds.get(kind, 0) + 1
+        for kind, place, fitted in effects:
             places.setdefault(kind, {})[place] = places.setdefault(kind, {}).get(place, 0) + 1
-            for name, value in fitted.get(kind, {}).items():
+            for name, value in fitted.items():
                 params.setdefault(kind, {}).setdefault(name, []).append(np.nan if value is None else value)
+        for kind in dict.fromkeys(k for k, _, _ in effects):      # recordings, and their improvement, once per kind
+            kinds[kind] = kinds.get(kind, 0) + 1
             by_kind.setdefault(kind, []).extend(row[c] for c in improvement_cols)
     return {"n_recordings": int(len(table)), "n_ok": int(len(ok)), "n_failed": int(len(table) - len(ok)),
             "failed": {str(r["param.recording"]): str(r["error"]) for _, r in bad.iterrows()},
@@ -168,7 +178,7 @@ def _plots(table, summary: dict, directory: Path) -> dict:
         fig, axes = plt.subplots(panels, 1, figsize=(6, 2.2 * panels + 0.4), squeeze=False)
         values = {}
         for _, row in ok.iterrows():
-            for kind, p in json.loads(row["metric.parameters"]).items():
+            for kind, _, p in _effects(row):
                 for name, v in p.items():
                     values.setdefault((kind, name), []).append(np.nan if v is None else v)
         for ax, (kind, name) in zip(axes[:, 0], fitted):

@@ -53,8 +53,8 @@ class ProgressBar:
         """Add `done` finished runs (of which `failed` failed); set the number `running`."""
         self.done += done
         self.failed += failed
-        if running is not None:
-            self.running = running
+        if running is not None:     # estimated by the caller from whole chunks: never more than are left
+            self.running = max(0, min(int(running), self.total - self.done))
         if self.stream is None:
             return
         if self._tty:

@@ -12,10 +12,14 @@ What is cheap to ship, and so shipped instead of rebuilt:
   a worker writes it once into its own temporary directory (by content hash)
   and every run sets its parameters on it before initialisation;
 - a model's :class:`~bondgraph.equations.StateEquations` (some 17 kB,
-  cloudpickled): deriving them takes ~1 s (``pam``); their compiled C
-  evaluator is looked up by content hash in the bondgraph cache
-  (:func:`bondgraph.numerics.c_build.cache_dir`), so it is compiled at most once per
-  machine -- never per task -- and not at all on a shared cache directory.
+  cloudpickled): deriving them takes ~1 s (``pam``);
+- the compiled C libraries (the model's evaluator, the UKF's kernels, the FMU
+  fast path; 15-29 kB each): :meth:`prepare` runs the target once on the
+  client with its nominal values while :func:`bondgraph.numerics.c_shipped.recording`
+  notes every library built or loaded, and ships their bytes as a
+  :class:`~bondgraph.numerics.c_shipped.KernelBundle`.  A worker installs the bundle
+  before its first run, so it loads those libraries without generating code
+  or needing a compiler; a library the bundle lacks is compiled there as before.
 """
 from __future__ import annotations
 
@@ -74,6 +78,29 @@ def _select(metrics: dict, keep, target: str) -> dict:
     return {k: metrics[k] for k in keep}
 
 
+def _record_kernels(run):
+    """The C libraries that `run()` builds or loads, as a KernelBundle (bondgraph.numerics.c_shipped).
+
+    `run` is one run with nominal values; if it fails, what it built so far is
+    kept and the sweep's own runs report the failure -- except a MetricError,
+    which every run would raise, so it stops the sweep before any cluster starts.
+    """
+    from bondgraph.numerics import c_shipped
+    with c_shipped.recording() as rec:
+        try:
+            run()
+        except MetricError:
+            raise
+        except Exception:  # noqa: BLE001 -- reported by the runs themselves, each as a failed row
+            pass
+    return rec.bundle()
+
+
+def _install(kernels) -> None:
+    if kernels is not None:
+        kernels.install()          # once per process: later calls return at once
+
+
 def _check_names(problems, spec: SweepSpec, known: dict, target: str) -> None:
     for where, names in (("vary", spec.vary), ("fixed", spec.fixed)):
         for n in names:
@@ -118,18 +145,30 @@ class ScenarioRunner:
         self.fixed = dict(spec.fixed)
         self.keep = tuple(spec.metrics)
         self.fmus: dict = {}
+        self.kernels = None
 
-    def prepare(self) -> None:
-        """Export the scenario's FMUs once, keeping their bytes (shipped with the runner)."""
+    def prepare(self, *, ship_kernels: bool = True) -> None:
+        """Export the scenario's FMUs once, keeping their bytes (shipped with the runner).
+
+        With `ship_kernels`, also run the scenario once (quick profile, fixed
+        values, seed 0) and keep the C libraries it used (:func:`_record_kernels`;
+        ~0.5 s for ``pam-ukf``).  A requested metric the results lack stops here.
+        """
         import reproductions as scenarios
         with tempfile.TemporaryDirectory() as tmp:
             files = scenarios.export_fmus(self.target.name, tmp)
             self.fmus = {Path(p).name: Path(p).read_bytes() for p in files.values()}
+        if ship_kernels:
+            self.kernels = _record_kernels(lambda: self._run({}, 0, quick=True))
 
     def __call__(self, params: dict, seed: int) -> dict:
         """One scenario run; its numeric results flattened (:func:`flatten`), kept metrics only."""
+        _install(self.kernels)
+        return self._run(params, seed, quick=self.target.quick)
+
+    def _run(self, params: dict, seed: int, *, quick: bool) -> dict:
         import reproductions as scenarios
-        result = scenarios.run(self.target.name, quick=self.target.quick, params={**self.fixed, **params},
+        result = scenarios.run(self.target.name, quick=quick, params={**self.fixed, **params},
                                seed=seed, fmu_dir=_local_files(self.fmus))
         return _select(flatten(result), self.keep, self.label)
 
@@ -176,12 +215,18 @@ class ModelRunner:
         self.units = {n: str(self.eqs.units.get(n, "")) for n in self.nominal}
         self.fixed = dict(spec.fixed)
         self.keep = tuple(spec.metrics)
+        self.kernels = None
 
-    def prepare(self) -> None:
-        """Nothing to build: the equations were derived in the constructor."""
+    def prepare(self, *, ship_kernels: bool = True) -> None:
+        """The equations were derived in the constructor; with `ship_kernels`, simulate the
+        model once with its nominal values and keep the C libraries it used (:func:`_record_kernels`)."""
+        if ship_kernels:
+            self.kernels = _record_kernels(lambda: self({}, 0))
 
     def __call__(self, params: dict, seed: int) -> dict:
+        """One open-loop simulation: the output statistics (and series) of :class:`ModelRunner`."""
         from bondgraph.numerics.simulation import simulate
+        _install(self.kernels)
         t = self.target
         res = simulate(self.eqs, (0.0, t.stop_time), inputs=dict(t.inputs), params={**self.fixed, **params},
                        output_interval=t.output_interval)

@@ -62,11 +62,18 @@ class RunStore:
                 old = json.loads(meta_path.read_text())
             except (OSError, ValueError) as exc:
                 raise StoreError(self.directory, f"sweep.json is unreadable ({exc}); not a sweep directory") from None
-            if old != json.loads(json.dumps(meta)):
+            new = json.loads(json.dumps(meta))
+            if old != new:
                 differ = sorted(k for k in set(old.get("spec", {})) | set(spec)
-                                if old.get("spec", {}).get(k) != json.loads(json.dumps(spec)).get(k))
+                                if old.get("spec", {}).get(k) != new["spec"].get(k))
                 raise StoreError(self.directory, "--resume needs the same sweep; these keys differ: "
                                                  f"{', '.join(differ) or 'n_runs/version'}")
+            if list(old.get("spec", {}).get("vary", {})) != list(new["spec"].get("vary", {})):
+                # the order numbers the grid points and orders each run's draws: equal laws in another
+                # order would give other values to the run ids still missing
+                raise StoreError(self.directory, "--resume needs the same sweep; the varied parameters are in "
+                                                 f"another order ({', '.join(old['spec']['vary'])} before, "
+                                                 f"{', '.join(new['spec']['vary'])} now)")
         self.parts.mkdir(parents=True, exist_ok=True)
         _atomic_write(meta_path, json.dumps(meta, indent=1).encode())
 

@@ -161,7 +161,8 @@ def run_sweep(spec: SweepSpec, out, *, resume: bool = False, workers=None, sched
     runs = plan_runs(spec, runner.nominal)
     store = RunStore(out, spec.to_dict(), len(runs), resume=resume)
     if len(store.done()) < len(runs):
-        runner.prepare()
+        # the C libraries are recorded for workers only: a serial sweep runs in this process
+        runner.prepare(ship_kernels=not (workers == 0 and scheduler is None and client is None))
     stats = execute(runner, runs, store, workers=workers, scheduler=scheduler, client=client,
                     chunk_size=chunk_size, progress=progress, on_chunk=on_chunk,
                     flush_interval_s=flush_interval_s)

@@ -167,11 +167,11 @@ def test_pam_chambers_are_places_for_a_leak_and_the_chambers_thermal_form():
     expected = -S("k1") * S("R") * S("T") * S("c_leak_chamber1") * (S("P_1") - S("P_amb_chamber1")) / V1
     assert sp.simplify(rates["P_1"] - base["P_1"] - expected) == 0
     heat = _one(nominal, place, "heat_transfer")
-    assert heat.target == "muscle1" and [p.unit for p in heat.params] == ["s", "1"]
-    thermal = heat.build(nominal, {"tau_th_muscle1": 0.5, "gamma_muscle1": 1.4})
-    assert thermal.elements["muscle1"].heat == {"tau": "tau_th_muscle1", "gamma": "gamma_muscle1"}
+    assert heat.target == "muscle1" and [p.unit for p in heat.params] == ["W/K", "1"]
+    thermal = heat.build(nominal, {"hA_muscle1": 0.1, "gamma_muscle1": 1.4})
+    assert thermal.elements["muscle1"].heat == {"hA": "hA_muscle1", "gamma": "gamma_muscle1"}
     assert "T_muscle1" in [s.name for s in thermal.equations().states]
-    assert "walls" in heat.explain({"tau_th_muscle1": 0.5, "gamma_muscle1": 1.4})
+    assert "0.1 W/K" in heat.explain({"hA_muscle1": 0.1, "gamma_muscle1": 1.4})
 
 
 def test_chamber_heat_exchange_spans_isothermal_to_adiabatic():
@@ -180,10 +180,10 @@ def test_chamber_heat_exchange_spans_isothermal_to_adiabatic():
     from plants.library.pam import pam
     from bondgraph.numerics import simulate
     run = lambda g: simulate(g, (0.0, 0.3), inputs={"u1": 7.0, "u2": 3.0}, output_interval=1e-3)["P1"]
-    for tau, k in ((1e-6, 1.0), (1e6, 1.4)):
+    for h_a, k in ((1e4, 1.0), (1e-8, 1.4)):
         nominal = pam("locked", params={"k1": 1.0, "k2": 1.0})
         heat = _one(nominal, Place("junction", "chamber1"), "heat_transfer")
-        thermal = heat.build(nominal, {"tau_th_muscle1": tau, "gamma_muscle1": 1.4})
+        thermal = heat.build(nominal, {"hA_muscle1": h_a, "gamma_muscle1": 1.4})
         np.testing.assert_allclose(run(thermal), run(pam("locked", params={"k1": k, "k2": k})), rtol=1e-3)
     assert run(pam("locked", params={"k1": 1.4, "k2": 1.4}))[100] > 1.05 * run(nominal)[100]  # the test can tell
 

@@ -154,8 +154,8 @@ def pneumatic_chamber():
     g.add(Zero("gas"))
     g.add(R("leak", flow="1e-9*(e - 101325)", domain="pneumatic"))
     g.add(PneumaticChamber("cyl", pressure="P", length="0.1", volume="A*l", force="-(P - 101325)*A",
-                           heat={"tau": "tau_th", "gamma": "gamma"}, initial_pressure=2e5,
-                           initial_temperature=300.0, params={"tau_th": Param("tau_th", 0.05, "s")},
+                           heat={"hA": "hA", "gamma": "gamma"}, initial_pressure=2e5,
+                           initial_temperature=300.0, params={"hA": Param("hA", 2.0, "W/K")},
                            guards=[Guard("P_abs", "P", min=0.0, unit="Pa")], description="piston chamber"))
     g.connect("feed", "gas")
     g.connect("gas", "leak")

@@ -11,6 +11,7 @@ from plants import library
 from bondgraph.numerics.simulation import simulate
 import reproductions as scenarios
 from sweeps import MetricError, StoreError, montecarlo_spec, run_sweep, spec_from_dict
+from sweeps.runners import plan_runs
 
 MSD = {"name": "mass-spring-damper", "stop_time": 20.0, "output_interval": 0.05}
 
@@ -67,6 +68,13 @@ def test_resume_runs_only_the_missing_rows(tmp_path):
         run_sweep(spec, tmp_path, workers=0, progress=None)
     with pytest.raises(StoreError, match="keys differ: seed"):
         run_sweep(_grid_spec(seed=1), tmp_path, resume=True, workers=0, progress=None)
+    # the same laws in another order number the grid points otherwise: refused, not silently mixed
+    reordered = spec_from_dict({"model": dict(MSD), "vary": {"m": "grid(0, 1)", "k": "linspace(2, 6, 3)"},
+                                "metrics": ["x.final", "x.max"]})
+    assert [r.params for r in plan_runs(reordered, {"m": 1, "k": 1})][:2] != \
+        [r.params for r in plan_runs(spec, {"m": 1, "k": 1})][:2]
+    with pytest.raises(StoreError, match=r"another order \(k, m before, m, k now\)"):
+        run_sweep(reordered, tmp_path, resume=True, workers=0, progress=None)
 
 
 def test_a_flush_interval_gathers_rows_into_fewer_files_losing_none(tmp_path):

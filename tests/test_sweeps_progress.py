@@ -9,10 +9,13 @@ def test_progress_line_counts_and_prints_once_per_decile():
     bar = ProgressBar(20, stream=stream)
     bar.update(running=4)
     assert "0/20 runs  0 failed  4 running" in bar.line() and bar.line().endswith("ETA --")
-    for _ in range(20):
-        bar.update(done=1, failed=1 if bar.done % 5 == 0 else 0, running=2)
+    for _ in range(18):
+        bar.update(done=1, failed=1 if bar.done % 5 == 0 else 0, running=4)
+    assert "18/20 runs  4 failed  2 running" in bar.line()      # whole chunks estimated: capped at what is left
+    for _ in range(2):
+        bar.update(done=1, running=4)
     line = bar.line()
-    assert "[" + "#" * 30 + "] 20/20 runs  4 failed  2 running" in line and line.endswith("ETA 0s")
+    assert "[" + "#" * 30 + "] 20/20 runs  4 failed  0 running" in line and line.endswith("ETA 0s")
     # not a terminal: one line per 10 % (and the first), not one per update
     assert len(stream.getvalue().splitlines()) == 11
 

@@ -17,14 +17,16 @@ the volume term)::
 With ``heat=`` the gas temperature becomes a state and the chamber exchanges
 heat with its wall (energy balance of an ideal gas, ratio of specific heats
 gamma, inflow at the wall/supply temperature, outflow at the gas
-temperature; the heat flux written with the time constant
-:math:`\\tau = m c_v / (h A)`, so that :math:`(\\gamma - 1) \\dot Q / V = P (T_w - T_g) / (\\tau T_g)`)::
+temperature, Newtonian heat flux :math:`\\dot Q = hA (T_w - T_g)` with a
+constant conductance hA, W/K)::
 
-    dP/dt   = gamma R T_in mdot / V - gamma (dV/dl) (dl/dt) P / V + P (T_w - T_g) / (tau T_g)
+    dP/dt   = gamma R T_in mdot / V - gamma (dV/dl) (dl/dt) P / V + (gamma - 1) hA (T_w - T_g) / V
     dT_g/dt = T_g (dP/dt / P + (dV/dl) (dl/dt) / V - R T_g mdot / (P V))
 
-(the second from :math:`m = P V / (R T_g)`).  As tau -> 0 it is isothermal
-at T_w (k_1 = k_2 = 1), as tau -> infinity adiabatic (k_1 = k_2 = gamma).
+(the second from :math:`m = P V / (R T_g)`).  The gas relaxes to the wall
+temperature with the time constant :math:`m c_v / hA`; as hA -> infinity the
+chamber is isothermal at T_w (k_1 = k_2 = 1), as hA -> 0 adiabatic
+(k_1 = k_2 = gamma).
 
 Because the chamber is an element of its own, a graph can hang a leak (an R
 to the ambient) or any other flow on the chamber's 0-junction, and a
@@ -66,7 +68,7 @@ class PneumaticChamber(EquationElement):
     gas_constant, temperature : str
         Specific gas constant R (J/(kg K)) and the gas/supply temperature T (K).
     heat : mapping, optional
-        ``{"tau": ..., "gamma": ...}`` (s, 1; expressions) turns on the thermal form with
+        ``{"hA": ..., "gamma": ...}`` (W/K, 1; expressions) turns on the thermal form with
         the gas temperature state ``T_<name>`` (K), wall at `temperature`.
     initial_pressure : float
         Initial pressure (Pa).
@@ -82,8 +84,8 @@ class PneumaticChamber(EquationElement):
                  flow_index="k1", volume_index="k2", gas_constant="R", temperature="T", heat=None,
                  initial_pressure: float = 101325.0, initial_temperature: float = 293.0, guards=None,
                  params=None, description: str = ""):
-        if heat is not None and set(heat) != {"tau", "gamma"}:
-            raise DerivationError(f"PneumaticC {name!r}: heat= needs exactly the keys 'tau' and 'gamma', "
+        if heat is not None and set(heat) != {"hA", "gamma"}:
+            raise DerivationError(f"PneumaticC {name!r}: heat= needs exactly the keys 'hA' and 'gamma', "
                                   f"got {sorted(heat)}", element=name)
         self.pressure, self.length, self.volume, self.force = pressure, str(length), str(volume), str(force)
         self.flow_index, self.volume_index = str(flow_index), str(volume_index)
@@ -97,12 +99,12 @@ class PneumaticChamber(EquationElement):
         if self.heat is None:
             states = {P: f"{self.flow_index}*{R}*{T}*f_pn/V - {self.volume_index}*dV*f_mech*{P}/V"}
         else:
-            gas, tau, gamma = f"T_{name}", self.heat["tau"], self.heat["gamma"]
+            gas, h_a, gamma = f"T_{name}", self.heat["hA"], self.heat["gamma"]
             # inflow at the supply temperature, outflow at the gas's (a sign, not a Piecewise on the
             # flow: sympy canonicalises a relational over the whole valve law recursively)
             locals_["T_in"] = f"({T} + {gas})/2 + ({T} - {gas})/2*sign(f_pn)"
             locals_["dP"] = (f"{gamma}*{R}*T_in*f_pn/V - {gamma}*dV*f_mech*{P}/V "
-                             f"+ {P}*({T} - {gas})/(({tau})*{gas})")
+                             f"+ ({gamma} - 1)*({h_a})*({T} - {gas})/V")
             states = {P: "dP", gas: f"{gas}*(dP/{P} + dV*f_mech/V - {R}*{gas}*f_pn/({P}*V))"}
             initial[gas], units[gas] = self.initial_temperature, "K"
             descriptions[gas] = f"gas temperature in {name}"
@@ -115,11 +117,11 @@ class PneumaticChamber(EquationElement):
         """Name of the gas-temperature state of the thermal form (K)."""
         return f"T_{self.name}"
 
-    def with_heat(self, tau: str, gamma: str, *, initial_temperature: float | None = None,
+    def with_heat(self, h_a: str, gamma: str, *, initial_temperature: float | None = None,
                   description: str | None = None) -> "PneumaticChamber":
-        """The same chamber in its thermal form (time constant `tau`, ratio of specific heats `gamma`)."""
+        """The same chamber in its thermal form (wall conductance `h_a`, W/K; ratio of specific heats `gamma`)."""
         spec = {**self._spec(), "description": self.description}
-        spec["heat"] = {"tau": str(tau), "gamma": str(gamma)}
+        spec["heat"] = {"hA": str(h_a), "gamma": str(gamma)}
         if initial_temperature is not None:
             spec["initial_temperature"] = float(initial_temperature)
         if description is not None:

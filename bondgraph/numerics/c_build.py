@@ -10,6 +10,11 @@ maps a hash of the equations to the library); :class:`CLibrary` is the 1:1
 ctypes binding of the functions of the C contract documented in
 :mod:`bondgraph.numerics.codegen_c`, which re-exports every name of this module.
 
+Libraries shipped from another process (:mod:`bondgraph.numerics.c_shipped`: a sweep's
+client to its workers) come first: both :func:`compile_source` and
+:func:`build_library` look up their compiler-independent key there before
+they need a compiler, and note what they hand out for an open recording.
+
 Compiler flags
 --------------
 :data:`CFLAGS`.  The SLP vectoriser is switched off
@@ -24,15 +29,17 @@ import os
 import shutil
 import subprocess
 import tempfile
+import weakref
 from pathlib import Path
 
 import sympy as sp
 
-from . import codegen_c
+from . import c_shipped, codegen_c
 from .codegen_c import PARTS, generate_source
 from ..errors import CompilationError
 
-__all__ = ["compile_source", "build_library", "find_compiler", "cache_dir", "CLibrary", "CFLAGS"]
+__all__ = ["compile_source", "build_library", "find_compiler", "c_available", "cache_dir", "source_key",
+           "equations_key", "CLibrary", "CFLAGS"]
 
 #: Compiler flags (besides ``-o``, source and ``-lm``).
 CFLAGS = ("-O2", "-fno-tree-slp-vectorize", "-shared", "-fPIC")
@@ -45,6 +52,17 @@ def find_compiler() -> str | None:
         if path:
             return path
     return None
+
+
+def c_available() -> bool:
+    """True when C kernels can be had here: a compiler is found, or libraries were shipped in
+    (:mod:`bondgraph.numerics.c_shipped`), so that ``backend="auto"`` picks C as the shipping process did."""
+    return find_compiler() is not None or bool(c_shipped.installed())
+
+
+def source_key(source: str) -> str:
+    """Compiler-independent lookup key of a library of C `source` (:mod:`bondgraph.numerics.c_shipped`)."""
+    return "src:" + hashlib.sha256("\0".join([source, *CFLAGS]).encode()).hexdigest()[:40]
 
 
 def cache_dir() -> Path:
@@ -78,6 +96,10 @@ def compile_source(source: str, *, compiler: str | None = None) -> Path:
     CompilationError
         No compiler found, or it failed (its output is in ``.output``).
     """
+    shipped = c_shipped.lookup(source_key(source))
+    if shipped is not None:
+        c_shipped.note(source_key(source), shipped)
+        return shipped
     compiler = compiler or find_compiler()
     if compiler is None:
         raise CompilationError("no C compiler found: set $CC or put cc/gcc/clang on PATH "
@@ -85,31 +107,54 @@ def compile_source(source: str, *, compiler: str | None = None) -> Path:
     key = hashlib.sha256("\0".join([source, compiler, *CFLAGS]).encode()).hexdigest()
     directory = cache_dir()
     target = directory / f"bc_{key[:40]}.so"
-    if target.exists():
-        return target
+    if not target.exists():
+        _compile(source, compiler, key, target)
+    c_shipped.note(source_key(source), target)
+    return target
+
+
+def _compile(source: str, compiler: str, key: str, target: Path) -> None:
+    """Compile `source` into `target` through a temporary directory next to it."""
+    directory = target.parent
     directory.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=directory, prefix=".build-") as tmp:
         src = Path(tmp) / f"bc_{key[:40]}.c"
         src.write_text(source)
         lib = Path(tmp) / "lib.so"
-        cmd = [compiler, *CFLAGS, "-o", str(lib), str(src), "-lm"]
-        try:
-            proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
-        except (OSError, subprocess.TimeoutExpired) as exc:
-            raise CompilationError(f"could not run {' '.join(cmd)}: {exc}") from None
-        if proc.returncode != 0:
-            raise CompilationError(
-                f"C compiler failed (exit {proc.returncode}): {' '.join(cmd)}",
-                output=(proc.stdout + proc.stderr).strip())
+        _run_compiler([compiler, *CFLAGS, "-o", str(lib), str(src), "-lm"])
         os.replace(src, directory / src.name)   # keep the source next to the library
         os.replace(lib, target)
-    return target
 
 
-def _equations_key(eqs, part: str, compiler: str) -> str:
-    """sha256 of everything the generated source depends on (cheap: no cse)."""
-    parts = [codegen_c.GENERATOR_VERSION, part, compiler, *CFLAGS,
-             str(codegen_c.SPLIT_STATEMENTS), eqs.name]
+def _run_compiler(cmd: list) -> None:
+    """Run one compiler command; CompilationError with its output if it fails."""
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
+    except (OSError, subprocess.TimeoutExpired) as exc:
+        raise CompilationError(f"could not run {' '.join(cmd)}: {exc}") from None
+    if proc.returncode != 0:
+        raise CompilationError(f"C compiler failed (exit {proc.returncode}): {' '.join(cmd)}",
+                               output=(proc.stdout + proc.stderr).strip())
+
+
+_EQUATIONS_KEYS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def equations_key(eqs, part: str = "main") -> str:
+    """Compiler-independent lookup key of the `part` library of `eqs` (:mod:`bondgraph.numerics.c_shipped`).
+
+    The sha256 of everything the generated source depends on: no code is
+    generated (no cse), but every expression is printed (~0.1 s for ``pam``),
+    so the key is kept per equations object.
+    """
+    keys = _EQUATIONS_KEYS.setdefault(eqs, {})
+    if part not in keys:
+        keys[part] = "eqs:" + _equations_hash(eqs, part)[:40]
+    return keys[part]
+
+
+def _equations_hash(eqs, part: str) -> str:
+    parts = [codegen_c.GENERATOR_VERSION, part, *CFLAGS, str(codegen_c.SPLIT_STATEMENTS), eqs.name]
     for field in ("t", "step"):
         parts.append(sp.srepr(getattr(eqs, field)))
     for field in ("states", "inputs", "params", "algebraic", "held",
@@ -122,9 +167,11 @@ def _equations_key(eqs, part: str, compiler: str) -> str:
 def build_library(eqs, *, part: str = "main") -> "CLibrary":
     """Generate, compile (or reuse) and load one library of `eqs`.
 
-    A small index file ``idx_<key>`` in the cache maps a hash of the
-    equations themselves to the library, so a later process skips code
-    generation as well as compilation.
+    A library shipped in (:mod:`bondgraph.numerics.c_shipped`) under
+    :func:`equations_key` is loaded as it is.  Otherwise a small index file
+    ``idx_<key>`` in the cache maps a hash of the equations themselves (and
+    the compiler) to the library, so a later process skips code generation as
+    well as compilation.
 
     Parameters
     ----------
@@ -141,15 +188,23 @@ def build_library(eqs, *, part: str = "main") -> "CLibrary":
     CompilationError
         No compiler, or it failed.
     """
+    key = equations_key(eqs, part)
+    path = c_shipped.lookup(key) or _cached_library(eqs, part, key)
+    c_shipped.note(key, path)
+    return CLibrary(path)
+
+
+def _cached_library(eqs, part: str, key: str) -> Path:
+    """The library through the index file of `key` and this compiler, compiling if need be."""
     compiler = find_compiler()
     if compiler is None:
         raise CompilationError("no C compiler found: set $CC or put cc/gcc/clang on PATH "
                                "(or use backend='numpy')")
-    index = cache_dir() / f"idx_{_equations_key(eqs, part, compiler)[:40]}"
+    index = cache_dir() / f"idx_{hashlib.sha256((key + chr(0) + compiler).encode()).hexdigest()[:40]}"
     try:
         cached = cache_dir() / index.read_text().strip()
         if cached.exists():
-            return CLibrary(cached)
+            return cached
     except OSError:
         pass
     path = compile_source(generate_source(eqs, part=part), compiler=compiler)
@@ -157,7 +212,7 @@ def build_library(eqs, *, part: str = "main") -> "CLibrary":
     with os.fdopen(fd, "w") as fh:
         fh.write(path.name)
     os.replace(tmp, index)
-    return CLibrary(path)
+    return path
 
 
 class CLibrary:

@@ -23,8 +23,9 @@ Backends
     :func:`sympy.lambdify` (``cse=True``) vectorised over the batch; Newton
     vectorised over rows with :func:`numpy.linalg.solve` on stacked Jacobians.
 ``"auto"``
-    ``"c"`` when a C compiler is on PATH (``$CC``, cc, gcc or clang), else
-    ``"numpy"``.  A compiler that is found but fails raises
+    ``"c"`` when a C compiler is on PATH (``$CC``, cc, gcc or clang) or
+    compiled libraries were shipped into this process (a sweep's worker,
+    :mod:`bondgraph.numerics.c_shipped`), else ``"numpy"``.  A compiler that is found but fails raises
     :class:`~bondgraph.errors.CompilationError`; it never silently falls back.
 
 Both backends run the same Newton iteration
@@ -38,7 +39,7 @@ import weakref
 import numpy as np
 import sympy as sp
 
-from .c_build import find_compiler
+from .c_build import c_available
 from .codegen_c_templates import NEWTON_STATUS
 from ..errors import ArgumentError, ExpressionError, ParameterError, SimulationError
 from .evaluate_c import CKernels
@@ -62,7 +63,7 @@ def compile_model(eqs, *, backend: str = "auto") -> "CompiledModel":
     eqs : StateEquations
         The equations (or any object with an ``equations()`` method returning them).
     backend : {"auto", "c", "numpy"}
-        See the module docstring; ``"auto"`` is C when a compiler is on PATH.
+        See the module docstring; ``"auto"`` is C when a compiler is on PATH (or libraries were shipped in).
 
     Returns
     -------
@@ -96,13 +97,15 @@ def compile_model(eqs, *, backend: str = "auto") -> "CompiledModel":
     if backend not in BACKENDS:
         raise ArgumentError(f"backend must be one of {', '.join(map(repr, BACKENDS))}; found {backend!r}")
     if backend == "auto":
-        backend = "c" if find_compiler() else "numpy"
+        backend = "c" if c_available() else "numpy"
     per_eqs = _KERNEL_CACHE.setdefault(eqs, {})
     kernels = per_eqs.get(backend)
     if kernels is None:
         _check_symbols(eqs)
         kernels = CKernels(eqs) if backend == "c" else NumpyKernels(eqs)
         per_eqs[backend] = kernels
+    elif backend == "c":
+        kernels.note_libraries()        # cached here, yet an open recording must see them too
     return CompiledModel(eqs, kernels)
 
 

@@ -42,6 +42,16 @@ class CKernels:
         self._main = build_library(eqs, part="main")
         self._jac = None
 
+    def note_libraries(self) -> None:
+        """Tell an open :func:`bondgraph.numerics.c_shipped.recording` which libraries these kernels use."""
+        from . import c_shipped
+        from .c_build import equations_key
+        if not c_shipped.recording_open():
+            return
+        for part, lib in (("main", self._main), ("jacobian", self._jac)):
+            if lib is not None:
+                c_shipped.note(equations_key(self._eqs, part), lib.path)
+
     def _lib(self, name):
         if name in PARTS["jacobian"]:
             if self._jac is None:

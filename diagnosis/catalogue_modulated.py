@@ -25,6 +25,8 @@ viscous term, which ``viscous_friction`` adds in a further round.
 """
 from __future__ import annotations
 
+import numpy as np
+
 from .catalogue_common import ParamSpec, fresh_name, junction_units
 
 __all__ = ["MODULATED_KINDS", "make_modulated", "build_modulated", "explain_modulated", "modulating_signals"]
@@ -56,9 +58,10 @@ def modulating_signals(graph, junction: str, regime_variables=None) -> dict[str,
 
 
 def make_modulated(graph, place, scales, taken, values, v_eps) -> list[dict]:
-    """One ``modulated_friction`` prototype per modulating signal whose nominal values are known
-    (`values["signal:<label>"]`, :func:`~diagnosis.catalogue_scales.junction_scales`); `v_eps` is
-    the friction kinds' smoothing-flow constant."""
+    """One ``modulated_friction`` prototype per modulating signal that varies in the nominal
+    simulation (`values["signal:<label>"]`, :func:`~diagnosis.catalogue_scales.junction_scales`;
+    without data, every signal with unit scales); `v_eps` is the friction kinds' smoothing-flow
+    constant."""
     j = place.name
     e_unit, _ = junction_units(graph, j)
     E = scales.effort
@@ -66,7 +69,11 @@ def make_modulated(graph, place, scales, taken, values, v_eps) -> list[dict]:
     protos = []
     for label, expr in modulating_signals(graph, j).items():
         s = (values or {}).get(f"signal:{label}")
-        if s is None or not s.size or not float(s.std()) > 0:
+        if s is None and scales.from_data:
+            continue                      # not simulated: nothing to scale it by
+        if s is None:                     # listed without data: unit scales
+            s = np.array([-1.0, 1.0])
+        if not s.size or not float(s.std()) > 0:
             continue                      # a constant signal modulates nothing
         s_ref, s_scale, s_unit = float(s.mean()), float(s.std()), units.get(label, "")
         name = lambda base: fresh_name(taken, f"{base}_{j}_{label}")  # noqa: E731 - short local namer

@@ -441,8 +441,10 @@ def _fine_window(ctx, n_junctions):
     sigma = {o: 1.0 / np.sqrt(w) for o, w in ctx.weight.items()}
     spacing = max(knot_spacing(ctx.residual, sigma, dt), 2.0 * dt)
     whole = (t[-1] - t[0]) / (_knots(ctx, n_junctions) - 1)
+    if whole <= 2.0 * spacing:
+        return None
     length = int((_MAX_KNOTS - 1) * spacing / dt) + 1
-    if whole <= 2.0 * spacing or length >= t.size:
+    if length >= t.size:
         return None
     a = busiest_window(ctx.residual, ctx.weight, length)
     return a, a + length, spacing

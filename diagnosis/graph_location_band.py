@@ -12,8 +12,11 @@ spectrum (Welch) with the white measurement noise's level subtracted,
 
     P_{ex}(f) = \\max\\bigl(P_r(f) - 2\\sigma^2 \\Delta t, 0\\bigr),
 
-and :math:`f_{95}` is the frequency below which 95 % of :math:`\\sum P_{ex}`
-lies (the largest over the outputs).  A hat basis of spacing :math:`h` follows
+where the noise level is the larger of the estimated :math:`\\sigma` 's and the median
+power in the top fifth of the band (white noise the estimate missed), raised by three
+standard errors of the Welch average so that the noise's own scatter is no excess;
+:math:`f_{95}` is the frequency below which 95 % of :math:`\\sum P_{ex}` lies (the
+largest over the outputs).  A hat basis of spacing :math:`h` follows
 a sinusoid of period :math:`T` to within a few per cent when :math:`h \\le T/4`,
 so the knots are :math:`h = 1 / (4 f_{95})` apart.  When the record is longer
 than the knots then cover, the location runs on the window of that length where
@@ -51,8 +54,11 @@ def excited_band(residual: dict, noise: dict, dt: float) -> float:
         r = np.asarray(r, dtype=float)
         if r.size < 16 or not np.isfinite(r).all():
             continue
-        f, p = welch(r - np.mean(r), fs=1.0 / dt, nperseg=min(r.size, 4096), detrend="linear")
-        excess = np.clip(p - 2.0 * noise.get(o, 0.0) ** 2 * dt, 0.0, None)
+        nperseg = min(r.size, 4096)
+        f, p = welch(r - np.mean(r), fs=1.0 / dt, nperseg=nperseg, detrend="linear")
+        level = max(2.0 * noise.get(o, 0.0) ** 2 * dt, float(np.median(p[f >= 0.8 * f[-1]])))
+        segments = max(1.0, 2.0 * r.size / nperseg - 1.0)      # Welch averages, half overlapping
+        excess = np.clip(p - (1.0 + 3.0 / np.sqrt(segments)) * level, 0.0, None)
         total = float(np.sum(excess))
         if total <= 0.0 or total * (f[1] - f[0]) < 0.1 * noise.get(o, 0.0) ** 2:
             continue            # the residual stays at the noise level: nothing to resolve here

@@ -196,11 +196,11 @@ def _refitted_law(entry: dict, linear: str) -> str:
     loses its own value, which `linear`, named as the element, replaces), or a law with the
     linear term ``linear*q`` added."""
     for key, form in (("stiffness", f"{linear}*q"), ("value", f"q/{linear}")):
-        if key in entry:
+        if key in entry and linear == entry["name"]:
             entry.pop(key)
             entry.pop("unit", None)
             return form
-    return f"({entry['law']}) + {linear}*q"
+    return f"{_c_law(entry)} + {linear}*q"
 
 
 def _c_law(entry: dict) -> str:

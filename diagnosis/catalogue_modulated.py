@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .catalogue_common import ParamSpec, fresh_name, junction_units
+from .catalogue_common import ParamSpec, fresh_name, junction_elements, junction_units
 
 __all__ = ["MODULATED_KINDS", "make_modulated", "build_modulated", "explain_modulated", "modulating_signals"]
 
@@ -42,12 +42,15 @@ _MAX_EFFORTS = 2
 def modulating_signals(graph, junction: str, regime_variables=None) -> dict[str, str]:
     """Signals that may set a friction level at `junction`: label -> expression.
 
-    Every input of the model, then the efforts ``e_<C>`` of C elements of another domain
-    than the junction's, other than pressures (``pressure_dependent_friction``), that
+    Every input of the model except those that drive the junction itself (read by a source
+    or an element bonded to it: the motion's cause, whose errors the actuator kinds
+    describe), then the efforts ``e_<C>`` of C elements of another domain than the
+    junction's, other than pressures (``pressure_dependent_friction``), that
     `regime_variables` lists (all of them without regime variables), at most two.
     """
     from .catalogue_common import junction_domain
-    out = {d.name: d.name for d in graph.inputs()}
+    driving = _driving_inputs(graph, junction)
+    out = {d.name: d.name for d in graph.inputs() if d.name not in driving}
     dom = junction_domain(graph, junction)
     efforts = [f"e_{e.name}" for e in graph.elements.values()
                if e.kind == "C" and getattr(e, "domain", dom) not in (dom, "pneumatic", "hydraulic", "generic")]
@@ -55,6 +58,26 @@ def modulating_signals(graph, junction: str, regime_variables=None) -> dict[str,
         efforts = [e for e in efforts if e in regime_variables]
     out.update({e: e for e in efforts[:_MAX_EFFORTS]})
     return out
+
+
+def _driving_inputs(graph, junction: str) -> set:
+    """Inputs that drive `junction`: read by an element bonded to it (a source's own input, or
+    an expression naming the input), or by a source of the junction's own domain anywhere (a
+    force or torque of the same mechanics)."""
+    from .catalogue_common import expression_fields, junction_domain, substitute
+    names = {d.name for d in graph.inputs()}
+    bonded = {e.name for e, _ in junction_elements(graph, junction)}
+    dom = junction_domain(graph, junction)
+    found = set()
+    for entry in graph.to_dict()["elements"]:
+        source = entry.get("kind") in ("Se", "Sf", "MSe", "MSf")
+        if not (entry["name"] in bonded or (source and entry.get("domain") == dom and dom != "generic")):
+            continue
+        if entry.get("kind") in ("Se", "Sf"):
+            found.add(entry.get("input") or entry["name"])
+        for container, key in expression_fields(entry):
+            found |= {u for u in names if substitute(container[key], u, "") != container[key]}
+    return found & names
 
 
 def make_modulated(graph, place, scales, taken, values, v_eps) -> list[dict]:

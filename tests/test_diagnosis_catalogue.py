@@ -88,8 +88,7 @@ def test_places_offer_the_kinds_that_make_sense():
     at = lambda g, p: [c.kind for c in candidates(g, p)]  # noqa: E731
     assert at(msd, Place("junction", "v_mass")) == ["coulomb_friction", "viscous_friction", "stribeck_friction",
                                                     "hysteresis", "backlash", "nonlinear_stiffness",
-                                                    "constant_load", "coulomb_viscous_friction",
-                                                    "modulated_friction"]
+                                                    "constant_load", "coulomb_viscous_friction"]
     assert at(msd, Place("input", "F")) == ["valve_lag", "transport_delay", "saturation"]
     assert at(msd, Place("output", "x")) == ["saturation", "sensor_offset", "sensor_gain"]
     cyl = hydraulic_cylinder()

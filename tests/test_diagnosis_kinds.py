@@ -187,3 +187,16 @@ def test_backlash_with_an_uncertain_spring_sets_the_laws_own_parameter():
     cand = next(c for c in candidates(msd, Place("junction", "v_mass")) if c.kind == "backlash")
     better = _with_values(cand.build(msd, {"b_play_k": 0.01}), {"k": 5.5})
     assert better.parameters()["k"].value == 5.5
+
+
+def test_a_friction_is_modulated_by_no_input_that_drives_its_own_junction():
+    """The force on the msd's mass, the rod position imposed on the cylinder's piston and the
+    drivetrain's torques drive the mechanics; the cylinder's pressure (another domain, through the
+    piston area) and the motor's voltage may set a friction level."""
+    from diagnosis.catalogue_modulated import modulating_signals
+    at = lambda model, j: list(modulating_signals(library.build(model), j))  # noqa: E731
+    assert at("mass-spring-damper", "v_mass") == []
+    assert at("pneumatic-cylinder", "piston") == ["p"]
+    assert at("drivetrain", "dw_shaft") == []
+    assert at("dc-motor", "w_motor") == ["V"]
+    assert at("pam", "seesaw") == ["u1", "u2"]

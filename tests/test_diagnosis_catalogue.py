@@ -76,10 +76,11 @@ def pneumatic_tank():
 
 
 def test_kinds_are_the_issue_vocabulary_in_order():
-    # issue 6, section 2c, verbatim order; then issue 11's constant load
+    # issue 6, section 2c, verbatim order; then issue 11's constant load and friction laws
     assert KINDS == ("coulomb_friction", "viscous_friction", "stribeck_friction", "pressure_dependent_friction",
                      "leak", "heat_transfer", "valve_lag", "transport_delay", "hysteresis", "backlash",
-                     "nonlinear_stiffness", "saturation", "sensor_offset", "sensor_gain", "constant_load")
+                     "nonlinear_stiffness", "saturation", "sensor_offset", "sensor_gain", "constant_load",
+                     "coulomb_viscous_friction", "modulated_friction")
 
 
 def test_places_offer_the_kinds_that_make_sense():
@@ -87,7 +88,7 @@ def test_places_offer_the_kinds_that_make_sense():
     at = lambda g, p: [c.kind for c in candidates(g, p)]  # noqa: E731
     assert at(msd, Place("junction", "v_mass")) == ["coulomb_friction", "viscous_friction", "stribeck_friction",
                                                     "hysteresis", "backlash", "nonlinear_stiffness",
-                                                    "constant_load"]
+                                                    "constant_load", "coulomb_viscous_friction"]
     assert at(msd, Place("input", "F")) == ["valve_lag", "transport_delay", "saturation"]
     assert at(msd, Place("output", "x")) == ["saturation", "sensor_offset", "sensor_gain"]
     cyl = hydraulic_cylinder()

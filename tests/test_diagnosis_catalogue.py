@@ -37,7 +37,14 @@ def _one(graph, place, kind, **kw):
 
 
 def _differs_by(built, nominal, state, expected):
-    assert sp.simplify(_rates(built)[state] - _rates(nominal)[state] - expected) == 0
+    assert _vanishes(_rates(built)[state] - _rates(nominal)[state] - expected)
+
+
+def _vanishes(expr):
+    """Exactly zero? Each Piecewise law (a valve's tables) stands in as one symbol first: the two
+    sides share them unchanged, and sympy's simplify would spend minutes folding their conditions."""
+    laws = {law: sp.Dummy(f"law{i}") for i, law in enumerate(expr.atoms(sp.Piecewise))}
+    return sp.simplify(expr.xreplace(laws)) == 0
 
 
 def hydraulic_cylinder():
@@ -166,7 +173,7 @@ def test_pam_chambers_are_places_for_a_leak_and_the_chambers_thermal_form():
     l1 = S("L0") - S("r") * sp.sin(S("q_psi"))
     V1 = S("D1") * l1 ** 2 + S("D2") * l1 + S("D3")
     expected = -S("k1") * S("R") * S("T") * S("c_leak_chamber1") * (S("P_1") - S("P_amb_chamber1")) / V1
-    assert sp.simplify(rates["P_1"] - base["P_1"] - expected) == 0
+    assert _vanishes(rates["P_1"] - base["P_1"] - expected)
     heat = _one(nominal, place, "heat_transfer")
     assert heat.target == "muscle1" and [p.unit for p in heat.params] == ["W/K", "1"]
     thermal = heat.build(nominal, {"hA_muscle1": 0.1, "gamma_muscle1": 1.4})

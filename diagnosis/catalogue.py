@@ -13,11 +13,14 @@ to an FMU like any other.
 
 Which kinds at which place (:func:`candidates`):
 
-* 1-junction: ``coulomb_friction``, ``viscous_friction``, ``stribeck_friction``,
-  ``pressure_dependent_friction`` (one per pressure variable of the model),
-  ``hysteresis``, and for each C on it ``backlash``, ``nonlinear_stiffness``,
-  ``saturation`` (end stops)
-  (:mod:`diagnosis.catalogue_friction`, :mod:`diagnosis.catalogue_storage`);
+* 1-junction: ``coulomb_friction``, ``viscous_friction``, ``coulomb_viscous_friction``,
+  ``stribeck_friction``, ``pressure_dependent_friction`` (one per pressure variable
+  of the model), ``modulated_friction`` (one per input and per listed effort of
+  another domain, :func:`~diagnosis.catalogue_modulated.modulating_signals`),
+  ``hysteresis``, and for each C on it ``backlash``, ``nonlinear_stiffness``
+  (with the C's own linear value refitted), ``saturation`` (end stops)
+  (:mod:`diagnosis.catalogue_friction`, :mod:`diagnosis.catalogue_modulated`,
+  :mod:`diagnosis.catalogue_storage`);
 * 0-junction: ``leak``, ``heat_transfer`` (pneumatic / thermal only),
   ``nonlinear_stiffness`` and ``saturation`` (an overflow) for each C on it;
 * 0- and 1-junction: ``constant_load`` (:mod:`diagnosis.catalogue_loads`);
@@ -36,6 +39,8 @@ from bondgraph.io_json import graph_from_dict
 from .catalogue_common import ParamSpec, add_parameter
 from .catalogue_friction import FRICTION_KINDS, build_friction, explain_friction, make_friction
 from .catalogue_loads import LOAD_KINDS, build_load, explain_load, make_load
+from .catalogue_modulated import (MODULATED_KINDS, build_modulated, explain_modulated, make_modulated,
+                                  modulating_signals)
 from .catalogue_scales import experiment_times, junction_scales
 from .catalogue_signals import (INPUT_KINDS, OUTPUT_KINDS, build_signal, explain_signal, make_input,
                                 make_output)
@@ -45,13 +50,15 @@ from .errors import DiagnosisError, UnknownNameError
 
 __all__ = ["KINDS", "ParamSpec", "Candidate", "candidates"]
 
-#: The vocabulary, in its order (issue 6's kinds, then constant_load).
+#: The vocabulary, in its order (issue 6's kinds, then constant_load, then issue 11's friction laws).
 KINDS = ("coulomb_friction", "viscous_friction", "stribeck_friction", "pressure_dependent_friction", "leak",
          "heat_transfer", "valve_lag", "transport_delay", "hysteresis", "backlash", "nonlinear_stiffness",
-         "saturation", "sensor_offset", "sensor_gain", "constant_load")
+         "saturation", "sensor_offset", "sensor_gain", "constant_load", "coulomb_viscous_friction",
+         "modulated_friction")
 
 _FAMILIES = {**{k: (build_friction, explain_friction) for k in FRICTION_KINDS},
              **{k: (build_load, explain_load) for k in LOAD_KINDS},
+             **{k: (build_modulated, explain_modulated) for k in MODULATED_KINDS},
              **{k: (build_storage, explain_storage) for k in STORAGE_KINDS},
              **{k: (build_signal, explain_signal) for k in INPUT_KINDS + OUTPUT_KINDS}}   # saturation: both
 assert set(_FAMILIES) == set(KINDS)
@@ -236,10 +243,13 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None) -
         if element is None or element.kind not in ("0", "1"):
             junctions = [n for n, e in graph.elements.items() if e.kind in ("0", "1")]
             raise UnknownNameError("junction", place.name, junctions, model=graph.name)
-        scales, values = junction_scales(graph, place.name, experiment)
+        signals = modulating_signals(graph, place.name, regime_variables) if element.kind == "1" else {}
+        scales, values = junction_scales(graph, place.name, experiment, signals)
         protos = make_storage(graph, place, scales, taken, values) + make_load(graph, place, scales, taken)
         if element.kind == "1":
-            protos = make_friction(graph, place, scales, taken, values) + protos
+            friction = make_friction(graph, place, scales, taken, values)
+            v_eps = next(p["constants"][0] for p in friction if p["kind"] == "coulomb_friction")
+            protos = friction + make_modulated(graph, place, scales, taken, values, v_eps) + protos
             protos = _regime_first(protos, regime_variables)
     elif place.kind == "input":
         names = [d.name for d in graph.inputs()]

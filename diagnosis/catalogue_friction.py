@@ -11,6 +11,9 @@ Laws (``f`` = the junction's flow into the element, ``e`` = its effort):
 * ``viscous_friction``: :math:`e = b f`.
 * ``stribeck_friction``: :math:`e = (F_c + \\Delta F_s e^{-(f/v_s)^2}) \\tanh(f/v_\\varepsilon)`
   (static level :math:`F_c + \\Delta F_s`; viscous friction is its own kind).
+* ``coulomb_viscous_friction``: :math:`e = F_c \\tanh(f / v_\\varepsilon) + b f`, both
+  levels fitted together as one law (a lubricated guide or a ball screw has
+  both; fitted one at a time, the first absorbs part of the second).
 * ``pressure_dependent_friction``: :math:`e = (c_0 + c_1 (P - P_{ref})) \\tanh(f/v_\\varepsilon)`
   with :math:`P` a pressure of the model (a chamber state, a C effort, or
   their mean) and :math:`P_{ref}` its mean in the nominal simulation (fixed),
@@ -33,7 +36,7 @@ from .catalogue_scales import pressure_variables
 __all__ = ["FRICTION_KINDS", "make_friction", "build_friction", "explain_friction"]
 
 FRICTION_KINDS = ("coulomb_friction", "viscous_friction", "stribeck_friction", "pressure_dependent_friction",
-                  "hysteresis")
+                  "hysteresis", "coulomb_viscous_friction")
 
 #: smoothing velocity of the sign, as a fraction of the RMS junction flow
 V_EPS_FRACTION = 0.05
@@ -49,11 +52,13 @@ def make_friction(graph, place, scales, taken, values=None) -> list[dict]:
     name = lambda base: fresh_name(taken, f"{base}_{j}")  # noqa: E731 - short local namer
     v_eps = (name("v_eps"), V_EPS_FRACTION * V, f_unit, f"smoothing flow of the friction sign at {j}")
     level = lambda n, what: ParamSpec(name(n), 0.1 * E, 0.0, 10 * E, e_unit, what)  # noqa: E731
+    viscous = ParamSpec(name("b_visc"), 0.1 * E / V, 0.0, 100 * E / V, b_unit, f"viscous friction coefficient at {j}")
     protos = [
         dict(kind="coulomb_friction", params=[level("Fc", f"Coulomb friction level at {j}")],
              constants=[v_eps]),
-        dict(kind="viscous_friction", params=[ParamSpec(name("b_visc"), 0.1 * E / V, 0.0, 100 * E / V, b_unit,
-                                                        f"viscous friction coefficient at {j}")]),
+        dict(kind="viscous_friction", params=[viscous]),
+        dict(kind="coulomb_viscous_friction", params=[level("Fc", f"Coulomb friction level at {j}"), viscous],
+             constants=[v_eps]),
         dict(kind="stribeck_friction", constants=[v_eps], params=[
             level("Fc", f"Coulomb friction level at {j}"),
             level("dFs", f"static friction in excess of the Coulomb level at {j}"),
@@ -105,6 +110,8 @@ def build_friction(data: dict, graph, cand, values: dict) -> None:
             law = f"{p[0]}*{sign}"
         elif cand.kind == "viscous_friction":
             law = f"{p[0]}*f"
+        elif cand.kind == "coulomb_viscous_friction":
+            law = f"{p[0]}*{sign} + {p[1]}*f"
         elif cand.kind == "stribeck_friction":
             law = f"({p[0]} + {p[1]}*exp(-(f/{p[2]})**2))*{sign}"
         else:  # pressure_dependent_friction
@@ -125,6 +132,9 @@ def explain_friction(cand, values: dict, show) -> str:
                 f"Coulomb friction at the {j} 1-junction")
     if cand.kind == "viscous_friction":
         return f"the motion at {j} is braked in proportion to its speed ({show(p[0])}): viscous friction at {j}"
+    if cand.kind == "coulomb_viscous_friction":
+        return (f"the motion at {j} loses about {show(p[0])} whenever it moves plus {show(p[1])} times its "
+                f"speed: Coulomb and viscous friction together at the {j} 1-junction")
     if cand.kind == "stribeck_friction":
         return (f"the motion at {j} loses {show(p[0])} when sliding and up to {show(p[1])} more near "
                 f"standstill (fading above about {show(p[2])}): Stribeck friction at {j}")

@@ -26,7 +26,8 @@ class Scales:
     flow : float
         RMS of the junction's common flow (1-junction) or of its largest bond flow (0-junction).
     effort : float
-        RMS of the junction's largest bond effort (1-junction) or of its common effort (0-junction).
+        RMS of the junction's largest bond effort (1-junction) or of its common effort (0-junction),
+        or the spread of a measured output in its unit if larger.
     displacement : float
         RMS of the integrated flow about its mean.
     span : float, s
@@ -87,15 +88,19 @@ def experiment_times(experiment) -> tuple[float, float]:
     return float(t[-1] - t[0]), float(np.median(np.diff(t)))
 
 
-def junction_scales(graph, junction: str, experiment) -> tuple[Scales, dict]:
+def junction_scales(graph, junction: str, experiment, signals=None) -> tuple[Scales, dict]:
     """Scales at a junction and the nominal values the catalogue needs there, from ONE simulation.
+
+    `signals` (label -> expression, optional): further variables to read, keyed
+    ``signal:<label>`` (the signals that may modulate a friction there).
 
     Returns
     -------
     (Scales, dict str -> ndarray)
         The values are keyed ``e_<bond>`` / ``f_<bond>`` for the junction's bonds,
-        ``pressure:<label>`` for :func:`pressure_variables` and ``state:<name>`` for
-        the states of the C elements on the junction (empty without an experiment).
+        ``pressure:<label>`` for :func:`pressure_variables`, ``state:<name>`` for
+        the states of the C elements on the junction and ``signal:<label>`` for
+        `signals` (empty without an experiment).
     """
     if experiment is None:
         return Scales(), {}
@@ -104,6 +109,7 @@ def junction_scales(graph, junction: str, experiment) -> tuple[Scales, dict]:
     exprs = {f"f_{b.name}": f"f_{b.name}" for b in bonds}
     exprs.update({f"e_{b.name}": f"e_{b.name}" for b in bonds})
     exprs.update({f"pressure:{label}": expr for label, expr in pressure_variables(graph).items()})
+    exprs.update({f"signal:{label}": expr for label, expr in (signals or {}).items()})
     for b, end in graph.bonds_of(junction):
         other = graph.elements[b.head.element if end == "tail" else b.tail.element]
         if other.kind == "C":
@@ -120,8 +126,19 @@ def junction_scales(graph, junction: str, experiment) -> tuple[Scales, dict]:
     t = np.asarray(experiment.t, dtype=float)
     displacement = np.concatenate([[0.0], np.cumsum(0.5 * (flow[1:] + flow[:-1]) * np.diff(t))])
     displacement = displacement - np.mean(displacement)
-    return Scales(flow=_positive(rms(flow)), effort=_positive(rms(effort)),
+    return Scales(flow=_positive(rms(flow)), effort=_positive(max(rms(effort), _measured_effort(graph, junction,
+                                                                                             experiment))),
                   displacement=_positive(rms(displacement)), span=span, dt=dt, from_data=True), values
+
+
+def _measured_effort(graph, junction: str, experiment) -> float:
+    """Largest spread of a measured output in the junction's effort unit (a load cell on a rig
+    whose nominal model puts no force there: the missing effort is what it measures)."""
+    from .catalogue_common import junction_units
+    unit = junction_units(graph, junction)[0]
+    spreads = [float(np.std(y)) for o, y in experiment.outputs.items()
+               if unit and experiment.units.get(o) == unit and np.isfinite(y).all()]
+    return max(spreads, default=0.0)
 
 
 def _positive(value: float) -> float:

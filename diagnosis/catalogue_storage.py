@@ -20,7 +20,10 @@ and backlash of a C element at a junction.
   C hung on the chamber's 0-junction; :math:`\\tau_{th} = R_{th} C_{th}` is the
   thermal time constant :math:`m c_v / (h A)`.  We fit :math:`C_{th}` and
   :math:`\\tau_{th}`; the C branch starts at the chamber's initial pressure.
-* ``nonlinear_stiffness``: the C's law gets a cubic term, :math:`e = \\Phi(q) + k_3 q^3`.
+* ``nonlinear_stiffness``: the C's law gets a cubic term, :math:`e = \\Phi(q) + k_3 q^3`, and
+  its own linear value is refitted with it (a linear C's stiffness or compliance, named
+  as the element; a linear term added to a law): a linear model identified from data
+  carries the cubic term's average in its linear value.
 * ``backlash``: the C's law acts on the displacement beyond a play of
   :math:`\\pm b`: :math:`e = \\Phi(q - \\mathrm{clip}(q, -b, b))` (a compliant
   transmission with a dead zone of total width 2b).
@@ -91,7 +94,8 @@ def make_storage(graph, place, scales, taken, values=None) -> list[dict]:
         k_lin = E / X
         protos.append(dict(kind="nonlinear_stiffness", target=c, params=[
             ParamSpec(fresh_name(taken, f"k3_{c}"), 0.0, -100 * k_lin / X ** 2, 100 * k_lin / X ** 2,
-                      f"{e_unit}/{q_unit}^3" if q_unit else s_unit, f"cubic stiffness coefficient of {c}")]))
+                      f"{e_unit}/{q_unit}^3" if q_unit else s_unit, f"cubic stiffness coefficient of {c}"),
+            _linear_value(element, taken, k_lin)]))
         if graph.elements[j].kind == "1":
             protos.append(dict(kind="backlash", target=c, params=[
                 ParamSpec(fresh_name(taken, f"b_play_{c}"), 0.1 * X, 0.0, 3 * X, q_unit,
@@ -133,6 +137,25 @@ def _chamber_volume(graph, chamber, params) -> float:
     volume = parse(chamber.volume, {**table, "l": sp.Symbol("l")}, owner=f"{chamber.name} volume")
     value = complex(volume.xreplace(numbers).subs(sp.Symbol("l"), length).evalf())
     return abs(value.real) if np.isfinite(value.real) and value.real != 0 else 1e-4
+
+
+def _linear_value(element, taken, k_lin: float) -> ParamSpec:
+    """The C's own linear value, refitted with its cubic term (within a factor 3): its
+    stiffness or compliance parameter (named as the element) for a linear C, else a
+    linear term ``dk_<C> q`` added to its law (within 3 `k_lin` either way).  A linear model identified from data carries the
+    cubic term's average in its linear value, which is wrong once the cubic term is there.
+    A zero stiffness (a free mass) may become up to 10 `k_lin`, the junction's effort over
+    the C's displacement scale."""
+    c = element.name
+    if element.value is not None and element.stiffness_form and float(element.value.value) == 0.0:
+        return ParamSpec(c, 0.0, 0.0, 10 * k_lin, element.value.unit, f"linear stiffness of {c} (refitted)")
+    if element.value is not None and float(element.value.value) > 0:
+        v = float(element.value.value)
+        quantity = "stiffness" if element.stiffness_form else "compliance"
+        return ParamSpec(c, v, v / 3, 3 * v, element.value.unit, f"linear {quantity} of {c} (refitted)")
+    unit = DOMAINS[element.domain].stiffness if element.domain in DOMAINS else ""
+    return ParamSpec(fresh_name(taken, f"dk_{c}"), 0.0, -3 * k_lin, 3 * k_lin, unit,
+                     f"change of the linear stiffness of {c} (refitted)")
 
 
 def _content_limit(graph, j, element, q, k_lin, scales, taken, q_unit) -> dict:
@@ -205,13 +228,25 @@ def build_storage(data: dict, graph, cand, values: dict) -> None:
                           {"name": f"b_{c_th}", "tail": [branch, ""], "head": [c_th, ""]}]
         return
     entry = next(e for e in data["elements"] if e["name"] == cand.target)
-    law = _c_law(entry)
     if cand.kind == "nonlinear_stiffness":
-        entry["law"] = f"{law} + {p[0]}*q**3"
+        entry["law"] = f"{_refitted_law(entry, p[1])} + {p[0]}*q**3"
     else:  # backlash: the law sees the displacement beyond the play
+        law = _c_law(entry)
         dead = f"q - Max(-{p[0]}, Min({p[0]}, q))"
         entry["law"] = substitute(substitute(law, entry.get("state", f"q_{cand.target}"), "q"), "q", dead)
     entry["description"] = (entry.get("description", "") + f" (with {cand.kind.replace('_', ' ')})").strip()
+
+
+def _refitted_law(entry: dict, linear: str) -> str:
+    """The C entry's law in ``q`` with its linear value the graph parameter `linear` (a linear C
+    loses its own value, which `linear`, named as the element, replaces), or a law with the
+    linear term ``linear*q`` added."""
+    for key, form in (("stiffness", f"{linear}*q"), ("value", f"q/{linear}")):
+        if key in entry and linear == entry["name"]:
+            entry.pop(key)
+            entry.pop("unit", None)
+            return form
+    return f"{_c_law(entry)} + {linear}*q"
 
 
 def _c_law(entry: dict) -> str:
@@ -250,7 +285,10 @@ def explain_storage(cand, values: dict, show) -> str:
     if cand.kind == "nonlinear_stiffness":
         k3 = values.get(p[0], 0.0)
         word = "stiffens" if k3 > 0 else ("softens" if k3 < 0 else "changes its stiffness")
-        return (f"the spring {cand.target} at {j} {word} with deflection (cubic term {show(p[0])}): "
-                f"nonlinear stiffness of {cand.target}")
+        linear = next(spec for spec in cand.params if spec.name == p[1])
+        was = f"{linear.guess:.3g} {linear.unit if linear.unit != '1' else ''}".strip()
+        return (f"the spring {cand.target} at {j} {word} with deflection (cubic term {show(p[0])}; "
+                f"{linear.description.replace(' (refitted)', '')} refitted with it: {show(p[1])}, "
+                f"nominal {was}): nonlinear stiffness of {cand.target}")
     return (f"the spring {cand.target} at {j} only engages beyond a play of +/- {show(p[0])}: "
             f"backlash in front of {cand.target}")

@@ -99,6 +99,9 @@ def _with_values(graph, values: dict):
         if entry["name"] in values:
             entry["value"] = float(values[entry["name"]])
     for entry in data.get("elements", []):
+        for name, private in (entry.get("params") or {}).items():   # a law's own parameters
+            if name in values and isinstance(private, dict):
+                private["value"] = float(values[name])
         if entry.get("name") in values:
             for key in ("value", "stiffness", "compliance", "inertance", "resistance", "modulus"):
                 if isinstance(entry.get(key), (int, float)):

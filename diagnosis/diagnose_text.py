@@ -32,6 +32,9 @@ def _regime(chosen, scores, res, n_train, rv, locate_regime, units):
         label = f"residual of {worst}"
     if signal.size != n_train or not rv:
         return None, None, None, ""
+    seen = np.isfinite(signal)          # a correction estimated on a window of the record
+    if not seen.all():
+        signal, rv = signal[seen], {k: (np.asarray(v)[seen], d) for k, (v, d) in rv.items()}
     finding = locate_regime(signal, rv, unit=unit)
     if finding.explained < _MIN_REGIME_SHARE:
         finding = replace(finding, description=(

@@ -276,7 +276,9 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
         raise DiagnosisError(f"the held-out part starts at {holdout.t[0]} s, not after the training part "
                              f"(ends at {train.t[-1]} s)")
     outputs = list(train.outputs)
-    specs = (list(candidate.params) if candidate is not None else []) + _uncertain_specs(graph, uncertain)
+    own = list(candidate.params) if candidate is not None else []
+    # a candidate that refits a nominal parameter itself (a C's linear value) fits it once
+    specs = own + _uncertain_specs(graph, [u for u in dict.fromkeys(uncertain) if u not in {s.name for s in own}])
     label = str(candidate) if candidate is not None else f"refit of {graph.name}"
     failed = dict(values={s.name: s.guess for s in specs}, train_nrmse={o: np.nan for o in outputs},
                   holdout_nrmse={o: np.nan for o in outputs}, n_params=len(specs), success=False)

@@ -107,6 +107,9 @@ class PlaceScore:
         one) to report the location by; None for inputs and outputs.
     dof : float
         Effective number of fitted parameters of the correction.
+    window : (float, float) or None
+        First and last time of the window the score was computed on, s; None: the whole
+        experiment.
     """
 
     place: Place
@@ -115,6 +118,7 @@ class PlaceScore:
     unit: str
     bond: str | None
     dof: float = 0.0
+    window: tuple | None = None
 
 
 def candidate_places(model, *, experiment=None) -> list[Place]:
@@ -152,7 +156,8 @@ def candidate_places(model, *, experiment=None) -> list[Place]:
     return places
 
 
-def locate_on_graph(model, experiment, *, places=None, progress=False, x0=None) -> list[PlaceScore]:
+def locate_on_graph(model, experiment, *, places=None, progress=False, x0=None,
+                    _spacing=None) -> list[PlaceScore]:
     """Rank places of a model by the share of the recorded residual a correction there explains.
 
     Parameters
@@ -171,7 +176,10 @@ def locate_on_graph(model, experiment, *, places=None, progress=False, x0=None) 
     Returns
     -------
     list of PlaceScore
-        Best first (see the module docstring for the method and the score).
+        Best first (see the module docstring for the method and the score).  When the
+        junction knots spread over the whole record could not follow the residual's band
+        (:mod:`diagnosis.graph_location_band`), every place is scored on one window of the
+        record (``PlaceScore.window``; the estimates are NaN outside it).
 
     Raises
     ------
@@ -202,6 +210,19 @@ def locate_on_graph(model, experiment, *, places=None, progress=False, x0=None) 
     sim = OutputSimulator(graph, exp, outputs=outputs)
     run = sim.run(None, x0)
     ctx = _Context(sim, run, experiment, outputs, x0)
+    window = _fine_window(ctx, len(junctions)) if junctions and _spacing is None else None
+    if window is not None:
+        a, b, spacing = window
+        say(f"locate: junction knots {spacing * 1e3:.3g} ms apart to follow the residual's band: "
+            f"window {ctx.t[a]:.4g} .. {ctx.t[b - 1]:.4g} s")
+        start = {nm: float(v) for nm, v in zip(run.state_names, run.states[a])}
+        scores = locate_on_graph(model, experiment.window(ctx.t[a], ctx.t[b - 1]), places=places,
+                                 progress=progress, x0=start, _spacing=spacing)
+        for score in scores:
+            full = np.full(ctx.t.size, np.nan)
+            full[a:b] = score.estimate
+            score.estimate, score.window = full, (float(ctx.t[a]), float(ctx.t[b - 1]))
+        return scores
     channels = list(d_inputs.values()) + [p.name for p in places if p.kind == "input"]
     lin = None
     if channels:
@@ -214,7 +235,7 @@ def locate_on_graph(model, experiment, *, places=None, progress=False, x0=None) 
         if place.kind == "input":
             sequences[i] = (channels.index(place.name), *_input_sequences(ctx, place))
         elif place.kind == "junction":
-            hats = _hat_basis(ctx.t, _knots(ctx, len(junctions)))
+            hats = _hat_basis(ctx.t, _knots(ctx, len(junctions), _spacing))
             sequences[i] = (channels.index(d_inputs[place.name]), hats, None)
     responses = _responses(lin, ctx.rows, {i: (ch, seq) for i, (ch, seq, _) in sequences.items()})
     scores = []
@@ -396,11 +417,37 @@ def _weighted_lstsq(S, r, w):
     return coef, float(np.sum((A @ coef - b) ** 2)), int(rank)
 
 
-def _knots(ctx, n_junctions) -> int:
-    """Hat functions per junction: a quarter of the rows kept, within the response budget."""
+def _knots(ctx, n_junctions, spacing=None) -> int:
+    """Hat functions per junction: a quarter of the rows kept, within the response budget; with a
+    knot `spacing` (s, a window of the record), as many as it takes, up to half the rows."""
     n_rows, ny = ctx.r_rows.shape
-    return int(np.clip(min(n_rows // 4, _RESPONSE_BUDGET / (n_rows * ny * max(1, n_junctions))),
-                       _MIN_KNOTS, _MAX_KNOTS))
+    budget = _RESPONSE_BUDGET / (n_rows * ny * max(1, n_junctions))
+    if spacing is not None:
+        wanted = np.ceil((ctx.t[-1] - ctx.t[0]) / spacing) + 1
+        return int(np.clip(min(wanted, n_rows // 2, budget), _MIN_KNOTS, _MAX_KNOTS))
+    return int(np.clip(min(n_rows // 4, budget), _MIN_KNOTS, _MAX_KNOTS))
+
+
+def _fine_window(ctx, n_junctions):
+    """``(first, stop, spacing)`` of the window the junction knots must be confined to so that
+    they follow the residual's band, or None when knots over the whole record do (see
+    :mod:`diagnosis.graph_location_band`; the knots are at least two samples apart)."""
+    from .graph_location_band import busiest_window, knot_spacing
+
+    t = ctx.t
+    if t.size < 4 * _MIN_KNOTS:
+        return None
+    dt = float(np.median(np.diff(t)))
+    sigma = {o: 1.0 / np.sqrt(w) for o, w in ctx.weight.items()}
+    spacing = max(knot_spacing(ctx.residual, sigma, dt), 2.0 * dt)
+    whole = (t[-1] - t[0]) / (_knots(ctx, n_junctions) - 1)
+    if whole <= 2.0 * spacing:
+        return None
+    length = int((_MAX_KNOTS - 1) * spacing / dt) + 1
+    if length >= t.size:
+        return None
+    a = busiest_window(ctx.residual, ctx.weight, length)
+    return a, a + length, spacing
 
 
 def _score_junction(ctx, place, d_input, hats, resp, graph) -> PlaceScore:

@@ -37,7 +37,14 @@ def _one(graph, place, kind, **kw):
 
 
 def _differs_by(built, nominal, state, expected):
-    assert sp.simplify(_rates(built)[state] - _rates(nominal)[state] - expected) == 0
+    assert _vanishes(_rates(built)[state] - _rates(nominal)[state] - expected)
+
+
+def _vanishes(expr):
+    """Exactly zero? Each Piecewise law (a valve's tables) stands in as one symbol first: the two
+    sides share them unchanged, and sympy's simplify would spend minutes folding their conditions."""
+    laws = {law: sp.Dummy(f"law{i}") for i, law in enumerate(expr.atoms(sp.Piecewise))}
+    return sp.simplify(expr.xreplace(laws)) == 0
 
 
 def hydraulic_cylinder():
@@ -76,10 +83,11 @@ def pneumatic_tank():
 
 
 def test_kinds_are_the_issue_vocabulary_in_order():
-    # issue 6, section 2c, verbatim order; then issue 11's constant load
+    # issue 6, section 2c, verbatim order; then issue 11's constant load and friction laws
     assert KINDS == ("coulomb_friction", "viscous_friction", "stribeck_friction", "pressure_dependent_friction",
                      "leak", "heat_transfer", "valve_lag", "transport_delay", "hysteresis", "backlash",
-                     "nonlinear_stiffness", "saturation", "sensor_offset", "sensor_gain", "constant_load")
+                     "nonlinear_stiffness", "saturation", "sensor_offset", "sensor_gain", "constant_load",
+                     "coulomb_viscous_friction", "modulated_friction")
 
 
 def test_places_offer_the_kinds_that_make_sense():
@@ -87,7 +95,7 @@ def test_places_offer_the_kinds_that_make_sense():
     at = lambda g, p: [c.kind for c in candidates(g, p)]  # noqa: E731
     assert at(msd, Place("junction", "v_mass")) == ["coulomb_friction", "viscous_friction", "stribeck_friction",
                                                     "hysteresis", "backlash", "nonlinear_stiffness",
-                                                    "constant_load"]
+                                                    "constant_load", "coulomb_viscous_friction"]
     assert at(msd, Place("input", "F")) == ["valve_lag", "transport_delay", "saturation"]
     assert at(msd, Place("output", "x")) == ["saturation", "sensor_offset", "sensor_gain"]
     cyl = hydraulic_cylinder()
@@ -165,27 +173,13 @@ def test_pam_chambers_are_places_for_a_leak_and_the_chambers_thermal_form():
     l1 = S("L0") - S("r") * sp.sin(S("q_psi"))
     V1 = S("D1") * l1 ** 2 + S("D2") * l1 + S("D3")
     expected = -S("k1") * S("R") * S("T") * S("c_leak_chamber1") * (S("P_1") - S("P_amb_chamber1")) / V1
-    assert sp.simplify(rates["P_1"] - base["P_1"] - expected) == 0
+    assert _vanishes(rates["P_1"] - base["P_1"] - expected)
     heat = _one(nominal, place, "heat_transfer")
     assert heat.target == "muscle1" and [p.unit for p in heat.params] == ["W/K", "1"]
     thermal = heat.build(nominal, {"hA_muscle1": 0.1, "gamma_muscle1": 1.4})
     assert thermal.elements["muscle1"].heat == {"hA": "hA_muscle1", "gamma": "gamma_muscle1"}
     assert "T_muscle1" in [s.name for s in thermal.equations().states]
     assert "0.1 W/K" in heat.explain({"hA_muscle1": 0.1, "gamma_muscle1": 1.4})
-
-
-def test_chamber_heat_exchange_spans_isothermal_to_adiabatic():
-    """Fast wall exchange: the isothermal chamber (k1 = k2 = 1); none: the adiabatic one (k1 = k2 = gamma).
-    On the locked joint (psi = 0) the chambers fill at fixed volume, each on its own."""
-    from plants.library.pam import pam
-    from bondgraph.numerics import simulate
-    run = lambda g: simulate(g, (0.0, 0.3), inputs={"u1": 7.0, "u2": 3.0}, output_interval=1e-3)["P1"]
-    for h_a, k in ((1e4, 1.0), (1e-8, 1.4)):
-        nominal = pam("locked", params={"k1": 1.0, "k2": 1.0})
-        heat = _one(nominal, Place("junction", "chamber1"), "heat_transfer")
-        thermal = heat.build(nominal, {"hA_muscle1": h_a, "gamma_muscle1": 1.4})
-        np.testing.assert_allclose(run(thermal), run(pam("locked", params={"k1": k, "k2": k})), rtol=1e-3)
-    assert run(pam("locked", params={"k1": 1.4, "k2": 1.4}))[100] > 1.05 * run(nominal)[100]  # the test can tell
 
 
 def test_input_kinds_route_the_input_through_the_effect():

@@ -106,7 +106,7 @@ def test_a_leak_from_both_chambers_is_found_at_the_chambers(tmp_path):
 
 def test_wall_heat_exchange_is_found_in_an_isothermal_chambers_model(tmp_path):
     isothermal = pam("locked", params={"k1": 1.0, "k2": 1.0})
-    report = _diagnose(_recording(tmp_path / "heat.csv", 2, hA=0.5), isothermal)
+    report = _diagnose(_recording(tmp_path / "heat.csv", 2, hA=0.2), isothermal)
     found = report["missing_physics"]
     assert found and {f["kind"] for f in found} == {"heat_transfer"}
     assert {f["attached_to"] for f in found} <= {"junction chamber1", "junction chamber2"}

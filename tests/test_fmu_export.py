@@ -229,3 +229,9 @@ def test_export_is_the_function_and_exporter_the_module():
     assert fmus.export is module.export and callable(fmus.export)
     with pytest.raises(ModuleNotFoundError):
         importlib.import_module("fmus.export")
+
+
+def test_a_stiff_model_steps_at_its_stability_limit_not_below():
+    """The exoskeleton's fastest modes are well damped: RK4 at 1 / rho(A) (1e-5 s), not 0.05 / rho."""
+    assert default_solver_step(library.build("exoskeleton").equations()) == 1e-5
+    assert default_solver_step(library.build("dc-motor").equations()) == 2e-5     # accuracy rule, not stiff

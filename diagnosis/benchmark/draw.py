@@ -221,6 +221,17 @@ def _shape(spec, plant, rec, rng, scales):
         sh["c0"], sh["p_ref"] = float(rng.uniform(0.1, 0.5)) * p, p_ref
     if k == "valve_lag":
         sh["u0"] = float(rec.u[spec.name][0])
+    if k == "coulomb_viscous_friction":
+        sh["beta"], sh["v_rms"] = float(rng.uniform(0.5, 2.0)), v_rms
+    if k == "nonlinear_stiffness":
+        sh["alpha"] = float(rng.uniform(0.0, 1.0))
+        sh["q2"] = 3.0 * scales["rms"][spec.name] ** 2       # <q^4>/<q^2> of a Gaussian motion
+    if k == "modulated_friction":
+        name = str(rng.choice(plant.junction(j).modulators))
+        i = next(i for i in plant.inputs if i.name == name)
+        sh["signal"], sh["low"], sh["span"] = name, i.low, i.high - i.low
+        sh["c0"], sh["u0"] = float(rng.uniform(0.1, 0.5)), float(rec.u[name][0])
+        sh["tau"] = float(rng.uniform(0.05, 0.3)) * i.hold[0]   # seen within each held level
     if spec.door == "input" and k == "saturation":
         i = next(i for i in plant.inputs if i.name == spec.name)
         sh["lo"], sh["hi"], sh["skew"] = i.low, i.high, float(rng.uniform(-0.3, 0.3))
@@ -250,6 +261,10 @@ def _initial_magnitude(spec, plant, rec, scales, sh, probe_gain):
     base = r / g      # a constant effort/flow of this size changes the output by about r
     if k == "viscous_friction":
         return base / (scales["rms"][j] or 1.0)
+    if k == "coulomb_viscous_friction":
+        return base / (1.0 + sh["beta"])
+    if k == "modulated_friction":
+        return base / (sh["c0"] + 0.5)
     if k == "leak":
         return base / (scales["rms"][j] - plant.junction(j).ambient or 1.0)
     if k == "pressure_dependent_friction":

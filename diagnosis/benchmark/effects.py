@@ -15,11 +15,16 @@ The kinds and where they may sit (:data:`KIND_PLACES`):
 junction (1: common flow)     viscous_friction, constant_load (any domain);
                               coulomb_friction (mechanical, or an electrical
                               brush drop); stribeck_friction, hysteresis
-                              (Dahl) (mechanical); pressure_dependent_friction
-                              (where the plant has pressures there)
+                              (Dahl), coulomb_viscous_friction (both at once)
+                              (mechanical); pressure_dependent_friction
+                              (where the plant has pressures there);
+                              modulated_friction (where an input sets the
+                              level, through a first-order lag: an MR damper)
 junction (0: common effort)   leak (laminar, towards the ambient effort),
                               constant_load (a constant flow)
-storage (a C element)         nonlinear_stiffness (cubic hardening),
+storage (a C element)         nonlinear_stiffness (cubic hardening, the
+                              nominal's linear stiffness carrying part of the
+                              cubic term's average, as a linear fit would),
                               backlash (a dead band in a linear mechanical
                               spring),
                               saturation (an end stop / overflow at the
@@ -54,6 +59,7 @@ KIND_PLACES = {
     "leak": ("junction0",), "nonlinear_stiffness": ("storage_linear",), "backlash": ("storage_linear1",),
     "saturation": ("input", "output", "storage_range"), "transport_delay": ("input",),
     "valve_lag": ("input",), "sensor_offset": ("output",), "sensor_gain": ("output",),
+    "coulomb_viscous_friction": ("junction1_mech",), "modulated_friction": ("junction1m",),
 }
 
 
@@ -70,6 +76,8 @@ def places_for(plant: TruthPlant, kind: str) -> list[tuple[str, str]]:
                     if j.kind == "1" and j.domain in MECHANICAL + ("electrical",)]
         elif door == "junction1p":
             out += [("junction", j.name) for j in plant.junctions if j.kind == "1" and j.pressures]
+        elif door == "junction1m":
+            out += [("junction", j.name) for j in plant.junctions if j.kind == "1" and j.modulators]
         elif door == "junction0":
             out += [("junction", j.name) for j in plant.junctions if j.kind == "0"]
         elif door == "storage_linear":
@@ -99,7 +107,7 @@ class TruthEffect(NoEffect):
     def __init__(self, kind, plant, door, name, m, scales, shape):
         self.kind, self.plant, self.door, self.name = kind, plant, door, name
         self.m, self.scales, self.shape = float(m), scales, dict(shape)
-        self.n_states = 1 if kind in ("hysteresis", "valve_lag") else 0
+        self.n_states = 1 if kind in ("hysteresis", "valve_lag", "modulated_friction") else 0
         if door == "storage":
             self.storage = plant.storage(name)
             self.junction = self.storage.junction
@@ -127,8 +135,9 @@ class TruthEffect(NoEffect):
 
     # -- the doors ---------------------------------------------------------------------
     def z0(self, plant):
-        return np.zeros(self.n_states) if self.kind != "valve_lag" else \
-            np.array([self.shape["u0"]])
+        if self.kind in ("valve_lag", "modulated_friction"):
+            return np.array([self.shape["u0"]])
+        return np.zeros(self.n_states)
 
     def delayed_inputs(self, t, u):
         if self.door != "input" or self.kind not in ("saturation", "transport_delay"):
@@ -168,8 +177,9 @@ class TruthEffect(NoEffect):
         if self.door == "storage":
             q = sig[self.storage.name]
             s = self.storage.sign
-            if k == "nonlinear_stiffness":     # hardening: e = k q + k3 q^3, k3 = m
-                return {j: -s * m * q ** 3}, np.zeros(0)
+            if k == "nonlinear_stiffness":     # hardening: e = k q + k3 q^3, k3 = m, where the
+                # nominal's k holds a share alpha of the cubic's average stiffness k3 <q^4>/<q^2>
+                return {j: -s * m * (q ** 3 - sh["alpha"] * sh["q2"] * q)}, np.zeros(0)
             if k == "backlash":                 # the spring carries nothing inside +-m
                 kk = self.storage.stiffness
                 dead = q - np.clip(q, -m, m)
@@ -190,6 +200,11 @@ class TruthEffect(NoEffect):
             return {j: -m * math.tanh(x / eps)}, np.zeros(0)
         if k == "viscous_friction":
             return {j: -m * x}, np.zeros(0)
+        if k == "coulomb_viscous_friction":   # level m, and b = beta m / v_rms: both of a size
+            return {j: -m * (math.tanh(x / eps) + sh["beta"] * x / sh["v_rms"])}, np.zeros(0)
+        if k == "modulated_friction":         # level m (c0 + s), s the input's lagged share of its span
+            level = m * (sh["c0"] + (z[0] - sh["low"]) / sh["span"])
+            return {j: -level * math.tanh(x / eps)}, np.array([(u[sh["signal"]] - z[0]) / sh["tau"]])
         if k == "stribeck_friction":
             fc = m
             fs, vs = sh["fs_over_fc"] * fc, sh["vs"]

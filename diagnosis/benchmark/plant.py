@@ -82,7 +82,9 @@ class JunctionSpec:
     velocity) or ``"0"`` (common effort: ``signals[name]`` is that effort,
     e.g. a pressure).  ``ambient`` is the effort a leak flows towards (0 for
     gauge pressures, the atmosphere for absolute ones).  ``pressures`` names
-    the signals that may modulate a friction law there (pneumatic plants).
+    the signals that may modulate a friction law there (pneumatic plants);
+    ``modulators`` the inputs whose level may set a friction there through a
+    lag (a damper's coil voltage, a seal's switched pressure).
     ``equivalent`` lists junctions no recording can tell apart from this one
     (rigidly geared through a TF: one degree of freedom).
     """
@@ -93,6 +95,7 @@ class JunctionSpec:
     ambient: float = 0.0
     pressures: tuple[str, ...] = ()
     equivalent: tuple[str, ...] = ()
+    modulators: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)

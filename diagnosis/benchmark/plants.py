@@ -4,7 +4,7 @@ from __future__ import annotations
 from typing import Callable
 
 from .plant import TruthPlant, UnknownTruthName
-from .plants_cylinder import pneumatic_cylinder
+from .plants_cylinder import pneumatic_cylinder, switched_cylinder
 from .plants_drivetrain import carriage, drivetrain
 from .plants_exo import exoskeleton
 from .plants_hydraulic import hydraulic
@@ -24,6 +24,7 @@ PLANTS: dict[str, Callable[[], TruthPlant]] = {
     "pam-frictionless": pam_frictionless,
     "exoskeleton": exoskeleton,
     "pneumatic-cylinder": pneumatic_cylinder,
+    "switched-cylinder": switched_cylinder,
     "drivetrain": drivetrain,
     "carriage": carriage,
     "hydraulic": hydraulic,

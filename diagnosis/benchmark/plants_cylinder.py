@@ -27,7 +27,7 @@ import numpy as np
 
 from .plant import InputSpec, JunctionSpec, OutputSpec, TruthPlant
 
-__all__ = ["pneumatic_cylinder", "triangle_strokes", "AREA", "TAU_SERVO"]
+__all__ = ["pneumatic_cylinder", "switched_cylinder", "triangle_strokes", "AREA", "TAU_SERVO"]
 
 AREA = math.pi * 0.0125 ** 2     # m^2, piston area of the Ø25 mm bore
 TAU_SERVO = 0.02                 # s, time constant of the drive's position follower
@@ -69,3 +69,22 @@ def pneumatic_cylinder() -> TruthPlant:
         junctions=(JunctionSpec("piston", "1", "translation", pressures=("p",)),),
         rate=100.0, duration=80.0, substeps=4, feedthrough=True,
         description="pneumatic cylinder seal-friction rig: F = p A, imposed rod position")
+
+
+def switched_cylinder() -> TruthPlant:
+    """The same rig with the chamber pressure switched every 0.5-3 s while the rod strokes.
+
+    A command that changes often and sets a friction level through a lag is the
+    structure of a magnetorheological damper (force against an imposed motion, the
+    yield level following the coil voltage through the coil's lag): the piston
+    junction lists ``p`` as a modulator (``modulated_friction``).  Equations, states
+    and nominal model are those of :func:`pneumatic_cylinder`.
+    """
+    from dataclasses import replace
+
+    base = pneumatic_cylinder()
+    p, x = base.inputs
+    return replace(base, name="switched-cylinder", duration=40.0,
+                   inputs=(replace(p, hold=(0.5, 3.0)), x),
+                   junctions=(JunctionSpec("piston", "1", "translation", pressures=("p",), modulators=("p",)),),
+                   description="pneumatic cylinder rig, pressure switched every 0.5-3 s: F = p A, imposed rod")

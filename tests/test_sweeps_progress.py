@@ -25,3 +25,18 @@ def test_progress_can_be_silent():
     bar.update(done=3)
     bar.close()
     assert bar.done == 3 and bar.eta_s() == 0.0
+
+
+class _Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def test_on_a_terminal_the_line_is_the_projects_tqdm_progress():
+    stream = _Terminal()
+    bar = ProgressBar(4, stream=stream, label="recordings")
+    bar.update(done=3, failed=1, running=1)
+    bar.close()
+    last = stream.getvalue().replace("\r", "\n").strip().splitlines()[-1]
+    assert last.startswith("[" + "#" * 22) and "3/4 recordings  1 failed  1 running" in last
+    assert "ETA" in last and stream.getvalue().endswith("\n")

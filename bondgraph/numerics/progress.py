@@ -47,27 +47,32 @@ class Progress:
             self._bar = tqdm(total=total, bar_format=fmt, file=file or sys.stderr, mininterval=0.2,
                              ascii=".#", leave=True, dynamic_ncols=False)
 
-    def update_to(self, value: float) -> None:
+    def update_to(self, value: float, *, note: str | None = None) -> None:
         """Set the current value (work done = value - start); redrawn at most every 0.2 s.
-        Cheap when disabled or called often (once per right-hand-side evaluation)."""
+        Cheap when disabled or called often (once per right-hand-side evaluation).
+        `note`, if given, is shown as ``{desc}`` instead of `value_fmt` (e.g. ``3 failed``)."""
         if self._bar is None:
             return
         now = time.monotonic()
         if now - self._last < 0.2:
             return
         self._last = now
-        if self.value_fmt:
-            self._bar.set_description_str(self.value_fmt.format(value), refresh=False)
+        self._describe(value, note)
         self._bar.update(value - self.start - self._bar.n)
 
-    def close(self, value: float | None = None) -> None:
+    def close(self, value: float | None = None, *, note: str | None = None) -> None:
         """Show the finished line (at `value`, default the end) and end it with a newline."""
         if self._bar is None:
             return
-        if self.value_fmt:
-            end = self.start + self._bar.total if value is None else value
-            self._bar.set_description_str(self.value_fmt.format(end), refresh=False)
-        self._bar.n = self._bar.total
+        end = self.start + self._bar.total if value is None else value
+        self._describe(end, note)
+        self._bar.n = end - self.start
         self._bar.refresh()
         self._bar.close()
         self._bar = None
+
+    def _describe(self, value: float, note: str | None) -> None:
+        if note is not None:
+            self._bar.set_description_str(note, refresh=False)
+        elif self.value_fmt:
+            self._bar.set_description_str(self.value_fmt.format(value), refresh=False)

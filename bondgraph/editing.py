@@ -159,7 +159,7 @@ class GraphEditing:
             new.add_parameter(param)
         return new
 
-    def with_law(self, name: str, law):
+    def with_law(self, name: str, law, *, description: str | None = None):
         """A copy whose storage element `name` (an I or a C) has the constitutive law `law`.
 
         `law` is an expression in the element's local energy variable (``q`` for a C, ``p`` for
@@ -167,7 +167,7 @@ class GraphEditing:
         as a sympy expression in ``x``, the local variable's symbol, returning the new one.  A
         linear element's law is ``x/value`` (``value*x`` in stiffness form); its value stays a
         parameter of the element as long as the new law uses it.  State, initial value, domain and
-        the law's other parameters are kept.
+        the law's other parameters are kept, and the description unless `description` is given.
 
         >>> from bondgraph import BondGraph, C, I, One, Se
         >>> g = BondGraph("spring")
@@ -196,7 +196,7 @@ class GraphEditing:
                                       old.value.name in {s.name for s in sp.sympify(new_law).free_symbols}):
             params[old.value.name] = old.value
         element = type(old)(name, law=new_law, params=params, state=old.state, initial=old.initial,
-                            domain=old.domain, description=old.description)
+                            domain=old.domain, description=old.description if description is None else description)
         return self.replace(name, element)
 
     def with_output(self, name: str, expression):

@@ -328,3 +328,38 @@ def test_storage_saturation_is_an_end_stop_at_a_one_junction_and_an_overflow_at_
     built = overflow.build(tanks, {"q_max_tank1": 0.012})
     _differs_by(built, tanks, "V1", -S("k_of_tank1") * sp.Max(S("V1") - S("q_max_tank1"), 0))
     assert "overflows" in overflow.explain({"q_max_tank1": 0.012})
+
+
+def test_a_new_kind_is_one_class_in_the_registry(monkeypatch):
+    """The example of docs/diagnosis.md ("Adding a kind"): registered, it is offered at a
+    1-junction and adds exactly its effort."""
+    from bondgraph import R as Resistor
+    from diagnosis.catalogue_common import fresh_name, junction_domain, junction_units
+    from diagnosis.kinds import REGISTRY, Kind, Proposal
+    from diagnosis.kinds.base import hang
+
+    class QuadraticDrag(Kind):
+        name = "quadratic_drag"
+        doors = ("1",)
+
+        def propose(self, site):
+            e_unit, f_unit = junction_units(site.graph, site.name)
+            E, V = site.scales.effort, site.scales.flow
+            return [Proposal((ParamSpec(fresh_name(site.taken, f"c_d_{site.name}"), 0.1 * E / V ** 2, 0.0,
+                                        100 * E / V ** 2, f"{e_unit}/({f_unit})^2", f"drag coefficient at {site.name}"),))]
+
+        def build(self, graph, cand, values):
+            j = cand.place.name
+            return hang(graph, Resistor(f"drag_{j}", effort=f"{cand.params[0].name}*f*Abs(f)",
+                                        domain=junction_domain(graph, j)), j)
+
+        def explain(self, cand, values, show):
+            return f"the motion at {cand.place.name} meets a drag of {show(cand.params[0].name)} times its speed squared"
+
+    monkeypatch.setitem(REGISTRY, "quadratic_drag", QuadraticDrag())
+    msd = library.build("mass-spring-damper")
+    drag = _one(msd, Place("junction", "v_mass"), "quadratic_drag")
+    assert [c.kind for c in candidates(msd, Place("output", "x"))] == ["saturation", "sensor_offset", "sensor_gain"]
+    v = S("p_m") / S("m")
+    _differs_by(drag.build(msd, {"c_d_v_mass": 0.2}), msd, "p_m", -S("c_d_v_mass") * v * sp.Abs(v))
+    assert "0.2" in drag.explain({"c_d_v_mass": 0.2})

@@ -6,7 +6,8 @@
 bonds kept), :meth:`~GraphEditing.remove` (an element and its bonds, or a bond),
 :meth:`~GraphEditing.declare` (graph-wide parameters added), :meth:`~GraphEditing.with_law` (a
 storage element's law rewritten as a sympy expression), :meth:`~GraphEditing.with_output` (an
-output's expression rewritten), :meth:`~GraphEditing.with_element` (an element rebuilt from its
+output's expression rewritten), :meth:`~GraphEditing.with_outputs` (the outputs replaced),
+:meth:`~GraphEditing.with_element` (an element rebuilt from its
 description with some fields changed) and :meth:`~GraphEditing.route_input` (every user of an
 input made to read an expression of it, :mod:`bondgraph.editing_inputs`).  The graph they
 are called on is never changed, so a model and its variants (the diagnosis catalogue's
@@ -215,6 +216,16 @@ class GraphEditing:
         new = self.copy()
         new.outputs[name] = dataclasses.replace(out, expression=str(expression))
         new._changed()
+        return new
+
+    def with_outputs(self, outputs: Mapping[str, object]):
+        """A copy whose outputs are exactly `outputs`: name -> expression (a string or sympy
+        expression), or name -> ``(expression, unit)``; the graph's own outputs are dropped."""
+        new = self.copy()
+        new.outputs = {}
+        for name, spec in outputs.items():
+            expression, unit = spec if isinstance(spec, tuple) else (spec, "")
+            new.add_output(name, expression, unit=unit)
         return new
 
     def with_element(self, name: str, **changes):

@@ -91,28 +91,14 @@ def _merge(windows):
 
 def _with_values(graph, values: dict):
     """A copy of `graph` whose parameters named in `values` take those values (SI)."""
-    from bondgraph.io_json import graph_from_dict
+    from .errors import UnknownNameError
     if not values:
         return graph
-    data = graph.to_dict()
-    for entry in data.get("parameters", []):
-        if entry["name"] in values:
-            entry["value"] = float(values[entry["name"]])
-    for entry in data.get("elements", []):
-        for name, private in (entry.get("params") or {}).items():   # a law's own parameters
-            if name in values and isinstance(private, dict):
-                private["value"] = float(values[name])
-        if entry.get("name") in values:
-            for key in ("value", "stiffness", "compliance", "inertance", "resistance", "modulus"):
-                if isinstance(entry.get(key), (int, float)):
-                    entry[key] = float(values[entry["name"]])
-                    break
-    out = graph_from_dict(data, source=f"{graph.name} with fitted values")
-    params = out.parameters()
-    wrong = [n for n, v in values.items() if n not in params or not np.isclose(params[n].value, v)]
-    if wrong:
-        raise DiagnosisError(f"cannot set fitted parameter(s) {', '.join(wrong)} in graph {graph.name!r}")
-    return out
+    try:
+        return graph.with_params({name: float(value) for name, value in values.items()})
+    except UnknownNameError:
+        wrong = sorted(set(values) - set(graph.parameters()))
+        raise DiagnosisError(f"cannot set fitted parameter(s) {', '.join(wrong)} in graph {graph.name!r}") from None
 
 
 def _fit_window(train, run, x0):

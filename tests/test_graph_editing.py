@@ -216,3 +216,13 @@ def test_route_input_makes_the_source_read_an_expression_and_own_new_states(grap
     with pytest.raises(UnknownNameError, match="input 'G'"):
         graph.route_input("G", "G")
     unchanged(graph)
+
+
+def test_with_outputs_replaces_the_outputs(graph):
+    g = graph.copy()
+    g.add_output("x", "q_c", unit="m")
+    probes = g.with_outputs({"force": "e_to_c", "speed": ("f_to_m", "m/s")})
+    assert list(probes.outputs) == ["force", "speed"] and probes.outputs["speed"].unit == "m/s"
+    assert [sp.simplify(h - want) for h, want in zip(probes.equations().h, [q / c, p / m])] == [0, 0]
+    assert list(g.outputs) == ["x"]
+    unchanged(graph)

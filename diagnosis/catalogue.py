@@ -96,6 +96,12 @@ class Candidate:
                                          f"its parameters {list(specs)}")
 
     @property
+    def definition(self):
+        """The registered :class:`~diagnosis.kinds.base.Kind` of this candidate (its doors,
+        builder, explanation and features hook)."""
+        return kind_named(self.kind)
+
+    @property
     def n_params(self) -> int:
         """Number of fitted parameters."""
         return len(self.params)
@@ -121,7 +127,7 @@ class Candidate:
         evidence behind it: it is moved to its outer bound (no limit on that side).
         Other kinds are returned unchanged.
         """
-        return kind_named(self.kind).settle(self, dict(values), experiment)
+        return self.definition.settle(self, dict(values), experiment)
 
     def build(self, model_graph, values=None):
         """A new graph: `model_graph` with this effect added.
@@ -141,7 +147,7 @@ class Candidate:
         values = self.values_with_guesses(values)
         graph = model_graph.copy(name=f"{model_graph.name}_{self.kind}",
                                  description=f"{model_graph.description} + {self.kind} at {self.place}".strip(" +"))
-        graph = kind_named(self.kind).build(graph, self, values)
+        graph = self.definition.build(graph, self, values)
         known = graph.parameters()      # a parameter the model has already (a C's own value) is refitted
         declared = [Param(spec.name, values[spec.name], spec.unit, spec.description)
                     for spec in self.params if spec.name not in known]
@@ -158,7 +164,7 @@ class Candidate:
             unit = units.get(name, "")
             return f"{values[name]:.3g} {unit if unit != '1' else ''}".strip()
 
-        return kind_named(self.kind).explain(self, values, show)
+        return self.definition.explain(self, values, show)
 
     def __str__(self) -> str:
         return f"{self.kind} at {self.place}"

@@ -363,3 +363,24 @@ def test_a_new_kind_is_one_class_in_the_registry(monkeypatch):
     v = S("p_m") / S("m")
     _differs_by(drag.build(msd, {"c_d_v_mass": 0.2}), msd, "p_m", -S("c_d_v_mass") * v * sp.Abs(v))
     assert "0.2" in drag.explain({"c_d_v_mass": 0.2})
+
+
+def test_the_registry_is_the_vocabulary_and_refuses_bad_kinds():
+    from diagnosis.kinds import DOORS, MODULES, REGISTRY, Kind, register
+    assert tuple(REGISTRY) == KINDS and len(MODULES) == len(KINDS)
+    assert all(k.name == name and set(k.doors) <= set(DOORS) for name, k in REGISTRY.items())
+    msd = library.build("mass-spring-damper")
+    assert all("1" in c.definition.doors for c in candidates(msd, Place("junction", "v_mass")))
+    assert all(c.definition.features(c) is None for c in candidates(msd, Place("output", "x")))
+
+    class Twice(Kind):
+        name, doors = "leak", ("0",)
+
+    class Nowhere(Kind):
+        name, doors = "levitation", ("ceiling",)
+
+    with pytest.raises(DiagnosisError, match="'leak' is registered twice"):
+        register(Twice)
+    with pytest.raises(DiagnosisError, match="doors must be some of"):
+        register(Nowhere)
+    assert "levitation" not in REGISTRY

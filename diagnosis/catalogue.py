@@ -190,7 +190,8 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None) -
     Returns
     -------
     list of Candidate
-        In the order of :data:`KINDS`.
+        In the order of :data:`KINDS`; at a 1-junction, within a kind, those whose regime
+        expression is among `regime_variables` first.
 
     Examples
     --------
@@ -209,7 +210,10 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None) -
                      target=prop.target, initial=dict(prop.initial), starts=tuple(prop.starts))
            for kind in REGISTRY.values() if site.door in kind.doors for prop in kind.propose(site)]
     order = list(REGISTRY)
-    return sorted(out, key=lambda c: order.index(c.kind))
+    named = set(regime_variables or ()) if site.door == "1" else None
+    # at a 1-junction, within a kind, laws of a located regime variable first (a pressure, a signal)
+    return sorted(out, key=lambda c: (order.index(c.kind), named is not None and bool(named)
+                                      and c.regime is not None and c.regime not in named))
 
 
 def site_of(graph, place: Place, *, regime_variables=None, experiment=None) -> Site:

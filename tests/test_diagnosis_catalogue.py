@@ -384,3 +384,12 @@ def test_the_registry_is_the_vocabulary_and_refuses_bad_kinds():
     with pytest.raises(DiagnosisError, match="doors must be some of"):
         register(Nowhere)
     assert "levitation" not in REGISTRY
+
+
+def test_laws_of_a_located_regime_variable_come_first_within_their_kind():
+    pam = library.build("pam")
+    seesaw = Place("junction", "seesaw")
+    modulated = lambda rv: [c.regime for c in candidates(pam, seesaw, regime_variables=rv)  # noqa: E731
+                            if c.kind == "modulated_friction"]
+    assert modulated(None)[:2] == ["u1", "u2"]
+    assert modulated({"u2": None})[:2] == ["u2", "u1"]

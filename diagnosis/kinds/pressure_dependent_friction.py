@@ -2,8 +2,8 @@
 :math:`e = (c_0 + c_1 (P - P_{ref})) \\tanh(f/v_\\varepsilon)`, one candidate per pressure
 :math:`P` of the model (a chamber state, a C effort, or their mean;
 :func:`~diagnosis.catalogue_scales.pressure_variables`), those among the located regime variables
-first.  :math:`P_{ref}` is its mean in the nominal simulation (fixed), so :math:`c_0` is the
-Coulomb level at the mean pressure."""
+first (:func:`~diagnosis.catalogue.candidates` orders them).  :math:`P_{ref}` is its mean in the
+nominal simulation (fixed), so :math:`c_0` is the Coulomb level at the mean pressure."""
 from __future__ import annotations
 
 from ..catalogue_common import ParamSpec, junction_units
@@ -32,10 +32,7 @@ class PressureDependentFriction(Kind):
                            f"change of the friction level at {j} per Pa of {label}")],
                 regime=expr, constants=(smoothing_flow(site),
                                         (name("p_ref"), p_ref, "Pa", f"reference pressure of the friction law at {j}"))))
-        if site.regime_variables:     # the pressures among the located regime variables first
-            named = set(site.regime_variables)
-            out.sort(key=lambda prop: prop.regime not in named)
-        return out
+        return out   # those among the located regime variables come first (catalogue.candidates)
 
     def build(self, graph, cand, values):
         c0, c1 = (p.name for p in cand.params)

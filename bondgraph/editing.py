@@ -1,9 +1,15 @@
 """The editing API of :class:`~bondgraph.graph.BondGraph`: each call returns a new graph.
 
 :meth:`~GraphEditing.copy`, :meth:`~GraphEditing.with_params`, :meth:`~GraphEditing.insert`
-(a one-port element bonded to a junction), :meth:`~GraphEditing.insert_on_bond` (a junction
-or a two-port put into a bond), :meth:`~GraphEditing.replace` (an element swapped, its bonds
-kept) and :meth:`~GraphEditing.remove` (an element and its bonds, or a bond).  The graph they
+(a one-port element, or a new junction, bonded to a junction), :meth:`~GraphEditing.insert_on_bond`
+(a junction or a two-port put into a bond), :meth:`~GraphEditing.replace` (an element swapped, its
+bonds kept), :meth:`~GraphEditing.remove` (an element and its bonds, or a bond),
+:meth:`~GraphEditing.declare` (graph-wide parameters added), :meth:`~GraphEditing.with_law` (a
+storage element's law rewritten as a sympy expression), :meth:`~GraphEditing.with_output` (an
+output's expression rewritten), :meth:`~GraphEditing.with_outputs` (the outputs replaced),
+:meth:`~GraphEditing.with_element` (an element rebuilt from its
+description with some fields changed) and :meth:`~GraphEditing.route_input` (every user of an
+input made to read an expression of it, :mod:`bondgraph.editing_inputs`).  The graph they
 are called on is never changed, so a model and its variants (the diagnosis catalogue's
 candidates, a sweep's plants) can live side by side.
 
@@ -26,9 +32,13 @@ import copy as _copy
 import dataclasses
 from collections.abc import Mapping
 
+import sympy as sp
+
+from .editing_inputs import mentions, rebuilt, route_input
 from .elements import Element
 from .errors import GraphError, PortError, UnknownNameError
 from .params import Param
+from .symbols import as_expression
 
 __all__ = ["GraphEditing"]
 
@@ -36,13 +46,16 @@ __all__ = ["GraphEditing"]
 class GraphEditing:
     """Editing methods mixed into :class:`~bondgraph.graph.BondGraph` (each returns a new graph)."""
 
-    def copy(self, name: str | None = None):
-        """An independent copy (elements, bonds, declarations), optionally renamed to `name`."""
+    def copy(self, name: str | None = None, *, description: str | None = None):
+        """An independent copy (elements, bonds, declarations), optionally renamed to `name` and
+        described by `description`."""
         new = _copy.deepcopy(self, {id(self._cache): None})   # derived equations are not copied
         if name is not None:
             if not isinstance(name, str) or not name.isidentifier():
                 raise GraphError(f"graph name {name!r} is not a valid identifier")
             new.name = name
+        if description is not None:
+            new.description = str(description)
         new._changed()
         return new
 
@@ -67,22 +80,26 @@ class GraphEditing:
         return new
 
     def insert(self, element: Element, *, at: str, bond: str | None = None):
-        """A copy with the one-port `element` added and bonded to junction `at`.
+        """A copy with `element` added and bonded to junction `at`.
 
-        The bond's half-arrow follows the element's natural direction: into a storage or
-        resistor, out of a source.  `bond` names the new bond (default ``bondN``).
+        `element` has one port (a one-port, or an equation element with a single named port) or
+        is a new junction (bonded from `at`, so that more elements can hang on it).  The bond's
+        half-arrow follows the element's natural direction: into a storage, resistor or junction,
+        out of a source.  `bond` names the new bond (default ``bondN``).
         """
         self._junction(at)
-        if element.ports != ("",):
+        if element.ports is not None and len(element.ports) != 1:
             raise PortError(f"insert() bonds one-port elements; {element.kind} {element.name!r} has ports "
                             f"{', '.join(map(repr, element.ports or ()))}: use add() and connect()",
                             element=element.name)
+        port = "" if element.ports is None else element.ports[0]
+        end = (element.name, port) if port else element.name
         new = self.copy()
         new.add(element)
-        if element.direction("") == "in":
-            new.connect(at, element.name, name=bond)
+        if element.direction(port) == "in":
+            new.connect(at, end, name=bond)
         else:
-            new.connect(element.name, at, name=bond)
+            new.connect(end, at, name=bond)
         return new
 
     def insert_on_bond(self, bond: str, element: Element, *, name: str | None = None):
@@ -134,6 +151,105 @@ class GraphEditing:
                      for n, b in new.bonds.items()}
         new._changed()
         return new
+
+    def declare(self, *params: Param):
+        """A copy with the graph-wide parameters `params` declared (each a :class:`Param`); a name
+        the graph already has is a :class:`DuplicateNameError`."""
+        new = self.copy()
+        for param in params:
+            new.add_parameter(param)
+        return new
+
+    def with_law(self, name: str, law, *, description: str | None = None):
+        """A copy whose storage element `name` (an I or a C) has the constitutive law `law`.
+
+        `law` is an expression in the element's local energy variable (``q`` for a C, ``p`` for
+        an I: a string or a sympy expression), or a callable ``law(old, x)`` given the present law
+        as a sympy expression in ``x``, the local variable's symbol, returning the new one.  A
+        linear element's law is ``x/value`` (``value*x`` in stiffness form); its value stays a
+        parameter of the element as long as the new law uses it.  State, initial value, domain and
+        the law's other parameters are kept, and the description unless `description` is given.
+
+        >>> from bondgraph import BondGraph, C, I, One, Se
+        >>> g = BondGraph("spring")
+        >>> for e in (Se("F"), One("v"), I("m", 1.0), C("k", stiffness=4.0)):
+        ...     _ = g.add(e)
+        >>> for a, b in (("F", "v"), ("v", "m"), ("v", "k")):
+        ...     _ = g.connect(a, b)
+        >>> hard = g.with_law("k", lambda old, q: old + sp.Symbol("k3") * q**3).declare(Param("k3", 0.5))
+        >>> print(hard.equations().f[0])
+        F - k*q_k - k3*q_k**3
+        """
+        old = self._element(name)
+        if old.kind not in ("I", "C"):
+            raise GraphError(f"with_law() rewrites the law of an I or a C; {_kind(old)} {name!r} is neither")
+        x = sp.Symbol(old._local)
+        if old.value is not None:
+            own = old.value.name
+            current = (sp.Symbol(own) * x if getattr(old, "stiffness_form", False) else x / sp.Symbol(own))
+        else:
+            table = {n: sp.Symbol(n) for n in self.names()}
+            table[old.state] = table[old._local] = x
+            current = as_expression(old.law, table, owner=f"{old.kind} {name!r} law")
+        new_law = law(current, x) if callable(law) else law
+        params = {k: p for k, p in old.params.items() if p is not old.value}
+        if old.value is not None and (mentions(new_law, old.value.name) if isinstance(new_law, str) else
+                                      old.value.name in {s.name for s in sp.sympify(new_law).free_symbols}):
+            params[old.value.name] = old.value
+        element = type(old)(name, law=new_law, params=params, state=old.state, initial=old.initial,
+                            domain=old.domain, description=old.description if description is None else description)
+        return self.replace(name, element)
+
+    def with_output(self, name: str, expression):
+        """A copy whose output `name` has the expression `expression` (unit and description kept).
+
+        `expression` is a string or sympy expression, or a callable given the present expression
+        as a sympy expression (every name of the graph a plain symbol of that name) and returning
+        the new one, e.g. ``lambda y: y + sp.Symbol("offset")``.
+        """
+        if name not in self.outputs:
+            raise UnknownNameError("output", name, self.outputs, model=self.name)
+        out = self.outputs[name]
+        if callable(expression):
+            table = {n: sp.Symbol(n) for n in self.names()}
+            expression = expression(as_expression(out.expression, table, owner=f"output {name!r}"))
+        new = self.copy()
+        new.outputs[name] = dataclasses.replace(out, expression=str(expression))
+        new._changed()
+        return new
+
+    def with_outputs(self, outputs: Mapping[str, object]):
+        """A copy whose outputs are exactly `outputs`: name -> expression (a string or sympy
+        expression), or name -> ``(expression, unit)``; the graph's own outputs are dropped."""
+        new = self.copy()
+        new.outputs = {}
+        for name, spec in outputs.items():
+            expression, unit = spec if isinstance(spec, tuple) else (spec, "")
+            new.add_output(name, expression, unit=unit)
+        return new
+
+    def with_element(self, name: str, **changes):
+        """A copy whose element `name` is rebuilt from its description
+        (:meth:`~bondgraph.elements.base.Element.to_dict`, the keywords of its constructor) with
+        the fields `changes` replaced, e.g. ``with_element("chamber", heat={...})``."""
+        old = self._element(name)
+        entry = old.to_dict()
+        entry.update(changes)
+        return self.replace(name, rebuilt(entry))
+
+    def route_input(self, u: str, replacement: str, *, states: Mapping[str, str] | None = None,
+                    initial: Mapping[str, float] | None = None, units: Mapping[str, str] | None = None):
+        """A copy in which every element reading input `u` reads the expression `replacement`.
+
+        `u` stays an input of the model (declared on the graph if no element declares it any
+        more).  A source whose input is `u` becomes a modulated source of `replacement`; an
+        element whose expressions name `u` gets `replacement` in their place.  `states` (name ->
+        rate expression, with their `initial` values and `units`) are new states the replacement
+        uses; they are owned by the source reading `u` (turned into an equation element with port
+        ``out``), else by the first modulated source or equation element using `u`.
+        :mod:`bondgraph.editing_inputs` does the work on the elements' descriptions.
+        """
+        return route_input(self, u, replacement, states=states, initial=initial, units=units)[0]
 
     def remove(self, name: str):
         """A copy without element `name` and its bonds, or without bond `name`."""

@@ -16,7 +16,8 @@ Pipeline (:func:`diagnosis.diagnose.diagnose`)
    ``graph_location``: at which junction an extra effort (1-junction) or flow
    (0-junction), or at which input/output a correction, explains it, ranked by
    the share of residual explained.
-4. ``catalogue``: candidate elements by physical name (``KINDS``), each
+4. ``catalogue``: candidate elements by physical name (``KINDS``; each kind one
+   class in the registry :mod:`diagnosis.kinds`), each
    attached to a :class:`Place` as a proper bond-graph element (or an input /
    output transformation for sensor and actuator effects), with parameters,
    guesses and bounds; ``fit``: simulation-error least squares on the training

@@ -7,26 +7,26 @@ guess and bounds scaled from the data) and fixed constants.
 bond-graph element (R with a nonlinear law, C with a changed law, equation
 element, 1-junction branch), an input transformation (the element reading the
 input gets the lag / delay / saturation, with its extra states) or an output
-transformation.  Candidate parameters are graph parameters, so a compiled
-candidate is re-run with new values, and the graph saves to JSON and exports
-to an FMU like any other.
+transformation, made through the graph-editing API of :mod:`bondgraph.editing`.
+Candidate parameters are graph parameters, so a compiled candidate is re-run
+with new values, and the graph saves to JSON and exports to an FMU like any other.
 
-Which kinds at which place (:func:`candidates`):
+The kinds themselves are classes in a registry, one module each, in :mod:`diagnosis.kinds`:
+a :class:`~diagnosis.kinds.base.Kind` says where it may attach (its doors), proposes its
+parameters at a place, builds and explains.  This module turns their proposals into
+candidates.  Which kinds at which place (:func:`candidates`):
 
 * 1-junction: ``coulomb_friction``, ``viscous_friction``, ``coulomb_viscous_friction``,
   ``stribeck_friction``, ``pressure_dependent_friction`` (one per pressure variable
   of the model), ``modulated_friction`` (one per input and per listed effort of
-  another domain, :func:`~diagnosis.catalogue_modulated.modulating_signals`),
+  another domain, :func:`~diagnosis.kinds.modulated_friction.modulating_signals`),
   ``hysteresis``, and for each C on it ``backlash``, ``nonlinear_stiffness``
-  (with the C's own linear value refitted), ``saturation`` (end stops)
-  (:mod:`diagnosis.catalogue_friction`, :mod:`diagnosis.catalogue_modulated`,
-  :mod:`diagnosis.catalogue_storage`);
+  (with the C's own linear value refitted), ``saturation`` (end stops);
 * 0-junction: ``leak``, ``heat_transfer`` (pneumatic / thermal only),
   ``nonlinear_stiffness`` and ``saturation`` (an overflow) for each C on it;
-* 0- and 1-junction: ``constant_load`` (:mod:`diagnosis.catalogue_loads`);
+* 0- and 1-junction: ``constant_load``;
 * input: ``valve_lag``, ``transport_delay``, ``saturation``;
-* output: ``saturation`` (the sensor's range), ``sensor_offset``, ``sensor_gain``
-  (:mod:`diagnosis.catalogue_signals`).
+* output: ``saturation`` (the sensor's range), ``sensor_offset``, ``sensor_gain``.
 """
 from __future__ import annotations
 
@@ -34,42 +34,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bondgraph.io_json import graph_from_dict
+from bondgraph import Param
 
-from .catalogue_common import ParamSpec, add_parameter
-from .catalogue_friction import FRICTION_KINDS, build_friction, explain_friction, make_friction
-from .catalogue_loads import LOAD_KINDS, build_load, explain_load, make_load
-from .catalogue_modulated import (MODULATED_KINDS, build_modulated, explain_modulated, make_modulated,
-                                  modulating_signals)
-from .catalogue_scales import experiment_times, junction_scales
-from .catalogue_signals import (INPUT_KINDS, OUTPUT_KINDS, build_signal, explain_signal, make_input,
-                                make_output)
-from .catalogue_storage import STORAGE_KINDS, build_storage, explain_storage, make_storage
-from .place import Place
+from .catalogue_common import ParamSpec
+from .catalogue_scales import Scales, experiment_times, junction_scales
 from .errors import DiagnosisError, UnknownNameError
+from .kinds import KINDS, REGISTRY, Site, kind_named
+from .kinds.modulated_friction import modulating_signals
+from .place import Place
 
-__all__ = ["KINDS", "ParamSpec", "Candidate", "candidates"]
-
-#: The vocabulary, in its order (issue 6's kinds, then constant_load, then issue 11's friction laws).
-KINDS = ("coulomb_friction", "viscous_friction", "stribeck_friction", "pressure_dependent_friction", "leak",
-         "heat_transfer", "valve_lag", "transport_delay", "hysteresis", "backlash", "nonlinear_stiffness",
-         "saturation", "sensor_offset", "sensor_gain", "constant_load", "coulomb_viscous_friction",
-         "modulated_friction")
-
-_FAMILIES = {**{k: (build_friction, explain_friction) for k in FRICTION_KINDS},
-             **{k: (build_load, explain_load) for k in LOAD_KINDS},
-             **{k: (build_modulated, explain_modulated) for k in MODULATED_KINDS},
-             **{k: (build_storage, explain_storage) for k in STORAGE_KINDS},
-             **{k: (build_signal, explain_signal) for k in INPUT_KINDS + OUTPUT_KINDS}}   # saturation: both
-assert set(_FAMILIES) == set(KINDS)
-
-
-def _family(cand):
-    """(build, explain) of a candidate: by kind, and for ``saturation`` by place (a junction's
-    storage content, an input, an output)."""
-    if cand.kind == "saturation" and cand.place.kind == "junction":
-        return build_storage, explain_storage
-    return _FAMILIES[cand.kind]
+__all__ = ["KINDS", "ParamSpec", "Candidate", "candidates", "site_of"]
 
 
 @dataclass(frozen=True)
@@ -110,8 +84,8 @@ class Candidate:
     starts: tuple = ()
 
     def __post_init__(self):
-        if self.kind not in KINDS:
-            raise DiagnosisError(f"unknown kind {self.kind!r}; expected one of {', '.join(KINDS)}")
+        if self.kind not in REGISTRY:
+            raise DiagnosisError(f"unknown kind {self.kind!r}; expected one of {', '.join(REGISTRY)}")
         if not isinstance(self.place, Place):
             raise DiagnosisError(f"candidate {self.kind}: place must be a Place, got {self.place!r}")
         specs = {p.name: p for p in self.params}
@@ -120,6 +94,12 @@ class Candidate:
                 if name not in specs or not specs[name].lower <= value <= specs[name].upper:
                     raise DiagnosisError(f"candidate {self.kind}: start {start} is not within the bounds of "
                                          f"its parameters {list(specs)}")
+
+    @property
+    def definition(self):
+        """The registered :class:`~diagnosis.kinds.base.Kind` of this candidate (its doors,
+        builder, explanation and features hook)."""
+        return kind_named(self.kind)
 
     @property
     def n_params(self) -> int:
@@ -147,16 +127,7 @@ class Candidate:
         evidence behind it: it is moved to its outer bound (no limit on that side).
         Other kinds are returned unchanged.
         """
-        values = dict(values)
-        if (self.kind == "saturation" and self.place.kind == "input" and experiment is not None
-                and self.place.name in experiment.inputs):
-            u = np.asarray(experiment.inputs[self.place.name], dtype=float)
-            low, high = self.params
-            if not np.any(u < values[low.name]):
-                values[low.name] = low.lower
-            if not np.any(u > values[high.name]):
-                values[high.name] = high.upper
-        return values
+        return self.definition.settle(self, dict(values), experiment)
 
     def build(self, model_graph, values=None):
         """A new graph: `model_graph` with this effect added.
@@ -174,16 +145,15 @@ class Candidate:
             Named ``<model>_<kind>``; the fitted parameters and constants are graph parameters.
         """
         values = self.values_with_guesses(values)
-        data = model_graph.to_dict()
-        data["name"] = f"{model_graph.name}_{self.kind}"
-        data["description"] = f"{model_graph.description} + {self.kind} at {self.place}".strip(" +")
-        for spec in self.params:
-            add_parameter(data, spec.name, values[spec.name], spec.unit, spec.description)
-        for name, value, unit, description in self.constants:
-            add_parameter(data, name, value, unit, description)
-        build, _ = _family(self)
-        build(data, model_graph, self, values)
-        return graph_from_dict(data, source=f"candidate {self.kind} at {self.place}")
+        graph = model_graph.copy(name=f"{model_graph.name}_{self.kind}",
+                                 description=f"{model_graph.description} + {self.kind} at {self.place}".strip(" +"))
+        graph = self.definition.build(graph, self, values)
+        known = graph.parameters()      # a parameter the model has already (a C's own value) is refitted
+        declared = [Param(spec.name, values[spec.name], spec.unit, spec.description)
+                    for spec in self.params if spec.name not in known]
+        declared += [Param(name, value, unit, description) for name, value, unit, description in self.constants]
+        refitted = {spec.name: values[spec.name] for spec in self.params if spec.name in known}
+        return graph.declare(*declared).with_params(refitted)
 
     def explain(self, values=None) -> str:
         """The effect in plain language, with the values and their units."""
@@ -194,8 +164,7 @@ class Candidate:
             unit = units.get(name, "")
             return f"{values[name]:.3g} {unit if unit != '1' else ''}".strip()
 
-        _, explain = _family(self)
-        return explain(self, values, show)
+        return self.definition.explain(self, values, show)
 
     def __str__(self) -> str:
         return f"{self.kind} at {self.place}"
@@ -221,7 +190,8 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None) -
     Returns
     -------
     list of Candidate
-        In the order of :data:`KINDS`.
+        In the order of :data:`KINDS`; at a 1-junction, within a kind, those whose regime
+        expression is among `regime_variables` first.
 
     Examples
     --------
@@ -235,9 +205,24 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None) -
     >>> offset.explain({"offset_x": 0.01})
     'the x sensor reads 0.01 m off: a sensor offset on output x'
     """
+    site = site_of(graph, place, regime_variables=regime_variables, experiment=experiment)
+    out = [Candidate(kind.name, place, list(prop.params), regime=prop.regime, constants=tuple(prop.constants),
+                     target=prop.target, initial=dict(prop.initial), starts=tuple(prop.starts))
+           for kind in REGISTRY.values() if site.door in kind.doors for prop in kind.propose(site)]
+    order = list(REGISTRY)
+    named = set(regime_variables or ()) if site.door == "1" else None
+    # at a 1-junction, within a kind, laws of a located regime variable first (a pressure, a signal)
+    return sorted(out, key=lambda c: (order.index(c.kind), named is not None and bool(named)
+                                      and c.regime is not None and c.regime not in named))
+
+
+def site_of(graph, place: Place, *, regime_variables=None, experiment=None) -> Site:
+    """What the kinds see at `place` (:class:`~diagnosis.kinds.base.Site`): its door, the names
+    taken, and the scales and nominal values read off a simulation of `experiment`; a place the
+    model does not have is an :class:`UnknownNameError` listing those it has."""
     if not isinstance(place, Place):
         raise DiagnosisError(f"place must be a diagnosis.place.Place, got {place!r}")
-    taken = set(graph.names())
+    taken = frozenset(graph.names())
     if place.kind == "junction":
         element = graph.elements.get(place.name)
         if element is None or element.kind not in ("0", "1"):
@@ -245,33 +230,17 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None) -
             raise UnknownNameError("junction", place.name, junctions, model=graph.name)
         signals = modulating_signals(graph, place.name, regime_variables) if element.kind == "1" else {}
         scales, values = junction_scales(graph, place.name, experiment, signals)
-        protos = make_storage(graph, place, scales, taken, values) + make_load(graph, place, scales, taken)
-        if element.kind == "1":
-            friction = make_friction(graph, place, scales, taken, values)
-            v_eps = next(p["constants"][0] for p in friction if p["kind"] == "coulomb_friction")
-            protos = friction + make_modulated(graph, place, scales, taken, values, v_eps) + protos
-            protos = _regime_first(protos, regime_variables)
-    elif place.kind == "input":
+        return Site(graph, place, element.kind, taken, scales, dict(values or {}), regime_variables, signals)
+    span, dt = experiment_times(experiment) if experiment is not None else (1.0, 0.01)
+    if place.kind == "input":
         names = [d.name for d in graph.inputs()]
         if place.name not in names:
             raise UnknownNameError("input", place.name, names, model=graph.name)
-        span, dt = experiment_times(experiment) if experiment is not None else (1.0, 0.01)
         recorded = experiment.inputs.get(place.name) if experiment is not None else None
-        protos = make_input(graph, place, span, dt, recorded, taken)
     else:
         if place.name not in graph.outputs:
             raise UnknownNameError("output", place.name, list(graph.outputs), model=graph.name)
         measured = experiment.outputs.get(place.name) if experiment is not None else None
-        protos = make_output(graph, place, None if measured is None else np.asarray(measured, float), taken)
-    out = [Candidate(p["kind"], place, list(p["params"]), regime=p.get("regime"),
-                     constants=tuple(p.get("constants", ())), target=p.get("target"),
-                     initial=dict(p.get("initial", {})), starts=tuple(p.get("starts", ()))) for p in protos]
-    return sorted(out, key=lambda c: KINDS.index(c.kind))
-
-
-def _regime_first(protos: list[dict], regime_variables) -> list[dict]:
-    """Pressure-dependent frictions whose pressure is among the located regime variables first."""
-    if not regime_variables:
-        return protos
-    named = set(regime_variables)
-    return sorted(protos, key=lambda p: p.get("regime") is not None and p["regime"] not in named)
+        recorded = None if measured is None else np.asarray(measured, float)
+    return Site(graph, place, place.kind, taken, Scales(span=span, dt=dt, from_data=experiment is not None),
+                regime_variables=regime_variables, recorded=recorded)

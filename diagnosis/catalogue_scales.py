@@ -12,7 +12,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import BondcosimError
-from bondgraph.io_json import graph_from_dict
 
 __all__ = ["Scales", "simulate_expressions", "rms", "pressure_variables"]
 
@@ -70,12 +69,9 @@ def simulate_expressions(graph, experiment, expressions: dict) -> dict:
         the nominal model cannot be simulated (the caller falls back to unit scales).
     """
     from .residuals import OutputSimulator
-    data = graph.to_dict()
     labels = {f"scale_{k}": label for k, label in enumerate(expressions)}
-    data["outputs"] = [{"name": key, "expression": str(expressions[label]), "unit": ""}
-                       for key, label in labels.items()]
     try:
-        g = graph_from_dict(data, source=f"scales of {graph.name}")
+        g = graph.with_outputs({key: str(expressions[label]) for key, label in labels.items()})
         result = OutputSimulator(g, experiment, outputs=list(labels))()
     except BondcosimError:
         return {}

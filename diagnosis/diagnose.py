@@ -39,6 +39,7 @@ import numpy as np
 from plants import load as load_model
 
 from .errors import DiagnosisError
+from .rounds import JointRefit, Round
 
 __all__ = ["diagnose", "MIN_PLACE_SHARE", "MAX_FIT_SAMPLES"]
 
@@ -91,28 +92,14 @@ def _merge(windows):
 
 def _with_values(graph, values: dict):
     """A copy of `graph` whose parameters named in `values` take those values (SI)."""
-    from bondgraph.io_json import graph_from_dict
+    from .errors import UnknownNameError
     if not values:
         return graph
-    data = graph.to_dict()
-    for entry in data.get("parameters", []):
-        if entry["name"] in values:
-            entry["value"] = float(values[entry["name"]])
-    for entry in data.get("elements", []):
-        for name, private in (entry.get("params") or {}).items():   # a law's own parameters
-            if name in values and isinstance(private, dict):
-                private["value"] = float(values[name])
-        if entry.get("name") in values:
-            for key in ("value", "stiffness", "compliance", "inertance", "resistance", "modulus"):
-                if isinstance(entry.get(key), (int, float)):
-                    entry[key] = float(values[entry["name"]])
-                    break
-    out = graph_from_dict(data, source=f"{graph.name} with fitted values")
-    params = out.parameters()
-    wrong = [n for n, v in values.items() if n not in params or not np.isclose(params[n].value, v)]
-    if wrong:
-        raise DiagnosisError(f"cannot set fitted parameter(s) {', '.join(wrong)} in graph {graph.name!r}")
-    return out
+    try:
+        return graph.with_params({name: float(value) for name, value in values.items()})
+    except UnknownNameError:
+        wrong = sorted(set(values) - set(graph.parameters()))
+        raise DiagnosisError(f"cannot set fitted parameter(s) {', '.join(wrong)} in graph {graph.name!r}") from None
 
 
 def _fit_window(train, run, x0):
@@ -352,29 +339,28 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                 if chosen.candidate is not None else graph)
         improved_graph = _with_values(base, {k: v for k, v in chosen.values.items() if k not in cand_names})
         improved, y_imp = _holdout_nrmse(OutputSimulator(improved_graph, exp), None, x0, exp, mask)
-    rounds = [{"chosen": chosen, "fits": fits, "reference": dict(nominal), "improved": dict(improved),
-               "seconds": _time.perf_counter() - say.start, "diverged": diverged,
-               "window": [float(fit_part.t[0]), float(fit_part.t[-1])], "floor": floor,
-               "start": start}]
+    rounds = [Round(chosen, fits, dict(nominal), dict(improved), seconds=_time.perf_counter() - say.start,
+                    diverged=diverged, window=[float(fit_part.t[0]), float(fit_part.t[-1])], floor=floor,
+                    start=start)]
 
     if chosen is not None and chosen.candidate is not None:
         while len(rounds) < int(max_effects):
             start = _time.perf_counter()
             found = _further_round(improved_graph, exp, train, held, mask, x0, improved, floor,
                                    rounds, top=int(top), say=say, label=f"round {len(rounds) + 1}")
-            found["seconds"] = _time.perf_counter() - start
+            found.seconds = _time.perf_counter() - start
             rounds.append(found)
-            if found["chosen"] is None:
+            if found.chosen is None:
                 break
-            improved_graph, improved, y_imp = found["graph"], found["improved"], found["y"]
-        effects = [r["chosen"] for r in rounds if r["chosen"] is not None]
+            improved_graph, improved, y_imp = found.graph, found.improved, found.y
+        effects = [r.chosen for r in rounds if r.chosen is not None]
         if len(effects) >= 2:
             say("joint refit", f"{len(effects)} effects")
             joint = _joint_refit(improved_graph, effects, exp, train, held, mask, x0, improved, floor,
                                  uncertain)
-            rounds[-1]["joint"] = joint
-            if joint["kept"]:
-                improved_graph, improved, y_imp = joint["graph"], joint["improved"], joint["y"]
+            rounds[-1].joint = joint
+            if joint.kept:
+                improved_graph, improved, y_imp = joint.graph, joint.improved, joint.y
 
     from .diagnose_text import assemble
     return assemble(graph=graph, rec=rec, exp=exp, held=held, res=res, nominal=nominal,
@@ -406,9 +392,9 @@ def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, 
     Location, candidates at the ``top`` places (minus the kinds already added at
     the same place), fits with the earlier effects' values fixed in the graph,
     and :func:`~diagnosis.fit.choose` against `reference` (the held-out NRMSE of
-    `graph`) with the noise floor `floor`.  Returns a round dict: ``chosen``
-    (CandidateFit or None), ``fits``, ``reference``, ``improved`` and, when
-    something was kept, ``graph`` and ``y`` (its simulated outputs).
+    `graph`) with the noise floor `floor`.  Returns a :class:`~diagnosis.rounds.Round`:
+    ``chosen`` (CandidateFit or None), ``fits``, ``reference``, ``improved``, ``scores`` and,
+    when something was kept, ``graph`` and ``y`` (its simulated outputs).
     """
     from .catalogue import candidates
     from .fit import choose, fit_candidate
@@ -423,11 +409,11 @@ def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, 
     try:
         scores = locate_on_graph(graph, train, x0=x0)
     except (np.linalg.LinAlgError, FloatingPointError) as exc:   # numerics: no further effect
-        return {"chosen": None, "fits": [], "reference": dict(reference), "improved": dict(reference),
-                "scores": [], "note": f"graph location failed: {type(exc).__name__}: {exc}"}
+        return Round(None, [], dict(reference), dict(reference), scores=[],
+                     note=f"graph location failed: {type(exc).__name__}: {exc}")
     places = [s for s in scores[:top] if s.explained >= MIN_PLACE_SHARE]
-    done = {(c.kind, c.place) for r in rounds if r["chosen"] is not None and r["chosen"].candidate is not None
-            for c in getattr(r["chosen"].candidate, "members", (r["chosen"].candidate,))}
+    done = {(c.kind, c.place) for r in rounds if r.chosen is not None and r.chosen.candidate is not None
+            for c in getattr(r.chosen.candidate, "members", (r.chosen.candidate,))}
     cands = [c for s in places for c in candidates(graph, s.place, regime_variables=rv, experiment=train)
              if (c.kind, c.place) not in done]
     fit_part, fit_x0 = _fit_window(train, res.run, x0)
@@ -439,13 +425,12 @@ def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, 
         graph, cand, fit_part, held, x0=fit_x0, through=train), say, f"{label}: fitting")
     say(f"{label}: choosing")
     chosen = choose(reference, fits, noise=floor) if fits else None
-    out = {"chosen": chosen, "fits": fits, "reference": dict(reference), "improved": dict(reference),
-           "scores": scores}
+    out = Round(chosen, fits, dict(reference), dict(reference), scores=scores)
     if chosen is not None:
         names = {p.name for p in chosen.candidate.params}
         better = chosen.candidate.build(graph, {k: v for k, v in chosen.values.items() if k in names})
-        improved, y = _holdout_nrmse(OutputSimulator(better, exp), None, x0, exp, mask)
-        out.update(graph=better, improved=improved, y=y)
+        out.improved, out.y = _holdout_nrmse(OutputSimulator(better, exp), None, x0, exp, mask)
+        out.graph = better
     return out
 
 
@@ -454,9 +439,10 @@ def _joint_refit(graph, effects, exp, train, held, mask, x0, reference, floor, u
     """All accepted effects' parameters (and the `uncertain` ones) refitted together on the
     training part of `graph` (the improved graph), started from their round-by-round values.
 
-    Returns a dict: ``fit`` (CandidateFit), ``reference`` and ``improved`` held-out NRMSE
-    (whole-recording simulations as for every round), ``kept`` (the held-out excess error
-    beyond the noise floor did not grow), ``graph`` and ``y`` of the refitted model.
+    Returns a :class:`~diagnosis.rounds.JointRefit`: ``fit`` (CandidateFit), ``reference`` and
+    ``improved`` held-out NRMSE (whole-recording simulations as for every round), ``kept`` (the
+    held-out excess error beyond the noise floor did not grow), ``graph`` and ``y`` of the
+    refitted model.
     """
     from .fit import excess_error, fit_candidate
     from .residuals import OutputSimulator, residuals
@@ -465,7 +451,7 @@ def _joint_refit(graph, effects, exp, train, held, mask, x0, reference, floor, u
     res = residuals(graph, exp, simulator=OutputSimulator(graph, exp), x0=x0)
     part, part_x0 = _fit_window(train, res.run, x0)
     fit = fit_candidate(graph, None, part, held, uncertain=names, x0=part_x0, through=train)
-    out = {"fit": fit, "reference": dict(reference), "improved": dict(reference), "kept": False}
+    out = JointRefit(fit, dict(reference), dict(reference))
     if not all(np.isfinite(v) for v in fit.values.values()) or not np.all(np.isfinite(
             list(fit.holdout_nrmse.values()))):
         return out
@@ -473,5 +459,5 @@ def _joint_refit(graph, effects, exp, train, held, mask, x0, reference, floor, u
     improved, y = _holdout_nrmse(OutputSimulator(better, exp), None, x0, exp, mask)
     outputs = list(reference)
     kept = excess_error(improved, floor, outputs) <= excess_error(reference, floor, outputs)
-    out.update(improved=improved, kept=kept, graph=better, y=y)
+    out.improved, out.kept, out.graph, out.y = improved, kept, better, y
     return out

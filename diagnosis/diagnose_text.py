@@ -61,7 +61,7 @@ def _effects(fit, refit=None) -> list[dict]:
 def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, rv, scores, fits,
              chosen, improved_graph, locate_regime, timings, rounds=()) -> DiagnosisReport:
     """Build the report (see :func:`diagnosis.diagnose.diagnose` for the arguments' meaning;
-    `rounds`: one dict per round, see :func:`diagnosis.diagnose._further_round`)."""
+    `rounds`: one :class:`~diagnosis.rounds.Round` per round)."""
     n_train = exp.t.size - held.t.size
     units = dict(exp.units)
     finding, regime_values, regime_signal, regime_label = (None, None, None, "")
@@ -70,10 +70,10 @@ def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, r
                                                                       locate_regime, units)
         place = chosen.candidate.place
         attached = place.name if place.kind == "junction" else str(place)
-        joint = next((r["joint"] for r in rounds if "joint" in r), None)
-        refit = joint["fit"].values if joint is not None and joint["kept"] else None
+        joint = next((r.joint for r in rounds if r.joint is not None), None)
+        refit = joint.fit.values if joint is not None and joint.kept else None
         physics = _effects(chosen, refit)
-        physics += [e for r in list(rounds)[1:] if r["chosen"] is not None for e in _effects(r["chosen"], refit)]
+        physics += [e for r in list(rounds)[1:] if r.chosen is not None for e in _effects(r.chosen, refit)]
         location = {"junction": attached, "bond": place.bond or "",
                     "windows": windows, "regime": finding.description if finding else ""}
     else:
@@ -85,8 +85,8 @@ def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, r
         physics = [{"kind": "none", "attached_to": "", "parameters": refit, "explanation": why}]
         location = {"junction": "", "bond": "", "windows": windows, "regime": ""}
     fit = {"holdout": [float(held.t[0]), float(held.t[-1])], "nominal": nominal, "improved": improved}
-    if rounds and "window" in rounds[0]:
-        fit.update(window=rounds[0]["window"], start=rounds[0]["start"])
+    if rounds and rounds[0].window is not None:
+        fit.update(window=rounds[0].window, start=rounds[0].start)
     text = _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen, physics,
                  finding, rounds)
     plot = PlotData(exp.t, dict(exp.outputs), dict(res.run.outputs), dict(y_imp), units,
@@ -95,14 +95,14 @@ def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, r
     report = DiagnosisReport(location, physics, fit, text, improved_graph, None, scores, fits, chosen,
                              rec.notes(), timings(), plot, rounds=list(rounds))
     for i, r in enumerate(report.rounds, 1):
-        report.timings[f"round {i}"] = r["seconds"]
+        report.timings[f"round {i}"] = r.seconds
     return report
 
 
 def _why_none(nominal, fits, rounds) -> str:
     """Which rule of :func:`diagnosis.fit.choose` answered none, with the numbers."""
     from .fit import MIN_GAIN, MIN_SHARE, acceptance, needs_explaining, usable_fits
-    floor = (rounds[0].get("floor") if rounds else None) or {}
+    floor = (rounds[0].floor if rounds else None) or {}
     if not needs_explaining(nominal, floor):
         return "the nominal model's held-out error stays within the measurement noise"
     usable = usable_fits(fits, list(nominal))
@@ -124,7 +124,7 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
     for o in exp.outputs:
         lines.append(f"Output {o}: nominal held-out NRMSE {nominal[o]:.3g} (noise about "
                      f"{res.noise[o]:.3g} {u.get(o, '')}).")
-    diverged = rounds[0].get("diverged") if rounds else ""
+    diverged = rounds[0].diverged if rounds else ""
     if diverged:
         lines.append(f"The nominal model diverges on this recording ({diverged}). That is evidence of missing "
                      f"physics, not an error: with no run to locate along, the candidates of every place "
@@ -138,10 +138,10 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
     if scores:
         best = ", ".join(f"{s.place} {100 * s.explained:.0f} %" for s in scores[:3])
         lines.append(f"Share of the residual a correction explains, by place: {best}.")
-    if fits and rounds and "window" in rounds[0]:
-        a, b = rounds[0]["window"]
+    if fits and rounds and rounds[0].window is not None:
+        a, b = rounds[0].window
         lines.append(f"Candidates were fitted on {a:.4g}-{b:.4g} s of the training part, simulated from "
-                     f"{rounds[0]['start']}.")
+                     f"{rounds[0].start}.")
     m = physics[0]
     if m["kind"] == "none":
         lines.append(f"Missing physics: none - {m['explanation']} "
@@ -171,27 +171,27 @@ def _further_text(rounds, outputs):
     """Lines for rounds 2, 3, ...: each further effect, or why nothing more was added."""
     lines = []
     for i, r in enumerate(rounds, 2):
-        c = r["chosen"]
-        if c is None and r.get("note"):
-            lines.append(f"Round {i}: nothing more - {r['note']}.")
+        c = r.chosen
+        if c is None and r.note:
+            lines.append(f"Round {i}: nothing more - {r.note}.")
             continue
-        if c is None and not r["fits"]:
+        if c is None and not r.fits:
             lines.append(f"Round {i}: nothing more - no place on the improved graph explains a "
                          f"significant share of what is left of the residual.")
             continue
         if c is None:
             lines.append(f"Round {i}: nothing more - no further candidate improves the held-out error "
-                         f"beyond the noise and the price of its parameters ({len(r['fits'])} tried).")
+                         f"beyond the noise and the price of its parameters ({len(r.fits)} tried).")
             continue
         found = _effects(c)
-        gain = ", ".join(f"{o} {r['reference'][o]:.3g} -> {r['improved'][o]:.3g}" for o in outputs)
+        gain = ", ".join(f"{o} {r.reference[o]:.3g} -> {r.improved[o]:.3g}" for o in outputs)
         where = ", ".join(m["attached_to"] for m in found)
         lines.append(f"Also missing (round {i}): {found[0]['kind']} at {where}. "
                      f"{'; '.join(m['explanation'] for m in found)} (held-out NRMSE {gain}).")
-    joint = next((r["joint"] for r in rounds if "joint" in r), None)
+    joint = next((r.joint for r in rounds if r.joint is not None), None)
     if joint is not None:
-        gain = ", ".join(f"{o} {joint['reference'][o]:.3g} -> {joint['improved'][o]:.3g}" for o in outputs)
-        verdict = ("kept; the values above are the joint ones" if joint["kept"]
+        gain = ", ".join(f"{o} {joint.reference[o]:.3g} -> {joint.improved[o]:.3g}" for o in outputs)
+        verdict = ("kept; the values above are the joint ones" if joint.kept
                    else "not kept: it does not lower the held-out error")
         lines.append(f"Joint refit of all effects' parameters on the training part: held-out NRMSE "
                      f"{gain} ({verdict}).")

@@ -11,7 +11,7 @@ from bondgraph.errors import BondcosimError, SimulationError, UnknownNameError
 from bondgraph.errors import UnitError as CoreUnitError
 
 __all__ = ["DiagnosisError", "BenchmarkError", "UnitError", "RecordingError", "UnknownColumnError", "UnknownCaseError",
-           "BondcosimError", "SimulationError", "UnknownNameError", "CoreUnitError"]
+           "UnknownFieldError", "BondcosimError", "SimulationError", "UnknownNameError", "CoreUnitError"]
 
 
 class DiagnosisError(BondcosimError, ValueError):
@@ -80,6 +80,14 @@ class BenchmarkError(DiagnosisError):
 class UnknownCaseError(DiagnosisError, KeyError):
     """A diagnosis case, truth-model parameter or element name that does not exist
     (a ``KeyError`` too, as the lookups it replaces raised)."""
+
+    def __str__(self) -> str:   # KeyError would quote the message
+        return Exception.__str__(self)
+
+
+class UnknownFieldError(DiagnosisError, KeyError):
+    """A field a diagnosis round does not have, or has not set, read by key
+    (a ``KeyError`` too, as the dicts the rounds were raised)."""
 
     def __str__(self) -> str:   # KeyError would quote the message
         return Exception.__str__(self)

@@ -150,9 +150,8 @@ def regime_variables(model, experiment, x_sim) -> dict:
         extra = _augmented_outputs(model, eqs)
         if extra:
             from bondgraph.numerics.evaluate import compile_model
-            from bondgraph.io_json import graph_from_dict
 
-            aug = graph_from_dict(model.to_dict())
+            aug = model.copy()
             for name, (expr, unit, _) in extra.items():
                 aug.add_output(f"regime__{name}", expr, unit=unit)
             aug_eqs = aug.equations()

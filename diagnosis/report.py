@@ -96,10 +96,11 @@ class DiagnosisReport:
     timings : dict str -> float
         Seconds per step.
     plot_data : PlotData
-    rounds : list of dict
-        One per diagnosis round: ``chosen`` (CandidateFit or None), ``fits``,
-        ``reference`` and ``improved`` held-out NRMSE per output, ``seconds``; from
-        round 2 on also ``scores`` (the graph location of what was left).
+    rounds : list of Round
+        One :class:`~diagnosis.rounds.Round` per diagnosis round: ``chosen`` (CandidateFit or
+        None), ``fits``, ``reference`` and ``improved`` held-out NRMSE per output, ``seconds``;
+        from round 2 on also ``scores`` (the graph location of what was left); the last one the
+        ``joint`` refit (:class:`~diagnosis.rounds.JointRefit`) when there were two effects or more.
     """
 
     location: dict

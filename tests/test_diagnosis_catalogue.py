@@ -328,3 +328,68 @@ def test_storage_saturation_is_an_end_stop_at_a_one_junction_and_an_overflow_at_
     built = overflow.build(tanks, {"q_max_tank1": 0.012})
     _differs_by(built, tanks, "V1", -S("k_of_tank1") * sp.Max(S("V1") - S("q_max_tank1"), 0))
     assert "overflows" in overflow.explain({"q_max_tank1": 0.012})
+
+
+def test_a_new_kind_is_one_class_in_the_registry(monkeypatch):
+    """The example of docs/diagnosis.md ("Adding a kind"): registered, it is offered at a
+    1-junction and adds exactly its effort."""
+    from bondgraph import R as Resistor
+    from diagnosis.catalogue_common import fresh_name, junction_domain, junction_units
+    from diagnosis.kinds import REGISTRY, Kind, Proposal
+    from diagnosis.kinds.base import hang
+
+    class QuadraticDrag(Kind):
+        name = "quadratic_drag"
+        doors = ("1",)
+
+        def propose(self, site):
+            e_unit, f_unit = junction_units(site.graph, site.name)
+            E, V = site.scales.effort, site.scales.flow
+            return [Proposal((ParamSpec(fresh_name(site.taken, f"c_d_{site.name}"), 0.1 * E / V ** 2, 0.0,
+                                        100 * E / V ** 2, f"{e_unit}/({f_unit})^2", f"drag coefficient at {site.name}"),))]
+
+        def build(self, graph, cand, values):
+            j = cand.place.name
+            return hang(graph, Resistor(f"drag_{j}", effort=f"{cand.params[0].name}*f*Abs(f)",
+                                        domain=junction_domain(graph, j)), j)
+
+        def explain(self, cand, values, show):
+            return f"the motion at {cand.place.name} meets a drag of {show(cand.params[0].name)} times its speed squared"
+
+    monkeypatch.setitem(REGISTRY, "quadratic_drag", QuadraticDrag())
+    msd = library.build("mass-spring-damper")
+    drag = _one(msd, Place("junction", "v_mass"), "quadratic_drag")
+    assert [c.kind for c in candidates(msd, Place("output", "x"))] == ["saturation", "sensor_offset", "sensor_gain"]
+    v = S("p_m") / S("m")
+    _differs_by(drag.build(msd, {"c_d_v_mass": 0.2}), msd, "p_m", -S("c_d_v_mass") * v * sp.Abs(v))
+    assert "0.2" in drag.explain({"c_d_v_mass": 0.2})
+
+
+def test_the_registry_is_the_vocabulary_and_refuses_bad_kinds():
+    from diagnosis.kinds import DOORS, MODULES, REGISTRY, Kind, register
+    assert tuple(REGISTRY) == KINDS and len(MODULES) == len(KINDS)
+    assert all(k.name == name and set(k.doors) <= set(DOORS) for name, k in REGISTRY.items())
+    msd = library.build("mass-spring-damper")
+    assert all("1" in c.definition.doors for c in candidates(msd, Place("junction", "v_mass")))
+    assert all(c.definition.features(c) is None for c in candidates(msd, Place("output", "x")))
+
+    class Twice(Kind):
+        name, doors = "leak", ("0",)
+
+    class Nowhere(Kind):
+        name, doors = "levitation", ("ceiling",)
+
+    with pytest.raises(DiagnosisError, match="'leak' is registered twice"):
+        register(Twice)
+    with pytest.raises(DiagnosisError, match="doors must be some of"):
+        register(Nowhere)
+    assert "levitation" not in REGISTRY
+
+
+def test_laws_of_a_located_regime_variable_come_first_within_their_kind():
+    pam = library.build("pam")
+    seesaw = Place("junction", "seesaw")
+    modulated = lambda rv: [c.regime for c in candidates(pam, seesaw, regime_variables=rv)  # noqa: E731
+                            if c.kind == "modulated_friction"]
+    assert modulated(None)[:2] == ["u1", "u2"]
+    assert modulated({"u2": None})[:2] == ["u2", "u1"]

@@ -218,7 +218,7 @@ def test_leak_recovered_in_a_pneumatic_tank(rng):
 
 
 def test_added_actuator_states_start_where_the_input_rested():
-    from diagnosis.catalogue_signals import resting_input
+    from diagnosis.kinds.signal_common import resting_input
     pam = library.build("pam-locked")
     assert resting_input(pam, "u1", np.array([2.5, 2.5])) == 0.0      # valves closed: P = P_out at rest
     msd = library.build("mass-spring-damper")

@@ -194,7 +194,7 @@ def test_a_friction_is_modulated_by_no_input_that_drives_its_own_junction():
     """The force on the msd's mass, the rod position imposed on the cylinder's piston and the
     drivetrain's torques drive the mechanics; the cylinder's pressure (another domain, through the
     piston area) and the motor's voltage may set a friction level."""
-    from diagnosis.catalogue_modulated import modulating_signals
+    from diagnosis.kinds.modulated_friction import modulating_signals
     at = lambda model, j: list(modulating_signals(library.build(model), j))  # noqa: E731
     assert at("mass-spring-damper", "v_mass") == []
     assert at("pneumatic-cylinder", "piston") == ["p"]

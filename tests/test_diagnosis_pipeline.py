@@ -189,11 +189,11 @@ def test_one_effect_second_round_answers_nothing_more(coulomb):
     is round 1's (one effect, same held-out numbers)."""
     from diagnosis.diagnose import MIN_PLACE_SHARE
     first, second = coulomb.rounds
-    assert first["chosen"] is coulomb.chosen and second["chosen"] is None
-    assert len(second["scores"]) == 3                                # it did look, everywhere
-    assert max(s.explained for s in second["scores"]) < MIN_PLACE_SHARE
+    assert first.chosen is coulomb.chosen and second.chosen is None
+    assert len(second.scores) == 3                                # it did look, everywhere
+    assert max(s.explained for s in second.scores) < MIN_PLACE_SHARE
     assert coulomb.scores[0].explained > 0.9                         # round 1: 92-100 % by place
-    assert second["reference"] == coulomb.fit["improved"] == first["improved"]
+    assert second.reference == coulomb.fit["improved"] == first.improved
     assert "Round 2: nothing more - no place on the improved graph" in coulomb.text
     assert coulomb.timings["round 2"] > 0 and coulomb.timings["round 1"] > 0
 
@@ -214,8 +214,8 @@ def test_two_effects_friction_then_sensor_offset(two_effects):
     assert physics[1]["parameters"]["offset_x"] == pytest.approx(OFFSET, rel=0.1)
     assert report.location["junction"] == "v_mass"                   # the first effect's place
     first, second = report.rounds
-    assert second["reference"] == first["improved"]
-    assert second["improved"]["x"] < 0.5 * first["improved"]["x"] < 0.5 * first["reference"]["x"]
+    assert second.reference == first.improved
+    assert second.improved["x"] < 0.5 * first.improved["x"] < 0.5 * first.reference["x"]
     # both effects: down to about the noise floor, sigma_quantised / std(x)
     assert report.fit["improved"]["x"] < 3 * np.hypot(SIGMA, QUANTUM / np.sqrt(12)) / 0.7
     assert "Also missing (round 2): sensor_offset at output x" in report.text
@@ -251,8 +251,8 @@ def test_max_effects_one_is_round_one_alone(two_effects_csv, two_effects, capsys
     first = two_effects.rounds[0]
     assert [m["kind"] for m in data["missing_physics"]] == ["coulomb_friction"]
     assert data["missing_physics"][0]["parameters"] == pytest.approx(
-        {"Fc_v_mass": first["chosen"].values["Fc_v_mass"]}, rel=1e-12)
-    assert data["fit"]["improved"] == pytest.approx(first["improved"], rel=1e-12)
+        {"Fc_v_mass": first.chosen.values["Fc_v_mass"]}, rel=1e-12)
+    assert data["fit"]["improved"] == pytest.approx(first.improved, rel=1e-12)
     assert data["fit"]["improved"]["x"] > 2 * np.hypot(SIGMA, QUANTUM / np.sqrt(12)) / 0.7
 
 
@@ -312,3 +312,13 @@ def test_bad_arguments(small_csv):
         with pytest.raises(BondcosimError, match=f"max_effects must be a positive whole number.*{bad!r}"):
             diagnose("mass-spring-damper", small_csv(GOOD), inputs=["F=force"], outputs=["x=pos"],
                      max_effects=bad)
+
+
+def test_rounds_are_dataclasses_that_still_read_by_key():
+    from diagnosis.rounds import JointRefit, Round
+    joint = JointRefit(None, {"x": 0.2}, {"x": 0.1}, kept=True)
+    r = Round(None, [], {"x": 0.2}, {"x": 0.2}, scores=[], note="graph location failed", joint=joint)
+    assert r.note == r["note"] == r.get("note") and r["joint"]["kept"] and "joint" in r
+    assert "graph" not in r and r.get("window") is None and "window" not in r.keys()
+    with pytest.raises(KeyError, match="no field 'graph' set; set are fits, reference"):
+        r["graph"]

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from bondgraph import (C, GraphError, I, One, ParameterError, PortError, R, Se, TF, UnknownNameError, Zero,
+from bondgraph import (C, GraphError, I, One, Param, ParameterError, PortError, R, Se, TF, UnknownNameError, Zero,
                        BondGraph)
 from bondgraph.symbols import sym
 from plants import library
@@ -149,4 +149,80 @@ def test_editing_errors_name_the_culprit(graph):
         graph.insert(TF("n", 2.0), at="v")
     with pytest.raises(PortError, match=r"insert_on_bond\(\) takes a junction or a two-port; R 'r'"):
         graph.insert_on_bond("to_b", R("r", 1.0))
+    unchanged(graph)
+
+
+def test_declare_adds_graph_wide_parameters(graph):
+    from bondgraph import DuplicateNameError
+    loaded = graph.insert(R("load", effort="F0"), at="v").declare(Param("F0", 0.3, "N"))
+    assert loaded.parameters()["F0"].value == 0.3
+    assert_equations(loaded, ["p_m", "q_c"], [F - sym("F0") - b * p / m - q / c, p / m])
+    with pytest.raises(DuplicateNameError, match="F0"):
+        loaded.declare(Param("F0", 1.0))
+    unchanged(graph)
+
+
+def test_insert_a_junction_and_an_element_with_a_named_port(graph):
+    """A 1-junction hung on v carries a damper b2 (same flow); an equation element with one
+    port m adds its effort -k1 * (its flow)."""
+    from bondgraph import EquationElement
+    branch = graph.insert(One("w"), at="v", bond="to_w").insert(R("b2", 0.1), at="w")
+    assert branch.bonds["to_w"].tail.element == "v" and branch.bonds["to_w"].head.element == "w"
+    assert_equations(branch, ["p_m", "q_c"], [F - (b + sym("b2")) * p / m - q / c, p / m])
+    eq = graph.insert(EquationElement("drag", ports={"m": "in"}, outputs={"e_m": "2*f_m"}), at="v", bond="to_drag")
+    assert eq.bonds["to_drag"].head.port == "m"
+    assert_equations(eq, ["p_m", "q_c"], [F - (b + 2) * p / m - q / c, p / m])
+    unchanged(graph)
+
+
+def test_with_law_rewrites_a_storage_law_in_sympy(graph):
+    k3 = sym("k3")
+    hard = graph.with_law("c", lambda old, q: old + sp.Symbol("k3") * q ** 3)
+    hard = hard.declare(Param("k3", 2.0))
+    assert hard.parameters()["c"].value == 0.5            # the linear value is still used: kept
+    assert_equations(hard, ["p_m", "q_c"], [F - b * p / m - q / c - k3 * q ** 3, p / m])
+    cubic = graph.with_law("c", "k3*q**3").declare(Param("k3", 2.0))
+    assert "c" not in cubic.parameters()                   # no longer used: dropped
+    assert_equations(cubic, ["p_m", "q_c"], [F - b * p / m - k3 * q ** 3, p / m])
+    twice = cubic.with_law("c", lambda old, q: old.subs(q, 2 * q))   # a law read back and edited again
+    assert_equations(twice, ["p_m", "q_c"], [F - b * p / m - 8 * k3 * q ** 3, p / m])
+    with pytest.raises(GraphError, match="neither"):
+        graph.with_law("b", "q")
+    unchanged(graph)
+
+
+def test_with_output_and_with_element(graph):
+    g = graph.copy()
+    g.add_output("x", "q_c", unit="m")
+    off = g.with_output("x", lambda y: y + sp.Symbol("dx")).declare(Param("dx", 0.1))
+    assert off.outputs["x"].unit == "m"
+    assert sp.simplify(off.equations().h[0] - (q + sym("dx"))) == 0
+    assert g.outputs["x"].expression == "q_c"
+    stiff = graph.with_element("c", value=0.25, description="a stiffer spring")
+    assert stiff.elements["c"].description == "a stiffer spring" and stiff.parameters()["c"].value == 0.25
+    unchanged(graph)
+
+
+def test_route_input_makes_the_source_read_an_expression_and_own_new_states(graph):
+    x, tau = sym("x_lag"), sym("tau")
+    sat = graph.route_input("F", "Min(F, 1)").declare()
+    assert sat.elements["F"].kind == "MSe" and [d.name for d in sat.inputs()] == ["F"]
+    assert_equations(sat, ["p_m", "q_c"], [sp.Min(F, 1) - b * p / m - q / c, p / m])
+    lag = graph.route_input("F", "x_lag", states={"x_lag": "(F - x_lag)/tau"}, initial={"x_lag": 0.0},
+                            units={"x_lag": "N"})
+    lag.add_parameter(Param("tau", 0.1, "s"))
+    assert lag.elements["F"].kind == "Eq" and lag.bonds["from_F"].tail.port == "out"
+    assert_equations(lag, ["x_lag", "p_m", "q_c"], [(F - x) / tau, x - b * p / m - q / c, p / m])
+    with pytest.raises(UnknownNameError, match="input 'G'"):
+        graph.route_input("G", "G")
+    unchanged(graph)
+
+
+def test_with_outputs_replaces_the_outputs(graph):
+    g = graph.copy()
+    g.add_output("x", "q_c", unit="m")
+    probes = g.with_outputs({"force": "e_to_c", "speed": ("f_to_m", "m/s")})
+    assert list(probes.outputs) == ["force", "speed"] and probes.outputs["speed"].unit == "m/s"
+    assert [sp.simplify(h - want) for h, want in zip(probes.equations().h, [q / c, p / m])] == [0, 0]
+    assert list(g.outputs) == ["x"]
     unchanged(graph)

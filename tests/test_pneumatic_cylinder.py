@@ -159,10 +159,10 @@ def test_end_to_end_diagnosis_finds_seal_friction_and_a_force_offset():
     # friction alone (0.092)
     assert (force["kind"], force["attached_to"]) == ("sensor_gain", "output F")
     first, second = report.rounds
-    offset_fit = next(f for f in second["fits"] if f.candidate.kind == "sensor_offset")
-    assert offset_fit.holdout_nrmse["F"] < 0.75 * second["reference"]["F"]
-    assert second["improved"]["F"] < 0.75 * second["reference"]["F"]
-    assert second["joint"]["kept"] and data["fit"]["improved"] == second["joint"]["improved"]
+    offset_fit = next(f for f in second.fits if f.candidate.kind == "sensor_offset")
+    assert offset_fit.holdout_nrmse["F"] < 0.75 * second.reference["F"]
+    assert second.improved["F"] < 0.75 * second.reference["F"]
+    assert second.joint.kept and data["fit"]["improved"] == second.joint.improved
     # the friction law c0 + c1 (p - p_ref) (N, Pa), p_ref the mean training pressure
     c0, c1 = friction["parameters"]["c0_piston"], friction["parameters"]["c1_piston"]
     p_ref = report.improved_graph.parameters()["p_ref_piston"].value
@@ -190,8 +190,8 @@ def test_end_to_end_diagnosis_finds_seal_friction_and_a_force_offset():
     t0, t1 = data["fit"]["holdout"]
     bound = bind(rec, pneumatic_cylinder(), **BINDINGS)
     held = bound.t >= t0
-    friction_only = first["chosen"].candidate.build(pneumatic_cylinder(), {
-        k: first["chosen"].values[k] for k in ("c0_piston", "c1_piston")})
+    friction_only = first.chosen.candidate.build(pneumatic_cylinder(), {
+        k: first.chosen.values[k] for k in ("c0_piston", "c1_piston")})
     rmse, whole = {}, {}
     for label, graph in (("nominal", pneumatic_cylinder()), ("friction", friction_only),
                          ("both", report.improved_graph)):

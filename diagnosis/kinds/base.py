@@ -1,0 +1,162 @@
+"""What every kind of missing physics is: a :class:`Kind`, registered under its name.
+
+A kind says where it may attach (:attr:`Kind.doors`: ``"1"`` or ``"0"`` for a 1- or 0-junction,
+``"input"``, ``"output"``), proposes its parameters at one place (:meth:`Kind.propose`, from a
+:class:`Site`: the model, the place and the scales read off the data), builds the model with the
+effect through the graph-editing API of :mod:`bondgraph.editing` (:meth:`Kind.build`) and says
+what a fit found in words (:meth:`Kind.explain`); :meth:`Kind.settle` may release what the
+training data cannot tell.  :meth:`Kind.features` is the hook for the
+feature regression (what a kind's effect looks like in the residual); it answers None here.
+
+:func:`register` adds a kind to :data:`REGISTRY` (by name, in registration order: the catalogue
+order, :data:`diagnosis.catalogue.KINDS`).  :mod:`diagnosis.kinds` imports one module per kind.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import ClassVar
+
+from ..catalogue_common import ParamSpec
+from ..catalogue_scales import Scales
+from ..errors import DiagnosisError
+from ..place import Place
+
+__all__ = ["Kind", "Site", "Proposal", "DOORS", "REGISTRY", "register", "kind_named", "hang"]
+
+#: The places a kind may attach to: a 1-junction, a 0-junction, a recorded input, a measured output.
+DOORS = ("1", "0", "input", "output")
+
+
+@dataclass(frozen=True)
+class Site:
+    """What a kind sees of its place when it proposes parameters.
+
+    Attributes
+    ----------
+    graph : BondGraph
+        The nominal model.
+    place : Place
+        Where the candidate attaches.
+    door : str
+        One of :data:`DOORS`: the junction's type, or the place's kind.
+    taken : frozenset of str
+        Names the model already uses (new names are made fresh against them).
+    scales : Scales
+        Typical magnitudes at a junction (:func:`~diagnosis.catalogue_scales.junction_scales`);
+        unit scales and the experiment's span and step elsewhere.
+    values : dict
+        Nominal values at a junction (``e_<bond>``, ``state:<name>``, ``pressure:<label>``,
+        ``signal:<label>``), from the nominal simulation; empty without data.
+    regime_variables : dict or None
+        Located regime variables (:func:`diagnosis.locate.regime_variables`).
+    signals : dict
+        Signals that may modulate a friction at a 1-junction (label -> expression).
+    recorded : ndarray or None
+        The recorded input (input sites) or the measured output (output sites), model units.
+    """
+
+    graph: object
+    place: Place
+    door: str
+    taken: frozenset
+    scales: Scales = Scales()
+    values: dict = field(default_factory=dict)
+    regime_variables: dict | None = None
+    signals: dict = field(default_factory=dict)
+    recorded: object = None
+
+    @property
+    def name(self) -> str:
+        """The place's name (junction, input or output)."""
+        return self.place.name
+
+    @cached_property
+    def shared(self) -> dict:
+        """Values the kinds at this site compute once and share (e.g. an input's resting value)."""
+        return {}
+
+
+@dataclass(frozen=True)
+class Proposal:
+    """One candidate a kind proposes at a site: its fitted parameters and what else it needs
+    (the fields of :class:`~diagnosis.catalogue.Candidate` but kind and place)."""
+
+    params: tuple
+    constants: tuple = ()
+    regime: str | None = None
+    target: str | None = None
+    initial: dict = field(default_factory=dict)
+    starts: tuple = ()
+
+    def __post_init__(self):
+        if not all(isinstance(p, ParamSpec) for p in self.params):
+            raise DiagnosisError(f"a proposal's params must be ParamSpec objects, got {self.params!r}")
+
+
+class Kind:
+    """One kind of missing physics.  Subclass, set :attr:`name` and :attr:`doors`, write
+    :meth:`propose`, :meth:`build` and :meth:`explain`, and decorate with :func:`register`."""
+
+    #: the kind's name, one word of the catalogue's vocabulary
+    name: ClassVar[str] = ""
+    #: where it may attach: some of :data:`DOORS`
+    doors: ClassVar[tuple] = ()
+
+    def propose(self, site: Site) -> list[Proposal]:
+        """The candidates of this kind at `site` (none where the domain does not fit)."""
+        raise NotImplementedError
+
+    def build(self, graph, cand, values: dict):
+        """`graph` with the effect of `cand` at its place, through the editing API (a new graph).
+
+        `values` holds every fitted parameter's value; the candidate's parameters and constants
+        are declared on the result by :meth:`Candidate.build <diagnosis.catalogue.Candidate.build>`,
+        so the new elements simply use their names.
+        """
+        raise NotImplementedError
+
+    def explain(self, cand, values: dict, show) -> str:
+        """The effect in plain language (`show(name)` formats a value with its unit)."""
+        raise NotImplementedError
+
+    def settle(self, cand, values: dict, experiment) -> dict:
+        """Fitted `values` with what the training data cannot tell released (unchanged here)."""
+        return values
+
+    def features(self, cand, site: Site | None = None):
+        """What this kind's effect looks like in the residual, for the feature regression
+        (None: no features declared)."""
+        return None
+
+    def __repr__(self) -> str:
+        return f"<kind {self.name} at {', '.join(self.doors)}>"
+
+
+#: name -> Kind instance, in the catalogue order
+REGISTRY: dict[str, Kind] = {}
+
+
+def register(cls):
+    """Class decorator: add an instance of the :class:`Kind` subclass `cls` to :data:`REGISTRY`."""
+    if not (isinstance(cls, type) and issubclass(cls, Kind)) or not cls.name.isidentifier():
+        raise DiagnosisError(f"register() takes a Kind subclass with a name, got {cls!r}")
+    if cls.name in REGISTRY:
+        raise DiagnosisError(f"kind {cls.name!r} is registered twice")
+    bad = [d for d in cls.doors if d not in DOORS]
+    if not cls.doors or bad:
+        raise DiagnosisError(f"kind {cls.name!r}: doors must be some of {DOORS}, got {cls.doors!r}")
+    REGISTRY[cls.name] = cls()
+    return cls
+
+
+def kind_named(name: str) -> Kind:
+    """The registered kind called `name`."""
+    if name not in REGISTRY:
+        raise DiagnosisError(f"unknown kind {name!r}; expected one of {', '.join(REGISTRY)}")
+    return REGISTRY[name]
+
+
+def hang(graph, element, junction: str):
+    """`graph` with `element` bonded to `junction` by a bond ``b_<element>``."""
+    return graph.insert(element, at=junction, bond=f"b_{element.name}")

@@ -1,0 +1,24 @@
+"""``coulomb_friction`` at a 1-junction: an R with :math:`e = F_c \\tanh(f / v_\\varepsilon)`
+(:mod:`~diagnosis.kinds.friction_common` for the smoothing flow)."""
+from __future__ import annotations
+
+from .base import Kind, register
+from .friction_common import friction_r, level, sign, smoothing_flow, with_level_starts
+
+
+@register
+class CoulombFriction(Kind):
+    name = "coulomb_friction"
+    doors = ("1",)
+
+    def propose(self, site):
+        return [with_level_starts([level(site, "Fc", f"Coulomb friction level at {site.name}")],
+                                  constants=(smoothing_flow(site),))]
+
+    def build(self, graph, cand, values):
+        return friction_r(graph, cand, f"{cand.params[0].name}*{sign(cand)}")
+
+    def explain(self, cand, values, show):
+        j = cand.place.name
+        return (f"the motion at {j} loses about {show(cand.params[0].name)} whenever it moves, whatever its "
+                f"speed: Coulomb friction at the {j} 1-junction")

@@ -1,0 +1,28 @@
+"""``coulomb_viscous_friction`` at a 1-junction: an R with
+:math:`e = F_c \\tanh(f / v_\\varepsilon) + b f`, both levels fitted together as one law (a
+lubricated guide or a ball screw has both; fitted one at a time, the first absorbs part of the
+second)."""
+from __future__ import annotations
+
+from .base import Kind, register
+from .friction_common import friction_r, level, sign, smoothing_flow, viscous, with_level_starts
+
+
+@register
+class CoulombViscousFriction(Kind):
+    name = "coulomb_viscous_friction"
+    doors = ("1",)
+
+    def propose(self, site):
+        return [with_level_starts([level(site, "Fc", f"Coulomb friction level at {site.name}"), viscous(site)],
+                                  constants=(smoothing_flow(site),))]
+
+    def build(self, graph, cand, values):
+        fc, b = (p.name for p in cand.params)
+        return friction_r(graph, cand, f"{fc}*{sign(cand)} + {b}*f")
+
+    def explain(self, cand, values, show):
+        j = cand.place.name
+        fc, b = (p.name for p in cand.params)
+        return (f"the motion at {j} loses about {show(fc)} whenever it moves plus {show(b)} times its "
+                f"speed: Coulomb and viscous friction together at the {j} 1-junction")

@@ -1,0 +1,48 @@
+"""``hysteresis`` at a 1-junction: Dahl friction [1]_, an equation element with the friction
+effort :math:`z` as state, :math:`\\dot z = \\sigma (f - |f| z / F_h)`: elastic (stiffness
+:math:`\\sigma`) for small reversals, :math:`\\pm F_h` in steady sliding, rate-independent
+hysteresis loops in between.
+
+References
+----------
+.. [1] P. R. Dahl, "Solid friction damping of mechanical vibrations", AIAA Journal 14(12), 1976,
+   eq. (1) with exponent 1.
+"""
+from __future__ import annotations
+
+from bondgraph import EquationElement
+
+from ..catalogue_common import ParamSpec, junction_units
+from .base import Kind, hang, register
+from .friction_common import displacement_unit, namer, with_level_starts
+
+
+@register
+class Hysteresis(Kind):
+    name = "hysteresis"
+    doors = ("1",)
+
+    def propose(self, site):
+        j, E, X = site.name, site.scales.effort, site.scales.displacement
+        e_unit, f_unit = junction_units(site.graph, j)
+        name = namer(site)
+        return [with_level_starts([
+            ParamSpec(name("Fh"), 0.1 * E, 1e-3 * E, 10 * E, e_unit, f"Dahl friction level at {j}"),
+            ParamSpec(name("sigma_dahl"), 2.0 * E / X, 2e-3 * E / X, 2e3 * E / X,
+                      f"{e_unit}/{displacement_unit(f_unit)}", f"Dahl pre-sliding stiffness at {j}")])]
+
+    def build(self, graph, cand, values):
+        j = cand.place.name
+        fh, sigma = (p.name for p in cand.params)
+        state = f"F_dahl_{j}"
+        element = EquationElement(f"hysteresis_{j}", ports={"m": "in"}, outputs={"e_m": state},
+                                  states={state: f"{sigma}*(f_m - Abs(f_m)*{state}/{fh})"}, initial={state: 0.0},
+                                  units={state: junction_units(graph, j)[0]},
+                                  description=f"Dahl hysteretic friction at {j}")
+        return hang(graph, element, j)
+
+    def explain(self, cand, values, show):
+        j = cand.place.name
+        fh, sigma = (p.name for p in cand.params)
+        return (f"the motion at {j} meets a friction of up to {show(fh)} that builds up elastically "
+                f"({show(sigma)}) after each reversal: hysteretic (Dahl) friction at {j}")

@@ -1,0 +1,40 @@
+"""``leak`` at a 0-junction: an R from the junction (common effort = pressure ``e``) to the
+ambient, :math:`f = c_{leak} (e - P_{amb})`; for pneumatic pseudo-bonds a mass flow proportional
+to the pressure difference.  :math:`P_{amb}` is fixed: 101325 Pa for a pneumatic junction whose
+mean pressure exceeds 50 kPa (absolute pressures), else 0 (gauge pressures, other domains)."""
+from __future__ import annotations
+
+from bondgraph import R
+
+from ..catalogue_common import ParamSpec, fresh_name, junction_domain, junction_units
+from .base import Kind, Proposal, hang, register
+
+P_AMBIENT = 101325.0  # Pa
+
+
+@register
+class Leak(Kind):
+    name = "leak"
+    doors = ("0",)
+
+    def propose(self, site):
+        j, graph = site.name, site.graph
+        e_unit, f_unit = junction_units(graph, j)
+        e = site.values.get(f"e_{graph.bonds_of(j)[0][0].name}")
+        e_mean = float(e.mean()) if e is not None else 0.0
+        p_amb = P_AMBIENT if junction_domain(graph, j) == "pneumatic" and e_mean > 5e4 else 0.0
+        dev, F = max(abs(e_mean - p_amb), site.scales.effort), site.scales.flow
+        return [Proposal(
+            (ParamSpec(fresh_name(site.taken, f"c_leak_{j}"), 0.1 * F / dev, 0.0, 100 * F / dev,
+                       f"({f_unit})/({e_unit})" if e_unit else "", f"leak conductance at {j}"),),
+            constants=((fresh_name(site.taken, f"P_amb_{j}"), p_amb, e_unit, f"ambient pressure the leak at {j} vents to"),))]
+
+    def build(self, graph, cand, values):
+        j = cand.place.name
+        return hang(graph, R(f"leak_{j}", flow=f"{cand.params[0].name}*(e - {cand.constants[0][0]})",
+                             domain=junction_domain(graph, j), description=f"leak from {j} to the ambient"), j)
+
+    def explain(self, cand, values, show):
+        j = cand.place.name
+        return (f"the chamber at {j} loses {show(cand.params[0].name)} of flow per unit of pressure above "
+                f"ambient: a leak at {j}")

@@ -1,0 +1,69 @@
+"""``nonlinear_stiffness`` of a C at a junction: its law gets a cubic term,
+:math:`e = \\Phi(q) + k_3 q^3`, and its own linear value is refitted with it (a linear C's
+stiffness or compliance, named as the element; a linear term added to a law): a linear model
+identified from data carries the cubic term's average in its linear value.  One candidate per C
+on the junction."""
+from __future__ import annotations
+
+import sympy as sp
+
+from ..catalogue_common import ParamSpec, fresh_name, junction_units
+from .base import Kind, Proposal, register
+from .storage_common import capacitors, displacement_scale, units_of
+
+
+@register
+class NonlinearStiffness(Kind):
+    name = "nonlinear_stiffness"
+    doors = ("1", "0")
+
+    def propose(self, site):
+        e_unit, _ = junction_units(site.graph, site.name)
+        out = []
+        for element in capacitors(site):
+            c = element.name
+            s_unit, q_unit = units_of(element)
+            X = displacement_scale(site, element)
+            k_lin = site.scales.effort / X
+            out.append(Proposal(target=c, params=(
+                ParamSpec(fresh_name(site.taken, f"k3_{c}"), 0.0, -100 * k_lin / X ** 2, 100 * k_lin / X ** 2,
+                          f"{e_unit}/{q_unit}^3" if q_unit else s_unit, f"cubic stiffness coefficient of {c}"),
+                _linear_value(element, site.taken, k_lin))))
+        return out
+
+    def build(self, graph, cand, values):
+        """The C's law plus ``k3*q**3``; a linear C keeps its value (refitted under its own name
+        by :meth:`Candidate.build <diagnosis.catalogue.Candidate.build>`), a law gets ``dk*q``."""
+        c = graph.elements[cand.target]
+        k3, linear = (sp.Symbol(spec.name) for spec in cand.params)
+        refit_own = c.value is not None and linear.name == c.value.name
+
+        def law(old, q):
+            return old + (0 if refit_own else linear * q) + k3 * q ** 3
+        return graph.with_law(cand.target, law, description=f"{c.description} (with nonlinear stiffness)".strip())
+
+    def explain(self, cand, values, show):
+        j = cand.place.name
+        k3, linear = cand.params
+        cubic = values.get(k3.name, 0.0)
+        word = "stiffens" if cubic > 0 else ("softens" if cubic < 0 else "changes its stiffness")
+        was = f"{linear.guess:.3g} {linear.unit if linear.unit != '1' else ''}".strip()
+        return (f"the spring {cand.target} at {j} {word} with deflection (cubic term {show(k3.name)}; "
+                f"{linear.description.replace(' (refitted)', '')} refitted with it: {show(linear.name)}, "
+                f"nominal {was}): nonlinear stiffness of {cand.target}")
+
+
+def _linear_value(element, taken, k_lin: float) -> ParamSpec:
+    """The C's own linear value, refitted with its cubic term (within a factor 3): its
+    stiffness or compliance parameter (named as the element) for a linear C, else a linear term
+    ``dk_<C> q`` added to its law (within 3 `k_lin` either way).  A zero stiffness (a free mass)
+    may become up to 10 `k_lin`, the junction's effort over the C's displacement scale."""
+    c = element.name
+    if element.value is not None and element.stiffness_form and float(element.value.value) == 0.0:
+        return ParamSpec(c, 0.0, 0.0, 10 * k_lin, element.value.unit, f"linear stiffness of {c} (refitted)")
+    if element.value is not None and float(element.value.value) > 0:
+        v = float(element.value.value)
+        quantity = "stiffness" if element.stiffness_form else "compliance"
+        return ParamSpec(c, v, v / 3, 3 * v, element.value.unit, f"linear {quantity} of {c} (refitted)")
+    return ParamSpec(fresh_name(taken, f"dk_{c}"), 0.0, -3 * k_lin, 3 * k_lin, units_of(element)[0],
+                     f"change of the linear stiffness of {c} (refitted)")

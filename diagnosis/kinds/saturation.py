@@ -1,0 +1,144 @@
+"""``saturation``: something that stops at a limit, at three kinds of place.
+
+* a C's content :math:`q` at a junction (the storage is full, an axis is at its end), one
+  candidate per C whose content moves in the nominal simulation: at a 1-junction, end stops, an R
+  whose effort :math:`k_{stop} (\\max(q - q_{max}, 0) + \\min(q - q_{min}, 0))` pushes back beyond
+  either limit; at a 0-junction, an overflow, an R whose flow :math:`k_{of} \\max(q - q_{max}, 0)`
+  spills what exceeds the limit.  The stiffnesses are fixed, not fitted: :math:`k_{stop}` 30 times
+  the spring's stiffness scale, :math:`k_{of}` one fifth of a sample's worth per second, so the
+  content stays within a few per cent of the limit;
+* an input: :math:`\\min(\\max(u, u_{min}), u_{max})` (routed as in
+  :mod:`~diagnosis.kinds.signal_common`);
+* an output, the sensor's range: :math:`\\min(\\max(y, y_{min}), y_{max})`.
+"""
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+from bondgraph import R
+
+from ..catalogue_common import ParamSpec, fresh_name, junction_domain
+from .base import Kind, Proposal, hang, register
+from .signal_common import input_record
+from .storage_common import capacitors, stiffness_scale, units_of
+
+
+@register
+class Saturation(Kind):
+    name = "saturation"
+    doors = ("1", "0", "input", "output")
+
+    def propose(self, site):
+        if site.door == "input":
+            return [_input_range(site)]
+        if site.door == "output":
+            return [_sensor_range(site)]
+        out = []
+        for element in capacitors(site):
+            q = site.values.get(f"state:{element.state}")
+            if q is not None and np.ptp(q) > 0 and element.state:
+                out.append(_content_limit(site, element, q))
+        return out
+
+    def build(self, graph, cand, values):
+        p = [spec.name for spec in cand.params]
+        name = cand.place.name
+        if cand.place.kind == "output":
+            lo, hi = sp.Symbol(p[0]), sp.Symbol(p[1])
+            return graph.with_output(name, lambda y: sp.Min(sp.Max(y, lo), hi))
+        if cand.place.kind == "input":
+            return graph.route_input(name, f"Min(Max({name}, {p[0]}), {p[1]})")
+        q, k = cand.regime, cand.constants[0][0]
+        if graph.elements[name].kind == "0":
+            law = {"flow": f"{k}*Max({q} - {p[0]}, 0)"}
+        else:
+            law = {"effort": f"{k}*(Max({q} - {p[1]}, 0) + Min({q} - {p[0]}, 0))"}
+        return hang(graph, R(f"limit_{cand.target}", domain=junction_domain(graph, name), **law,
+                             description=f"limits of the content of {cand.target}"), name)
+
+    def settle(self, cand, values, experiment):
+        """An input limit that no training sample goes beyond has no evidence behind it: it is
+        moved to its outer bound (no limit on that side)."""
+        if cand.place.kind == "input" and experiment is not None and cand.place.name in experiment.inputs:
+            u = np.asarray(experiment.inputs[cand.place.name], dtype=float)
+            low, high = cand.params
+            if not np.any(u < values[low.name]):
+                values[low.name] = low.lower
+            if not np.any(u > values[high.name]):
+                values[high.name] = high.upper
+        return values
+
+    def explain(self, cand, values, show):
+        name = cand.place.name
+        p = [spec.name for spec in cand.params]
+        if cand.place.kind == "output":
+            return (f"the {name} sensor reads nothing beyond {show(p[0])} .. {show(p[1])}: "
+                    f"the range of the {name} sensor (saturation of output {name})")
+        if cand.place.kind == "input":
+            return f"the input {name} has no effect beyond {show(p[0])} .. {show(p[1])}: saturation of input {name}"
+        if len(p) == 1:
+            return (f"the storage {cand.target} at {name} holds no more than {show(p[0])}: what exceeds it "
+                    f"overflows (saturation of {cand.target})")
+        return (f"the content of {cand.target} at {name} stays within {show(p[0])} .. {show(p[1])}: end stops "
+                f"(saturation of {cand.target})")
+
+
+def _content_limit(site, element, q) -> Proposal:
+    """End stops (1-junction) or an overflow (0-junction) of C `element` (content trajectory `q`)."""
+    c, taken = element.name, site.taken
+    stiffness_unit, q_unit = units_of(element)
+    lo, hi = float(np.min(q)), float(np.max(q))
+    width = hi - lo
+    q_max = fresh_name(taken, f"q_max_{c}")
+    if site.door == "0":
+        k = fresh_name(taken, f"k_of_{c}")
+        return Proposal(target=c, regime=element.state,
+                        constants=((k, 1.0 / (5.0 * site.scales.dt), "1/s", f"overflow rate of {c} beyond its limit"),),
+                        starts=tuple({q_max: lo + f * width} for f in (0.95, 0.8, 0.6)),
+                        params=(ParamSpec(q_max, hi + 1e-3 * width, lo, hi + width, q_unit,
+                                          f"content of {c} beyond which it overflows"),))
+    q_min, k = fresh_name(taken, f"q_min_{c}"), fresh_name(taken, f"k_stop_{c}")
+    return Proposal(target=c, regime=element.state,
+                    constants=((k, 30.0 * stiffness_scale(site, element), stiffness_unit,
+                                f"stiffness of the end stops of {c}"),),
+                    starts=tuple([{q_min: lo - 1e-3 * width, q_max: lo + f * width} for f in (0.9, 0.7)]
+                                 + [{q_min: lo + f * width, q_max: hi + 1e-3 * width} for f in (0.1, 0.3)]),
+                    params=(ParamSpec(q_min, lo - 1e-3 * width, lo - width, hi, q_unit, f"lower end stop of {c}"),
+                            ParamSpec(q_max, hi + 1e-3 * width, lo, hi + width, q_unit, f"upper end stop of {c}")))
+
+
+def _input_range(site) -> Proposal:
+    """Limits of an input, started one side at a time then both, from the recorded quantiles."""
+    u, rec = site.name, input_record(site)
+    lo, hi, width, mid, values = rec.lo, rec.hi, rec.width, rec.mid, rec.values
+    q_lo, q_hi = (float(v) for v in np.percentile(values, [5, 95]))
+    q_lo, q_hi = min(q_lo, mid - 1e-3 * width), max(q_hi, mid + 1e-3 * width)
+    u_min, u_max = fresh_name(site.taken, f"u_min_{u}"), fresh_name(site.taken, f"u_max_{u}")
+    limits = [(float(np.quantile(values, q)), float(np.quantile(values, 1 - q))) for q in (0.02, 0.1, 0.25)]
+    limits = [(a, b) for a, b in limits if a < mid < b]
+    # one-sided starts first: on a tie (no sample beyond a limit) the limit stays inactive
+    starts = [{u_min: lo - 1e-3 * width, u_max: b} for _, b in limits]
+    starts += [{u_min: a, u_max: hi + 1e-3 * width} for a, _ in limits]
+    starts += [{u_min: a, u_max: b} for a, b in limits]
+    # a recording of a saturated input has many samples AT the limit: its median may be the limit
+    # itself, so each limit may range over the whole recorded span
+    return Proposal(starts=tuple(starts), params=(
+        ParamSpec(u_min, q_lo, lo - width, hi, rec.unit, f"lower saturation of {u}"),
+        ParamSpec(u_max, q_hi, lo, hi + width, rec.unit, f"upper saturation of {u}")))
+
+
+def _sensor_range(site) -> Proposal:
+    """The range of a sensor, from the measured output."""
+    y, measured = site.name, site.recorded
+    unit = site.graph.outputs[y].unit
+    width = float(np.ptp(measured)) if measured is not None and np.ptp(measured) > 0 else 1.0
+    values = np.asarray(measured, dtype=float) if measured is not None else np.array([-1.0, 1.0])
+    lo, hi = float(np.min(values)), float(np.max(values))
+    y_min, y_max = fresh_name(site.taken, f"y_min_{y}"), fresh_name(site.taken, f"y_max_{y}")
+    # a clipped sensor reads its limit on many samples: start each side at the recorded extreme
+    # (inactive) and at a little inside it, one side at a time
+    starts = [{y_min: lo - 1e-3 * width, y_max: hi - f * width} for f in (0.0, 0.05)]
+    starts += [{y_min: lo + f * width, y_max: hi + 1e-3 * width} for f in (0.0, 0.05)]
+    return Proposal(starts=tuple(starts), params=(
+        ParamSpec(y_min, lo - 1e-3 * width, lo - width, hi, unit, f"lower end of the {y} sensor's range"),
+        ParamSpec(y_max, hi + 1e-3 * width, lo, hi + width, unit, f"upper end of the {y} sensor's range")))

@@ -1,0 +1,95 @@
+"""What the actuator (input) and sensor (output) kinds share.
+
+The recorded input ``u`` stays the model's input; the elements that used it see an effective
+input instead (:meth:`bondgraph.editing.GraphEditing.route_input`).  Added states start where the
+input was before the experiment (:func:`resting_input`: the value at which the nominal initial
+state is at rest, usually 0), so the first command step goes through the effect too.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import BondcosimError
+
+__all__ = ["InputRecord", "input_record", "resting_input", "trial_times"]
+
+
+@dataclass(frozen=True)
+class InputRecord:
+    """The recorded input at an input site (or a unit span about its default without data)."""
+
+    values: np.ndarray
+    unit: str
+    rest: float
+
+    @property
+    def lo(self) -> float:
+        return float(np.min(self.values))
+
+    @property
+    def hi(self) -> float:
+        return float(np.max(self.values))
+
+    @property
+    def width(self) -> float:
+        return max(self.hi - self.lo, 1e-12)
+
+    @property
+    def mid(self) -> float:
+        return float(np.median(self.values))
+
+
+def input_record(site) -> InputRecord:
+    """The input of an input `site`: recorded values, unit and resting value (computed once per site)."""
+    if "input" not in site.shared:
+        site.shared["input"] = _input_record(site)
+    return site.shared["input"]
+
+
+def _input_record(site) -> InputRecord:
+    decl = next(d for d in site.graph.inputs() if d.name == site.name)
+    recorded = site.recorded
+    values = (np.asarray(recorded, dtype=float) if recorded is not None
+              else np.array([decl.default - 1.0, decl.default + 1.0]))
+    return InputRecord(values, decl.unit, resting_input(site.graph, site.name, recorded))
+
+
+def trial_times(site) -> list[float]:
+    """Time constants or delays the fit starts from: 0.5 to 32 samples, under a quarter of the record."""
+    return [k * site.scales.dt for k in (0.5, 2, 8, 32) if k * site.scales.dt < site.scales.span / 4]
+
+
+def resting_input(graph, u: str, recorded) -> float:
+    """The value of input `u` before the experiment.
+
+    Of 0, the input's default and its first recorded value, the one at which the
+    nominal initial state is closest to rest: the rates :math:`|f_i(x_0, u)|` (other
+    inputs at their defaults) are normalised per state by their largest value over
+    the three, summed, and the smallest sum wins (ties: in that order).  The first
+    recorded value when the model cannot be evaluated, or when the rates do not depend
+    on the input at all (nothing says where it rested: the actuator is taken to have
+    followed its first command).
+    """
+    from bondgraph.numerics.evaluate import compile_model
+    decl = next(d for d in graph.inputs() if d.name == u)
+    first = float(recorded[0]) if recorded is not None else float(decl.default)
+    options = (0.0, float(decl.default), first)
+    try:
+        eqs = graph.equations()
+        model = compile_model(eqs, backend="numpy")
+        base = np.array([float(eqs.input_defaults.get(n, 0.0)) for n in model.input_names])
+        trials = np.tile(base, (len(options), 1))
+        trials[:, list(model.input_names).index(u)] = options
+        x0 = np.tile(model.default_state, (len(options), 1))
+        rates = np.abs(np.asarray(model.f(x0, trials), dtype=float)).reshape(len(options), -1)
+    except (BondcosimError, ValueError, TypeError):
+        return first
+    if not np.isfinite(rates).all():
+        return first
+    peak = rates.max(axis=0)
+    score = (rates[:, peak > 0] / peak[peak > 0]).sum(axis=1)
+    if np.allclose(rates, rates[0], rtol=1e-12, atol=0.0):
+        return first
+    return options[int(np.argmin(score))]

@@ -1,0 +1,34 @@
+"""What the kinds acting on a C element share: the C's displacement scale, unit and stiffness."""
+from __future__ import annotations
+
+import numpy as np
+
+from bondgraph.params import DOMAINS
+
+from ..catalogue_common import junction_elements
+
+__all__ = ["capacitors", "displacement_scale", "stiffness_scale", "units_of"]
+
+
+def capacitors(site) -> list:
+    """The C elements bonded to the site's junction, in bond order."""
+    return [element for element, _ in junction_elements(site.graph, site.name) if element.kind == "C"]
+
+
+def displacement_scale(site, element) -> float:
+    """RMS of the C's displacement in the nominal simulation (the junction's scale without one)."""
+    q = site.values.get(f"state:{element.state}")
+    scale = float(np.sqrt(np.mean(q ** 2))) if q is not None else 0.0
+    return scale if scale > 0 and np.isfinite(scale) else site.scales.displacement
+
+
+def stiffness_scale(site, element) -> float:
+    """The junction's effort scale over the C's displacement scale."""
+    return site.scales.effort / displacement_scale(site, element)
+
+
+def units_of(element) -> tuple[str, str]:
+    """(stiffness unit, displacement unit) of a C's domain ("" outside the known domains)."""
+    if element.domain in DOMAINS:
+        return DOMAINS[element.domain].stiffness, DOMAINS[element.domain].displacement
+    return "", ""

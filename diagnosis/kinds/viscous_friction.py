@@ -1,0 +1,22 @@
+"""``viscous_friction`` at a 1-junction: an R with :math:`e = b f`."""
+from __future__ import annotations
+
+from .base import Kind, register
+from .friction_common import friction_r, viscous, with_level_starts
+
+
+@register
+class ViscousFriction(Kind):
+    name = "viscous_friction"
+    doors = ("1",)
+
+    def propose(self, site):
+        return [with_level_starts([viscous(site)])]
+
+    def build(self, graph, cand, values):
+        return friction_r(graph, cand, f"{cand.params[0].name}*f")
+
+    def explain(self, cand, values, show):
+        j = cand.place.name
+        return (f"the motion at {j} is braked in proportion to its speed ({show(cand.params[0].name)}): "
+                f"viscous friction at {j}")

@@ -1,0 +1,108 @@
+"""The state of the diagnosis rounds, typed: one :class:`Round` per round and the
+:class:`JointRefit` of all effects' parameters.
+
+:func:`diagnosis.diagnose.diagnose` keeps a list of rounds (``report.rounds``): the first round's
+fits and choice on the nominal model, then one per further effect looked for on the improved
+graph.  Fields are read as attributes (``round.chosen``); reading them by key
+(``round["chosen"]``, ``round.get("note")``, ``"joint" in round``) still works for code written
+when the rounds were dicts, a key being present when its field is set.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from .errors import UnknownFieldError
+
+__all__ = ["Round", "JointRefit"]
+
+
+class _ReadByKey:
+    """Read-only mapping access to a dataclass's fields that are set (not None)."""
+
+    def __getitem__(self, key: str):
+        if key not in self:
+            raise UnknownFieldError(f"{type(self).__name__} has no field {key!r} set; set are "
+                                    f"{', '.join(self.keys()) or '(none)'}")
+        return getattr(self, key)
+
+    def __contains__(self, key) -> bool:
+        return key in self._fields() and getattr(self, key) is not None
+
+    def get(self, key: str, default=None):
+        return getattr(self, key) if key in self else default
+
+    def keys(self):
+        return [k for k in self._fields() if k in self]
+
+    @classmethod
+    def _fields(cls) -> tuple:
+        return tuple(f.name for f in dataclasses.fields(cls))
+
+
+@dataclass
+class JointRefit(_ReadByKey):
+    """All accepted effects' parameters refitted together (:func:`diagnosis.diagnose._joint_refit`).
+
+    Attributes
+    ----------
+    fit : CandidateFit
+        The joint fit.
+    reference, improved : dict
+        Held-out NRMSE per output before and after (``improved`` is ``reference`` when the fit failed).
+    kept : bool
+        Whether the held-out excess error beyond the noise floor did not grow (the joint values kept).
+    graph : BondGraph or None
+        The refitted model; ``y``: its simulated outputs.
+    """
+
+    fit: object
+    reference: dict
+    improved: dict
+    kept: bool = False
+    graph: object = None
+    y: object = None
+
+
+@dataclass
+class Round(_ReadByKey):
+    """One diagnosis round.
+
+    Attributes
+    ----------
+    chosen : CandidateFit or None
+        The effect kept, or None ("nothing more").
+    fits : list of CandidateFit
+        Every fit of the round.
+    reference, improved : dict
+        Held-out NRMSE per output of the model the round started from, and with ``chosen``.
+    seconds : float
+        Time the round took.
+    scores : list of PlaceScore, optional
+        Graph location of further rounds (what is left of the residual).
+    note : str, optional
+        Why a further round stopped early (a numerical failure of its graph location).
+    graph, y : optional
+        The improved graph of a further round that kept an effect, and its simulated outputs.
+    joint : JointRefit, optional
+        The joint refit, on the last round when there were two effects or more.
+    diverged, window, floor, start : optional
+        First round only: why the nominal simulation diverged ("" if it did not), the training
+        window the fits used (first and last time, s), the noise floor per output, and the state
+        the fits started from, in words.
+    """
+
+    chosen: object
+    fits: list
+    reference: dict
+    improved: dict
+    seconds: float = 0.0
+    scores: list | None = None
+    note: str | None = None
+    graph: object = None
+    y: object = None
+    joint: JointRefit | None = None
+    diverged: str | None = None
+    window: list | None = None
+    floor: dict | None = None
+    start: str | None = None

@@ -73,6 +73,7 @@ from .catalogue_storage import P_AMBIENT
 from .errors import BondcosimError
 
 __all__ = ["KIND_FEATURES", "SIGN_FRACTION", "FEATURE_PRICE", "MAX_SELECTED", "KindEvidence", "FeatureEvidence",
+           "evidence_lookup", "prune_candidates", "prefer_by_evidence",
            "feature_evidence", "regress_kinds", "dahl_state"]
 
 #: kind -> (junction kinds it applies at, the feature columns in words, the parameters it is
@@ -179,10 +180,13 @@ class FeatureEvidence:
 
     def for_candidate(self, candidate) -> KindEvidence | None:
         """The evidence of `candidate`'s kind (and variant) here, or None when it has no features."""
-        if candidate is None or (candidate.place.kind, candidate.place.name) != (self.place.kind, self.place.name):
-            return None
-        key = candidate.regime if candidate.kind in ("pressure_dependent_friction", "modulated_friction") \
-            else candidate.target
+        place = getattr(candidate, "place", None)
+        if place is None or hasattr(candidate, "members") or (place.kind, place.name) != (self.place.kind,
+                                                                                           self.place.name):
+            return None          # a twin group (several places) has no single place's evidence
+        key = getattr(candidate, "regime", None) if candidate.kind in ("pressure_dependent_friction",
+                                                                      "modulated_friction") \
+            else getattr(candidate, "target", None)
         for k in self.kinds:
             if k.kind == candidate.kind and (k.variant is None or k.variant == key):
                 return k
@@ -525,3 +529,73 @@ def _evidence_at(graph, p, experiment, x0, regime_variables, d_hat):
     kinds = sorted(best.values(), key=lambda k: k.score)
     chosen = [f"{k[0]} ({k[1]})" if k[1] else k[0] for k in selected]
     return FeatureEvidence(p, kinds, chosen, float(joint), junction_unit(graph, p.name))
+
+
+#: pruning: only where the best kind's features explain at least this validated share ...
+PRUNE_FROM = 0.5
+#: ... a candidate whose kind's features leave more than PRUNE_FACTOR times what the best
+#: leave unexplained, and more than PRUNE_FLOOR of the residual, is not fitted (the
+#: PRUNE_KEEP best kinds always are)
+PRUNE_FACTOR, PRUNE_FLOOR, PRUNE_KEEP = 10.0, 0.25, 3
+#: a near-tie in :func:`diagnosis.fit.choose` goes to another kind when its features leave at
+#: most this share of what the default winner's leave unexplained (and explain 2 % more)
+PREFER_RATIO = 0.5
+
+
+def evidence_lookup(evidence: dict):
+    """``fit_or_candidate -> KindEvidence or None`` over the evidence of several places."""
+    def lookup(item):
+        cand = getattr(item, "candidate", item)
+        place = getattr(cand, "place", None)
+        if place is None:
+            return None
+        for ev in evidence.values():
+            if (ev.place.kind, ev.place.name) == (place.kind, place.name):
+                return ev.for_candidate(cand)
+        return None
+    return lookup
+
+
+def prune_candidates(cands: list, evidence: dict) -> tuple[list, list]:
+    """The candidates worth a fit by simulation, and those the feature evidence rules out.
+
+    At a place whose best significant kind explains at least :data:`PRUNE_FROM` of the
+    residual, a candidate with features is dropped when it is not among the
+    :data:`PRUNE_KEEP` best and its features leave more than :data:`PRUNE_FACTOR` times
+    the best's unexplained share and more than :data:`PRUNE_FLOOR`.  Candidates without
+    features (inputs, outputs, heat transfer, twins) are always kept.
+    """
+    keep, dropped = [], []
+    for cand in cands:
+        place = getattr(cand, "place", None)
+        place_ev = next((e for e in evidence.values() if place is not None
+                         and (e.place.kind, e.place.name) == (place.kind, place.name)), None)
+        ev = place_ev.for_candidate(cand) if place_ev is not None else None
+        best = place_ev.best() if place_ev is not None else None
+        if ev is None or best is None or best.share < PRUNE_FROM or ev in place_ev.kinds[:PRUNE_KEEP]:
+            keep.append(cand)
+            continue
+        left, best_left = 1.0 - ev.share, max(1.0 - best.share, 0.0)
+        (dropped if left > max(PRUNE_FACTOR * best_left, PRUNE_FLOOR) else keep).append(cand)
+    return keep, dropped
+
+
+def prefer_by_evidence(default, near: list, lookup):
+    """Among `near` (fits within a parameter's price of the best held-out score), the fit the
+    feature evidence prefers to `default`, or `default`.
+
+    Another kind is preferred only when both have evidence, its features are significant,
+    leave at most :data:`PREFER_RATIO` of what `default`'s leave unexplained and explain at
+    least 2 % more of the residual; among such, the lowest penalised feature score.
+    """
+    base = lookup(default)
+    if base is None:
+        return default
+    better = []
+    for f in near:
+        ev = lookup(f)
+        if (f is default or ev is None or not ev.significant or f.candidate.kind == default.candidate.kind
+                or ev.share < base.share + 0.02 or 1.0 - ev.share > PREFER_RATIO * (1.0 - base.share)):
+            continue
+        better.append((ev.score, f))
+    return min(better, key=lambda x: x[0])[1] if better else default

@@ -107,3 +107,66 @@ def test_dahl_state_against_its_closed_form():
     t = np.linspace(0.0, 0.1, 51)
     z = dahl_state(np.full(t.size, 0.2), t, 30.0)
     assert np.allclose(z, 1.0 - np.exp(-30.0 * 0.2 * t), atol=1e-12)
+
+
+def _fit(kind, holdout, n_params=1, place=PLACE, **kw):
+    from types import SimpleNamespace
+
+    from diagnosis.fit import CandidateFit
+    cand = SimpleNamespace(kind=kind, place=place, regime=None, target=kw.get("target"))
+    return CandidateFit(cand, {}, {"x": holdout}, {"x": holdout}, n_params, True, "")
+
+
+def _place_evidence(shares):
+    """FeatureEvidence at v_mass with the given validated shares (kind -> share)."""
+    from diagnosis.features import FEATURE_PRICE, KIND_FEATURES, KindEvidence
+    kinds = [KindEvidence(k, None, "", s, (1 - s) * (1 + FEATURE_PRICE) ** KIND_FEATURES[k][2], {}, s > 0.02)
+             for k, s in shares.items()]
+    return FeatureEvidence(PLACE, sorted(kinds, key=lambda k: k.score))
+
+
+def test_choose_gives_a_near_tie_to_the_kind_whose_features_explain_more():
+    from diagnosis.features import evidence_lookup
+    from diagnosis.fit import choose
+    coulomb = _fit("coulomb_friction", 0.100, 1)
+    pressure = _fit("pressure_dependent_friction", 0.098, 2)    # within one parameter's price
+    evidence = {PLACE: _place_evidence({"coulomb_friction": 0.90, "pressure_dependent_friction": 0.99})}
+    assert choose({"x": 0.5}, [coulomb, pressure]) is coulomb                  # parsimony alone
+    chosen = choose({"x": 0.5}, [coulomb, pressure], evidence=evidence_lookup(evidence))
+    assert chosen is pressure and chosen.extra["preferred_over"] == str(coulomb.candidate)
+    # features that explain about as much do not overturn the held-out choice
+    close = {PLACE: _place_evidence({"coulomb_friction": 0.97, "pressure_dependent_friction": 0.98})}
+    assert choose({"x": 0.5}, [coulomb, pressure], evidence=evidence_lookup(close)) is coulomb
+    # nor does evidence for a fit outside the near-tie (30 % worse held-out score)
+    far = _fit("pressure_dependent_friction", 0.125, 2)
+    assert choose({"x": 0.5}, [coulomb, far], evidence=evidence_lookup(evidence)) is coulomb
+
+
+def test_pruning_keeps_the_best_kinds_and_candidates_without_features():
+    from types import SimpleNamespace
+
+    from diagnosis.features import prune_candidates
+    shares = {"coulomb_friction": 0.99, "viscous_friction": 0.95, "hysteresis": 0.9,
+              "constant_load": 0.01, "backlash": 0.3}
+    evidence = {PLACE: _place_evidence(shares)}
+    cands = [SimpleNamespace(kind=k, place=PLACE, regime=None, target=None) for k in shares]
+    cands.append(SimpleNamespace(kind="sensor_offset", place=Place("output", "x"), regime=None, target=None))
+    kept, dropped = prune_candidates(cands, evidence)
+    assert [c.kind for c in dropped] == ["constant_load", "backlash"]
+    assert [c.kind for c in kept] == ["coulomb_friction", "viscous_friction", "hysteresis", "sensor_offset"]
+    weak = {PLACE: _place_evidence({k: 0.4 * s for k, s in shares.items()})}   # best under 50 %: no pruning
+    assert len(prune_candidates(cands, weak)[0]) == len(cands)
+
+
+def test_diagnose_reports_the_feature_regression(tmp_path):
+    from diagnosis.diagnose import diagnose
+    exp = _truth(lambda x, v: 0.3 * np.tanh(v / 0.01), seed=6)
+    path = tmp_path / "rec.csv"
+    path.write_text("t,F,x\n" + "\n".join(f"{a:.6f},{f:.9g},{y:.9g}" for a, f, y in
+                                          zip(exp.t, exp.inputs["F"], exp.outputs["x"])) + "\n")
+    report = diagnose("mass-spring-damper", str(path), inputs=["F=F:N"], outputs=["x=x:m"], max_effects=1)
+    assert report.kind == "coulomb_friction"
+    (features,) = report.to_json()["features"]
+    assert features["place"] == "junction v_mass" and features["selected"] == ["coulomb_friction"]
+    assert features["kinds"][0]["coefficients"]["sign(v)"] == pytest.approx(0.3, rel=0.05)
+    assert "Feature regression at junction v_mass" in report.text

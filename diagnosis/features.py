@@ -4,29 +4,30 @@ Graph location (:mod:`diagnosis.graph_location`) estimates, at each junction, a 
 extra effort (1-junction) or flow (0-junction) :math:`d(t)` from the linearised
 response of the outputs to it.  Here :math:`d` is restricted instead to the physics
 each kind of the catalogue would add there: a few *feature signals*
-:math:`\\phi_{k,j}(t)` computed from the nominal simulation (from the same start as
-the fits) at the junction,
+:math:`\\phi_{k,j}(t)` computed at the junction along the run *corrected* by the
+location's estimate :math:`\\hat d` (from the same start as the location),
 
 .. math::
 
     d(t) = \\sum_j \\beta_{k,j}\\, \\phi_{k,j}(t), \\qquad
     r \\approx S_{\\phi_k} \\beta_k,
 
-where :math:`r` stacks the nominal residuals of the measured outputs (weighted by
-:math:`1/\\sigma_o`, the measurement noise) and :math:`S_{\\phi_k}` the linearised
-responses of the outputs to each feature signal injected at the junction
-(:class:`~diagnosis.graph_location_linear.LinearisedResponse`, the location's own
-machinery).  :math:`\\beta_k` is fitted by least squares on the first 70 % of the
+where :math:`r = r_c + S_c \\hat d` is the nominal residual linearised about the corrected
+run (:math:`r_c` the corrected run's residual; a Gauss-Newton step from the estimate),
+weighted by :math:`1/\\sigma_o` (the measurement noise), and :math:`S_{\\phi_k}` the
+linearised responses of the outputs to each feature signal injected at the junction
+along the corrected run (:class:`~diagnosis.graph_location_linear.LinearisedResponse`,
+the location's own machinery).  :math:`\\beta_k` is fitted by least squares on the first 70 % of the
 rows and judged on the last 30 % (a time split): the *validated share* of kind k is
 :math:`1 - \\mathrm{SSE}_{val}(k) / \\mathrm{SSE}_{val}(0)`.  Kinds are ranked by the
 penalised validation error :math:`\\mathrm{SSE}_{val}(k) (1 + \\rho)^{m_k}`
-(:data:`FEATURE_PRICE` per feature column); a forward selection over kind groups
+(:data:`FEATURE_PRICE` per parameter, :math:`m_k` the kind's parameters in :data:`KIND_FEATURES`); a forward selection over kind groups
 (at most :data:`MAX_SELECTED`) says which kinds together explain the estimate.
 
 The features per kind (:data:`KIND_FEATURES`, the one table), with
 :math:`v` the junction's common flow (a velocity at a mechanical 1-junction),
-:math:`s = \\tanh(v / v_\\varepsilon)` the catalogue's smoothed sign
-(:math:`v_\\varepsilon` 5 % of the RMS flow), :math:`q` the content of a C on the
+:math:`s = \\tanh(v / v_\\varepsilon)` a nearly sharp sign (:math:`v_\\varepsilon`
+:data:`SIGN_FRACTION` = 1 % of the RMS flow), :math:`q` the content of a C on the
 junction and :math:`e` the common effort of a 0-junction:
 
 * ``coulomb_friction`` :math:`s`; ``viscous_friction`` :math:`v`;

@@ -140,6 +140,11 @@ class KindEvidence:
     significant : bool
         The share is at least :data:`MIN_SHARE` and the drop of the weighted validation
         SSE at least :data:`MIN_DROP_PER_COLUMN` noise variances per column.
+    excess_share : float
+        Validated share of the residual *beyond the measurement noise* explained (the
+        weighted validation SSE less one noise variance per value), at most 1.
+    drop : float
+        Drop of the weighted validation SSE, in noise variances.
     """
 
     kind: str
@@ -149,6 +154,8 @@ class KindEvidence:
     score: float
     coefficients: dict
     significant: bool
+    excess_share: float = 0.0
+    drop: float = 0.0
 
     @property
     def label(self) -> str:
@@ -202,13 +209,14 @@ class FeatureEvidence:
         return {"place": str(self.place), "unit": self.unit, "selected": list(self.selected),
                 "selected_share": _finite(self.selected_share),
                 "kinds": [{"kind": k.kind, "variant": k.variant or "", "detail": k.detail,
-                           "share": _finite(k.share), "significant": bool(k.significant),
+                           "share": _finite(k.share), "excess_share": _finite(k.excess_share),
+                           "significant": bool(k.significant),
                            "coefficients": {n: _finite(v) for n, v in k.coefficients.items()}}
                           for k in self.kinds]}
 
     def summary(self, n: int = 4) -> str:
-        """One line: the best kinds' validated shares and the selection."""
-        shown = ", ".join(f"{k.label} {100 * max(k.share, 0.0):.0f} %" for k in self.kinds[:n])
+        """One line: the best kinds' validated shares of the residual beyond the noise, and the selection."""
+        shown = ", ".join(f"{k.label} {100 * max(k.excess_share, 0.0):.0f} %" for k in self.kinds[:n])
         chosen = " + ".join(self.selected) if self.selected else "none above the noise"
         return f"{shown}; selected: {chosen}"
 
@@ -359,10 +367,12 @@ def regress_kinds(responses: dict, r, w, *, price: float = FEATURE_PRICE, valida
 
     Returns
     -------
-    (dict key -> (share, score, beta, significant), list of keys selected, float)
+    (dict key -> (share, score, beta, significant, excess, drop), list of keys selected, float)
         Per group: validated share, penalised score (relative to the no-correction SSE),
-        coefficients fitted on all rows (in the responses' sign) and significance; the
-        forward selection's groups and their joint validated share.
+        coefficients fitted on all rows (in the responses' sign), significance, the share of
+        the validation SSE *beyond the noise* explained (the noise: one variance per weighted
+        value) and the drop of the weighted validation SSE (noise variances); the forward
+        selection's groups and their joint validated share.
     """
     rows, ny = r.shape
     split = int(round((1.0 - validation) * rows))
@@ -382,6 +392,8 @@ def regress_kinds(responses: dict, r, w, *, price: float = FEATURE_PRICE, valida
         err = b_val - (A_val / scale) @ coef
         return float(err @ err), int(rank)
 
+    noise = float(b_val.size)
+    excess0 = max(sse0 - noise, MIN_DROP_PER_COLUMN)
     out = {}
     for key, (_, S) in responses.items():
         if not np.isfinite(S).all() or S.shape[0] != rows:
@@ -392,12 +404,12 @@ def regress_kinds(responses: dict, r, w, *, price: float = FEATURE_PRICE, valida
         share = 1.0 - sse / sse0
         k = (parameters or {}).get(key, S.shape[2])
         significant = share >= MIN_SHARE and sse0 - sse >= MIN_DROP_PER_COLUMN * max(rank, 1)
-        out[key] = (share, sse / sse0 * (1.0 + price) ** k, beta, bool(significant))
+        excess = min((sse0 - sse) / excess0, 1.0)
+        out[key] = (share, sse / sse0 * (1.0 + price) ** k, beta, bool(significant), float(excess), sse0 - sse)
     # forward selection: a kind is added while it lowers the penalised score, drops the SSE by at
     # least MIN_DROP_PER_COLUMN noise variances per column and by 30 % of what is left above the
     # noise (N: the validation values, each of unit noise variance after weighting), and what is
     # left is still 5 % of the excess the residual started with
-    noise = float(b_val.size)
     selected, current, cols, sse_now = [], 1.0, [], sse0
     for _ in range(MAX_SELECTED):
         if selected and sse_now - noise <= 0.05 * (sse0 - noise):
@@ -522,24 +534,27 @@ def _evidence_at(graph, p, experiment, x0, regime_variables, d_hat):
     prices = {k: KIND_FEATURES[k[0]][2] for k in keys}
     ranked, selected, joint = regress_kinds(responses, r, w, parameters=prices)
     best = {}
-    for (kind, variant, detail), (share, score, beta, sig) in ranked.items():
+    for (kind, variant, detail), (share, score, beta, sig, excess, drop) in ranked.items():
         if (kind, variant) not in best or score < best[(kind, variant)].score:
             names = responses[(kind, variant, detail)][0]
             best[(kind, variant)] = KindEvidence(kind, variant, detail, float(share), float(score),
-                                                 {nm: -float(c) for nm, c in zip(names, beta)}, sig)
+                                                 {nm: -float(c) for nm, c in zip(names, beta)}, sig,
+                                                 excess, float(drop))
     kinds = sorted(best.values(), key=lambda k: k.score)
     chosen = [f"{k[0]} ({k[1]})" if k[1] else k[0] for k in selected]
     return FeatureEvidence(p, kinds, chosen, float(joint), junction_unit(graph, p.name))
 
 
-#: pruning: only where the best kind's features explain at least this validated share ...
+#: pruning (on the validated shares of the residual beyond the noise): only where the best
+#: kind's features explain at least this share ...
 PRUNE_FROM = 0.5
 #: ... a candidate whose kind's features leave more than PRUNE_FACTOR times what the best
 #: leave unexplained, and more than PRUNE_FLOOR of the residual, is not fitted (the
 #: PRUNE_KEEP best kinds always are)
 PRUNE_FACTOR, PRUNE_FLOOR, PRUNE_KEEP = 10.0, 0.25, 3
 #: a near-tie in :func:`diagnosis.fit.choose` goes to another kind when its features leave at
-#: most this share of what the default winner's leave unexplained (and explain 2 % more)
+#: most this share of what the default winner's leave unexplained beyond the noise (and explain
+#: 2 % and :data:`MIN_DROP_PER_COLUMN` noise variances more)
 PREFER_RATIO = 0.5
 
 
@@ -563,7 +578,7 @@ def prune_candidates(cands: list, evidence: dict) -> tuple[list, list]:
     At a place whose best significant kind explains at least :data:`PRUNE_FROM` of the
     residual, a candidate with features is dropped when it is not among the
     :data:`PRUNE_KEEP` best and its features leave more than :data:`PRUNE_FACTOR` times
-    the best's unexplained share and more than :data:`PRUNE_FLOOR`.  Candidates without
+    the best's unexplained share (beyond the noise) and more than :data:`PRUNE_FLOOR`.  Candidates without
     features (inputs, outputs, heat transfer, twins) are always kept.
     """
     keep, dropped = [], []
@@ -573,10 +588,10 @@ def prune_candidates(cands: list, evidence: dict) -> tuple[list, list]:
                          and (e.place.kind, e.place.name) == (place.kind, place.name)), None)
         ev = place_ev.for_candidate(cand) if place_ev is not None else None
         best = place_ev.best() if place_ev is not None else None
-        if ev is None or best is None or best.share < PRUNE_FROM or ev in place_ev.kinds[:PRUNE_KEEP]:
+        if ev is None or best is None or best.excess_share < PRUNE_FROM or ev in place_ev.kinds[:PRUNE_KEEP]:
             keep.append(cand)
             continue
-        left, best_left = 1.0 - ev.share, max(1.0 - best.share, 0.0)
+        left, best_left = 1.0 - ev.excess_share, max(1.0 - best.excess_share, 0.0)
         (dropped if left > max(PRUNE_FACTOR * best_left, PRUNE_FLOOR) else keep).append(cand)
     return keep, dropped
 
@@ -586,8 +601,9 @@ def prefer_by_evidence(default, near: list, lookup):
     feature evidence prefers to `default`, or `default`.
 
     Another kind is preferred only when both have evidence, its features are significant,
-    leave at most :data:`PREFER_RATIO` of what `default`'s leave unexplained and explain at
-    least 2 % more of the residual; among such, the lowest penalised feature score.
+    leave at most :data:`PREFER_RATIO` of what `default`'s leave unexplained beyond the
+    noise and explain at least 2 % and :data:`MIN_DROP_PER_COLUMN` noise variances more;
+    among such, the lowest penalised feature score.
     """
     base = lookup(default)
     if base is None:
@@ -596,7 +612,8 @@ def prefer_by_evidence(default, near: list, lookup):
     for f in near:
         ev = lookup(f)
         if (f is default or ev is None or not ev.significant or f.candidate.kind == default.candidate.kind
-                or ev.share < base.share + 0.02 or 1.0 - ev.share > PREFER_RATIO * (1.0 - base.share)):
+                or ev.excess_share < base.excess_share + 0.02 or ev.drop - base.drop < MIN_DROP_PER_COLUMN
+                or 1.0 - ev.excess_share > PREFER_RATIO * (1.0 - base.excess_share)):
             continue
         better.append((ev.score, f))
     return min(better, key=lambda x: x[0])[1] if better else default

@@ -553,8 +553,8 @@ PRUNE_FROM = 0.5
 #: PRUNE_KEEP best kinds always are)
 PRUNE_FACTOR, PRUNE_FLOOR, PRUNE_KEEP = 10.0, 0.25, 3
 #: a near-tie in :func:`diagnosis.fit.choose` goes to another kind when its features leave at
-#: most this share of what the default winner's leave unexplained beyond the noise (and explain
-#: 2 % and :data:`MIN_DROP_PER_COLUMN` noise variances more)
+#: most this share of what the default winner's leave unexplained beyond the noise (and drop the
+#: weighted SSE by :data:`MIN_DROP_PER_COLUMN` noise variances more)
 PREFER_RATIO = 0.5
 
 
@@ -602,7 +602,7 @@ def prefer_by_evidence(default, near: list, lookup):
 
     Another kind is preferred only when both have evidence, its features are significant,
     leave at most :data:`PREFER_RATIO` of what `default`'s leave unexplained beyond the
-    noise and explain at least 2 % and :data:`MIN_DROP_PER_COLUMN` noise variances more;
+    noise and drop the weighted SSE by :data:`MIN_DROP_PER_COLUMN` noise variances more;
     among such, the lowest penalised feature score.
     """
     base = lookup(default)
@@ -612,7 +612,7 @@ def prefer_by_evidence(default, near: list, lookup):
     for f in near:
         ev = lookup(f)
         if (f is default or ev is None or not ev.significant or f.candidate.kind == default.candidate.kind
-                or ev.excess_share < base.excess_share + 0.02 or ev.drop - base.drop < MIN_DROP_PER_COLUMN
+                or ev.drop - base.drop < MIN_DROP_PER_COLUMN
                 or 1.0 - ev.excess_share > PREFER_RATIO * (1.0 - base.excess_share)):
             continue
         better.append((ev.score, f))

@@ -396,7 +396,8 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
        :math:`1 - E / E_0 \\ge 0.3`; otherwise None: the tool does not invent
        physics.
     4. With `evidence` (the feature regression, :mod:`diagnosis.features`): a fit of another
-       kind within one parameter's price of the best score (a near-tie) wins instead when
+       kind whose held-out excess error, before the parameter price, is within one parameter's
+       price (and :data:`TIE`) of the winner's (a near-tie) wins instead when
        its features explain clearly more of the located estimate
        (:func:`~diagnosis.features.prefer_by_evidence`) and it passes rule 3; it records
        ``extra["preferred_over"]``.
@@ -461,8 +462,11 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
     best = min(tied, key=order)
     if evidence is not None and best.candidate is not None:
         from .features import prefer_by_evidence
+        # a near-tie: held-out errors within one parameter's price before the parameters are
+        # priced (parsimony alone would decide between them)
+        unpriced = lambda f: score(f) / (1 + PARAMETER_PRICE) ** f.n_params   # noqa: E731
         near = [f for f in usable if f.candidate is not None
-                and score(f) <= score(leader) * (1 + PARAMETER_PRICE) * (1 + TIE)]
+                and unpriced(f) <= unpriced(best) * (1 + PARAMETER_PRICE) * (1 + TIE)]
         preferred = prefer_by_evidence(best, near, evidence)
         share, gain = acceptance(nominal_holdout, preferred, floor)
         if preferred is not best and share >= MIN_SHARE and gain >= MIN_GAIN:

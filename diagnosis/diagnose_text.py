@@ -139,8 +139,8 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
         best = ", ".join(f"{s.place} {100 * s.explained:.0f} %" for s in scores[:3])
         lines.append(f"Share of the residual a correction explains, by place: {best}.")
     for ev in (rounds[0].get("features") or []) if rounds else []:
-        lines.append(f"Feature regression at {ev.place} (validated share of the residual each kind's "
-                     f"features explain): {ev.summary()}.")
+        lines.append(f"Feature regression at {ev.place} (validated share of the residual beyond the noise "
+                     f"each kind's features explain): {ev.summary()}.")
     if rounds and rounds[0].get("pruned"):
         lines.append(f"Not fitted, the features explaining far less than the best kind's: "
                      f"{', '.join(rounds[0]['pruned'])}.")

@@ -22,7 +22,8 @@ rows and judged on the last 30 % (a time split): the *validated share* of kind k
 :math:`1 - \\mathrm{SSE}_{val}(k) / \\mathrm{SSE}_{val}(0)`.  Kinds are ranked by the
 penalised validation error :math:`\\mathrm{SSE}_{val}(k) (1 + \\rho)^{m_k}`
 (:data:`FEATURE_PRICE` per parameter, :math:`m_k` the kind's parameters in
-:data:`KIND_FEATURES`); a forward selection over kind groups (at most :data:`MAX_SELECTED`) says which kinds together explain the estimate.
+:data:`KIND_FEATURES`); a forward selection over kind groups (at most
+:data:`MAX_SELECTED`) says which kinds together explain the estimate.
 
 The features per kind (:data:`KIND_FEATURES`, the one table), with
 :math:`v` the junction's common flow (a velocity at a mechanical 1-junction),

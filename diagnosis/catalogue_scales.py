@@ -144,13 +144,16 @@ def _positive(value: float) -> float:
 def pressure_variables(graph) -> dict[str, str]:
     """Pressure-like variables of a graph: label -> expression.
 
-    Inputs in Pa, kPa or bar (an imposed chamber pressure), states of equation
-    elements in those units (pneumatic chambers) and efforts of C elements of
-    the pneumatic and hydraulic domains; with two or more, also their mean.
+    Inputs in Pa, kPa or bar (an imposed chamber pressure), the pressure states
+    of pneumatic chambers (``PneumaticC``) and of equation elements in those
+    units, and efforts of C elements of the pneumatic and hydraulic domains;
+    with two or more, also their mean.
     """
     found = {d.name: d.name for d in graph.inputs() if d.unit in ("Pa", "kPa", "bar")}
     for e in graph.elements.values():
-        if e.kind == "Eq":
+        if e.kind == "PneumaticC":
+            found.update({state: state for state in e.states if state != e.gas_state})   # not its temperature
+        elif e.kind == "Eq":
             for state in e.states:
                 if e.units.get(state, "") in ("Pa", "kPa", "bar"):
                     found[state] = state

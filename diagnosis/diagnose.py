@@ -314,6 +314,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         place_list = [s.place for s in scores[:int(top)] if s.explained >= MIN_PLACE_SHARE]
 
     cands = [c for p in place_list for c in candidates(graph, p, regime_variables=rv, experiment=train)]
+    evidence, cands, pruned = _features(graph, scores, place_list, train, x0, rv, cands, say, "feature regression")
     fit_part, fit_x0 = _fit_window(train, res.run, x0)
     fits = []
     for i, cand in enumerate(cands, 1):
@@ -328,7 +329,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                                   through=train))
     say("choosing")
     floor = noise_floor(held, res.noise)
-    chosen = choose(nominal, fits, noise=floor) if fits else None
+    chosen = choose(nominal, fits, noise=floor, evidence=_lookup(evidence)) if fits else None
 
     say("improved model")
     if chosen is None:
@@ -341,7 +342,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         improved, y_imp = _holdout_nrmse(OutputSimulator(improved_graph, exp), None, x0, exp, mask)
     rounds = [Round(chosen, fits, dict(nominal), dict(improved), seconds=_time.perf_counter() - say.start,
                     diverged=diverged, window=[float(fit_part.t[0]), float(fit_part.t[-1])], floor=floor,
-                    start=start)]
+                    start=start, features=list(evidence.values()), pruned=pruned)]
 
     if chosen is not None and chosen.candidate is not None:
         while len(rounds) < int(max_effects):
@@ -367,6 +368,25 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                     improved=improved, y_imp=y_imp, windows=windows, rv=rv, scores=scores,
                     fits=fits, chosen=chosen, improved_graph=improved_graph,
                     locate_regime=locate_regime, timings=say.done, rounds=rounds)
+
+
+def _features(graph, scores, places, train, x0, rv, cands, say, label):
+    """The feature regression at the junction places (:mod:`diagnosis.features`) and the
+    candidates it leaves to fit: ``(evidence by place, candidates kept, candidates pruned)``."""
+    from .features import feature_evidence, prune_candidates
+    junctions = [p for p in places if p.kind == "junction"]
+    if not junctions or not scores:       # no location (a diverging nominal): nothing to regress
+        return {}, cands, []
+    say(label, ", ".join(map(str, junctions)))
+    evidence = feature_evidence(graph, junctions, train, x0=x0, regime_variables=rv,
+                                estimates={s.place: s.estimate for s in scores})
+    kept, pruned = prune_candidates(cands, evidence)
+    return evidence, kept, [str(c) for c in pruned]
+
+
+def _lookup(evidence):
+    from .features import evidence_lookup
+    return evidence_lookup(evidence) if evidence else None
 
 
 def _twin_fits(graph, fits, train, rv, fit, say, label) -> list:
@@ -416,6 +436,8 @@ def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, 
             for c in getattr(r.chosen.candidate, "members", (r.chosen.candidate,))}
     cands = [c for s in places for c in candidates(graph, s.place, regime_variables=rv, experiment=train)
              if (c.kind, c.place) not in done]
+    evidence, cands, pruned = _features(graph, scores, [s.place for s in places], train, x0, rv, cands, say,
+                                        f"{label}: feature regression")
     fit_part, fit_x0 = _fit_window(train, res.run, x0)
     fits = []
     for i, cand in enumerate(cands, 1):
@@ -424,8 +446,9 @@ def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, 
     fits += _twin_fits(graph, fits, train, rv, lambda cand: fit_candidate(
         graph, cand, fit_part, held, x0=fit_x0, through=train), say, f"{label}: fitting")
     say(f"{label}: choosing")
-    chosen = choose(reference, fits, noise=floor) if fits else None
-    out = Round(chosen, fits, dict(reference), dict(reference), scores=scores)
+    chosen = choose(reference, fits, noise=floor, evidence=_lookup(evidence)) if fits else None
+    out = Round(chosen, fits, dict(reference), dict(reference), scores=scores,
+                features=list(evidence.values()), pruned=pruned)
     if chosen is not None:
         names = {p.name for p in chosen.candidate.params}
         better = chosen.candidate.build(graph, {k: v for k, v in chosen.values.items() if k in names})

@@ -138,6 +138,12 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
     if scores:
         best = ", ".join(f"{s.place} {100 * s.explained:.0f} %" for s in scores[:3])
         lines.append(f"Share of the residual a correction explains, by place: {best}.")
+    for ev in (rounds[0].features or []) if rounds else []:
+        lines.append(f"Feature regression at {ev.place} (validated share of the residual beyond the noise "
+                     f"each kind's features explain): {ev.summary()}.")
+    if rounds and rounds[0].pruned:
+        lines.append(f"Not fitted, the features explaining far less than the best kind's: "
+                     f"{', '.join(rounds[0].pruned)}.")
     if fits and rounds and rounds[0].window is not None:
         a, b = rounds[0].window
         lines.append(f"Candidates were fitted on {a:.4g}-{b:.4g} s of the training part, simulated from "
@@ -150,6 +156,9 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
         first = physics[:len(getattr(chosen.candidate, "members", (None,)))]   # round 1: one per twin place
         lines.append(f"Missing physics: {m['kind']} at {', '.join(e['attached_to'] for e in first)}. "
                      f"{'; '.join(e['explanation'] for e in first)}")
+        if chosen.extra.get("preferred_over"):
+            lines.append(f"Held-out error nearly tied it with {chosen.extra['preferred_over']}; the feature "
+                         f"regression decided.")
         if finding is not None and finding.variable is not None:
             share = ("" if finding.explained < _MIN_REGIME_SHARE
                      else f" (explains {100 * finding.explained:.0f} % of it)")

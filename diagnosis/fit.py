@@ -363,7 +363,7 @@ def excess_error(nrmse: dict, floor: dict, names) -> float:
     return float(sum(max(nrmse[o] ** 2 - floor.get(o, 0.0) ** 2, 0.0) for o in names))
 
 
-def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
+def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=None):
     """The best candidate by held-out error and parsimony, or None ("none").
 
     Rule (all on the held-out part, per output :math:`o`, with noise floor
@@ -395,6 +395,12 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
        :data:`MIN_GAIN` (5 %):
        :math:`1 - E / E_0 \\ge 0.3`; otherwise None: the tool does not invent
        physics.
+    4. With `evidence` (the feature regression, :mod:`diagnosis.features`): a fit of another
+       kind whose held-out excess error, before the parameter price, is within one parameter's
+       price (and :data:`TIE`) of the winner's (a near-tie) wins instead when
+       its features explain clearly more of the located estimate
+       (:func:`~diagnosis.features.prefer_by_evidence`) and it passes rule 3; it records
+       ``extra["preferred_over"]``.
 
     Parameters
     ----------
@@ -404,6 +410,8 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
         Failed fits (``success`` False or NaN errors) are ignored.
     noise : dict str -> float, optional
         Noise floor per output as an NRMSE (:func:`noise_floor`); default 0.
+    evidence : callable, optional
+        ``fit -> KindEvidence or None`` (:func:`diagnosis.features.evidence_lookup`).
 
     Returns
     -------
@@ -452,6 +460,18 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None):
     lowest = min(train(f) for f in tied)
     tied = [f for f in tied if train(f) <= lowest * (1 + TIE) ** 2] or tied
     best = min(tied, key=order)
+    if evidence is not None and best.candidate is not None:
+        from .features import prefer_by_evidence
+        # a near-tie: held-out errors within one parameter's price before the parameters are
+        # priced (parsimony alone would decide between them)
+        unpriced = lambda f: score(f) / (1 + PARAMETER_PRICE) ** f.n_params   # noqa: E731
+        near = [f for f in usable if f.candidate is not None
+                and unpriced(f) <= unpriced(best) * (1 + PARAMETER_PRICE) * (1 + TIE)]
+        preferred = prefer_by_evidence(best, near, evidence)
+        share, gain = acceptance(nominal_holdout, preferred, floor)
+        if preferred is not best and share >= MIN_SHARE and gain >= MIN_GAIN:
+            preferred.extra["preferred_over"] = str(best.candidate)
+            return preferred
     share, gain = acceptance(nominal_holdout, best, floor)
     return best if share >= MIN_SHARE and gain >= MIN_GAIN else None
 

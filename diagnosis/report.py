@@ -16,6 +16,12 @@ effects; ``""`` for none); ``bond`` is ``""`` when there is none;
 ``improved_model`` is ``null`` until :meth:`DiagnosisReport.save`;
 ``fit.window`` is the part of the training samples the candidates were fitted on
 and ``fit.start`` the state their simulations started from.
+``features`` (present when round 1 located a junction) holds the feature regression
+at each located junction (:meth:`diagnosis.features.FeatureEvidence.to_json`):
+``{"place", "unit", "selected": [kind], "selected_share", "kinds": [{"kind", "variant",
+"detail", "share", "significant", "coefficients": {feature: value}}]}``, shares
+dimensionless (validated share of the residual), coefficients in the junction's
+effort (flow) unit per unit of the feature.
 Times in s, NRMSE dimensionless.
 """
 from __future__ import annotations
@@ -138,6 +144,8 @@ class DiagnosisReport:
                     **({"window": [_finite(v) for v in self.fit["window"]], "start": str(self.fit["start"])}
                        if "window" in self.fit else {})},
             "improved_model": self.improved_model,
+            **({"features": [ev.to_json() for ev in self.rounds[0].features]}
+               if self.rounds and self.rounds[0].features else {}),
         }
 
     def improvement(self) -> dict:

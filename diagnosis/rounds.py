@@ -90,6 +90,10 @@ class Round(_ReadByKey):
         First round only: why the nominal simulation diverged ("" if it did not), the training
         window the fits used (first and last time, s), the noise floor per output, and the state
         the fits started from, in words.
+    features : list of FeatureEvidence, optional
+        The feature regression at each located junction (:mod:`diagnosis.features`).
+    pruned : list of str, optional
+        Candidates not fitted by simulation, their kind's features explaining far less than the best's.
     """
 
     chosen: object
@@ -106,3 +110,5 @@ class Round(_ReadByKey):
     window: list | None = None
     floor: dict | None = None
     start: str | None = None
+    features: list | None = None
+    pruned: list | None = None

@@ -136,6 +136,20 @@ def test_pressure_dependent_friction_uses_a_pressure_of_the_model():
     assert built.parameters()["c1_rod"].value == 1e-5
 
 
+def test_the_pam_chambers_pressures_modulate_the_seesaw_friction():
+    """Each PneumaticChamber's pressure state (not its gas temperature) is a regime of pressure
+    friction at the seesaw, and so is their mean."""
+    from plants.library.pam import pam
+    for thermal in (False, True):
+        joint = pam("full")
+        if thermal:
+            joint = _one(joint, Place("junction", "chamber1"), "heat_transfer").build(
+                joint, {"hA_muscle1": 0.1, "gamma_muscle1": 1.4})
+        cands = [c for c in candidates(joint, Place("junction", "seesaw"))
+                 if c.kind == "pressure_dependent_friction"]
+        assert [c.regime for c in cands] == ["P_1", "P_2", "(P_1 + P_2)/2"]
+
+
 def test_leak_is_an_r_from_the_zero_junction_to_ambient():
     tank = pneumatic_tank()
     c = _one(tank, Place("junction", "tank"), "leak")

@@ -95,7 +95,7 @@ def test_coulomb_improves_held_out_nrmse(coulomb):
 def test_report_saves_schema_plots_and_an_improved_graph(coulomb, tmp_path):
     paths = coulomb.save(tmp_path / "report")
     data = json.loads(open(paths["json"]).read())
-    assert set(data) == {"location", "missing_physics", "fit", "improved_model"}
+    assert set(data) == {"location", "missing_physics", "fit", "improved_model", "features"}   # features: a junction was located
     assert set(data["location"]) == {"junction", "bond", "windows", "regime"}
     assert set(data["missing_physics"][0]) == {"kind", "attached_to", "parameters", "explanation"}
     assert set(data["fit"]) == {"holdout", "nominal", "improved", "window", "start"}

@@ -1,0 +1,620 @@
+"""Name the physics from the estimate: a feature regression per kind at a located junction.
+
+Graph location (:mod:`diagnosis.graph_location`) estimates, at each junction, a free
+extra effort (1-junction) or flow (0-junction) :math:`d(t)` from the linearised
+response of the outputs to it.  Here :math:`d` is restricted instead to the physics
+each kind of the catalogue would add there: a few *feature signals*
+:math:`\\phi_{k,j}(t)` computed at the junction along the run *corrected* by the
+location's estimate :math:`\\hat d` (from the same start as the location),
+
+.. math::
+
+    d(t) = \\sum_j \\beta_{k,j}\\, \\phi_{k,j}(t), \\qquad
+    r \\approx S_{\\phi_k} \\beta_k,
+
+where :math:`r = r_c + S_c \\hat d` is the nominal residual linearised about the corrected
+run (:math:`r_c` the corrected run's residual; a Gauss-Newton step from the estimate),
+weighted by :math:`1/\\sigma_o` (the measurement noise), and :math:`S_{\\phi_k}` the
+linearised responses of the outputs to each feature signal injected at the junction
+along the corrected run (:class:`~diagnosis.graph_location_linear.LinearisedResponse`,
+the location's own machinery).  :math:`\\beta_k` is fitted by least squares on the first 70 % of the
+rows and judged on the last 30 % (a time split): the *validated share* of kind k is
+:math:`1 - \\mathrm{SSE}_{val}(k) / \\mathrm{SSE}_{val}(0)`.  Kinds are ranked by the
+penalised validation error :math:`\\mathrm{SSE}_{val}(k) (1 + \\rho)^{m_k}`
+(:data:`FEATURE_PRICE` per parameter, :math:`m_k` the kind's parameters in
+:data:`KIND_FEATURES`); a forward selection over kind groups (at most
+:data:`MAX_SELECTED`) says which kinds together explain the estimate.
+
+The features per kind (:data:`KIND_FEATURES`, the one table), with
+:math:`v` the junction's common flow (a velocity at a mechanical 1-junction),
+:math:`s = \\tanh(v / v_\\varepsilon)` a nearly sharp sign (:math:`v_\\varepsilon`
+:data:`SIGN_FRACTION` = 1 % of the RMS flow), :math:`q` the content of a C on the
+junction and :math:`e` the common effort of a 0-junction:
+
+* ``coulomb_friction`` :math:`s`; ``viscous_friction`` :math:`v`;
+  ``coulomb_viscous_friction`` :math:`s, v`;
+* ``stribeck_friction`` :math:`s, e^{-(v/v_s)^2} s` for :math:`v_s` = 0.1, 0.3, 1 times
+  the RMS flow;
+* ``pressure_dependent_friction`` :math:`s, (P - \\bar P) s` per pressure variable;
+* ``modulated_friction`` :math:`s, (L_\\tau m - \\bar m) s` per modulating signal
+  :math:`m` and first-order lag :math:`\\tau` of 2, 20, 200 sample intervals;
+* ``hysteresis`` the normalised Dahl state :math:`\\dot z = \\alpha (v - |v| z)` for
+  :math:`\\alpha X` = 1, 3, 10, 30, 100 (X the RMS displacement), coefficient :math:`F_h`;
+* ``constant_load`` 1;
+* ``nonlinear_stiffness`` :math:`q^3, q` per C on a 1-junction (the cubic term and the
+  refitted linear value); ``backlash`` :math:`\\mathrm{clip}(q, -b, b)` for b = 0.1, 0.3,
+  1 times the RMS of q; ``saturation`` (end stops) the hinges
+  :math:`\\max(q - q_{hi}, 0), \\min(q - q_{lo}, 0)` at the 75/25, 90/10 and 97/3 %
+  quantiles of q;
+* at a 0-junction ``leak`` :math:`e - P_{amb}`, ``constant_load`` 1 and ``saturation``
+  (an overflow) :math:`\\max(q - q_{hi}, 0)`.
+
+``heat_transfer`` and a C's stiffness at a 0-junction (an effort law, not an extra
+flow) have no features: they keep today's path (fitted by simulation, no evidence).
+The coefficients are reported with the catalogue's sign convention (an element
+that *takes* effort or flow from the junction), so a Coulomb friction's
+coefficient is its level :math:`F_c`.
+
+Anchors: SINDy discrepancy models (Kaheman, Kaiser, Brunton et al. 2019, "Learning
+discrepancy models from experimental data", arXiv:1909.08574; Ebers, Steele and
+Kutz 2024, "Discrepancy modeling framework", SIAM J. Appl. Dyn. Syst. 23(1)) regress
+the discrepancy on an unstructured library of terms; here each group of columns is
+one kind of physics at one bond-graph place, so the winner is named and then
+inserted and refitted as a real element by :mod:`diagnosis.fit`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .catalogue_common import junction_elements
+from .kinds.leak import P_AMBIENT
+from .kinds.modulated_friction import modulating_signals
+from .catalogue_scales import pressure_variables
+from .errors import BondcosimError
+
+__all__ = ["KIND_FEATURES", "SIGN_FRACTION", "FEATURE_PRICE", "MAX_SELECTED", "KindEvidence", "FeatureEvidence",
+           "evidence_lookup", "prune_candidates", "prefer_by_evidence",
+           "feature_evidence", "regress_kinds", "dahl_state"]
+
+#: kind -> (junction kinds it applies at, the feature columns in words, the parameters it is
+#: priced by: the catalogue candidate's, a grid choice such as a Stribeck velocity counting as
+#: one); the builders below (:func:`_kind_variants`) follow this table and nothing else
+KIND_FEATURES = {
+    "coulomb_friction": ("1", ("sign(v)",), 1),
+    "viscous_friction": ("1", ("v",), 1),
+    "coulomb_viscous_friction": ("1", ("sign(v)", "v"), 2),
+    "stribeck_friction": ("1", ("sign(v)", "exp(-(v/v_s)^2) sign(v)"), 3),
+    "pressure_dependent_friction": ("1", ("sign(v)", "(P - P_mean) sign(v)"), 2),
+    "modulated_friction": ("1", ("sign(v)", "(lag(m) - m_mean) sign(v)"), 3),
+    "hysteresis": ("1", ("z_dahl",), 2),
+    "constant_load": ("01", ("1",), 1),
+    "nonlinear_stiffness": ("1", ("q^3", "q"), 2),
+    "backlash": ("1", ("clip(q, -b, b)",), 1),
+    "saturation": ("01", ("max(q - q_hi, 0)", "min(q - q_lo, 0)"), 2),
+    "leak": ("0", ("e - P_amb",), 1),
+}
+
+#: width of the smoothed sign of the friction features, as a fraction of the RMS flow: a nearly
+#: sharp sign (the catalogue's elements smooth at 5 % so that an integrator can step over the
+#: reversal; a feature column has no integrator to protect)
+SIGN_FRACTION = 0.01
+#: relative price of each parameter on the validation error (parsimony)
+FEATURE_PRICE = 0.05
+#: kinds the forward selection adds at most
+MAX_SELECTED = 3
+#: share of the validation rows (the last ones)
+VALIDATION = 0.3
+#: least validated share, and least drop of the weighted validation SSE per column (in
+#: noise variances), for a kind to count as significant
+MIN_SHARE, MIN_DROP_PER_COLUMN = 0.02, 25.0
+_MAX_ROWS = 10000
+_STRIBECK = (0.1, 0.3, 1.0)          # v_s / RMS flow
+_DAHL = (1.0, 3.0, 10.0, 30.0, 100.0)   # alpha * RMS displacement
+_PLAY = (0.1, 0.3, 1.0)              # b / RMS content
+_STOPS = ((0.75, 0.25), (0.9, 0.1), (0.97, 0.03))   # quantiles of q at the limits
+_LAG_STEPS = (2.0, 20.0, 200.0)      # modulating lag, sample intervals
+
+
+@dataclass
+class KindEvidence:
+    """How much of the residual one kind's features explain at one place.
+
+    Attributes
+    ----------
+    kind : str
+        Catalogue kind.
+    variant : str or None
+        The candidate it matches: a pressure or modulating signal's expression
+        (``Candidate.regime``), a C element's name (``Candidate.target``), else None.
+    detail : str
+        The variant's free choice in words (``v_s = 0.03 m/s``, ``lag 0.02 s``), or "".
+    share : float
+        Validated share of the weighted residual explained (last 30 % of the rows),
+        at most 1 (negative: worse than nothing).
+    score : float
+        Penalised validation SSE relative to the no-correction SSE (lower is better).
+    coefficients : dict str -> float
+        Feature -> coefficient in the catalogue's sign convention (fitted on all rows),
+        in the junction's effort (flow) unit per unit of the feature.
+    significant : bool
+        The share is at least :data:`MIN_SHARE` and the drop of the weighted validation
+        SSE at least :data:`MIN_DROP_PER_COLUMN` noise variances per column.
+    excess_share : float
+        Validated share of the residual *beyond the measurement noise* explained (the
+        weighted validation SSE less one noise variance per value), at most 1.
+    drop : float
+        Drop of the weighted validation SSE, in noise variances.
+    """
+
+    kind: str
+    variant: str | None
+    detail: str
+    share: float
+    score: float
+    coefficients: dict
+    significant: bool
+    excess_share: float = 0.0
+    drop: float = 0.0
+
+    @property
+    def label(self) -> str:
+        """``kind`` or ``kind (variant)``."""
+        return f"{self.kind} ({self.variant})" if self.variant else self.kind
+
+
+@dataclass
+class FeatureEvidence:
+    """The feature regression at one junction place.
+
+    Attributes
+    ----------
+    place : Place
+    kinds : list of KindEvidence
+        Best (lowest penalised score) first; one entry per kind and variant group.
+    selected : list of str
+        Labels the forward selection over kinds kept, in the order added.
+    selected_share : float
+        Validated share of the selected kinds together.
+    unit : str
+        The junction's effort (1-junction) or flow (0-junction) unit.
+    """
+
+    place: object
+    kinds: list
+    selected: list = field(default_factory=list)
+    selected_share: float = 0.0
+    unit: str = ""
+
+    def for_candidate(self, candidate) -> KindEvidence | None:
+        """The evidence of `candidate`'s kind (and variant) here, or None when it has no features."""
+        place = getattr(candidate, "place", None)
+        if place is None or hasattr(candidate, "members") or (place.kind, place.name) != (self.place.kind,
+                                                                                           self.place.name):
+            return None          # a twin group (several places) has no single place's evidence
+        key = getattr(candidate, "regime", None) if candidate.kind in ("pressure_dependent_friction",
+                                                                      "modulated_friction") \
+            else getattr(candidate, "target", None)
+        for k in self.kinds:
+            if k.kind == candidate.kind and (k.variant is None or k.variant == key):
+                return k
+        return None
+
+    def best(self) -> KindEvidence | None:
+        """The best significant kind, or None."""
+        return next((k for k in self.kinds if k.significant), None)
+
+    def to_json(self) -> dict:
+        """JSON form: place, unit, selected kinds and per kind its share and coefficients."""
+        return {"place": str(self.place), "unit": self.unit, "selected": list(self.selected),
+                "selected_share": _finite(self.selected_share),
+                "kinds": [{"kind": k.kind, "variant": k.variant or "", "detail": k.detail,
+                           "share": _finite(k.share), "excess_share": _finite(k.excess_share),
+                           "significant": bool(k.significant),
+                           "coefficients": {n: _finite(v) for n, v in k.coefficients.items()}}
+                          for k in self.kinds]}
+
+    def summary(self, n: int = 4) -> str:
+        """One line: the best kinds' validated shares of the residual beyond the noise, and the selection."""
+        shown = ", ".join(f"{k.label} {100 * max(k.excess_share, 0.0):.0f} %" for k in self.kinds[:n])
+        chosen = " + ".join(self.selected) if self.selected else "none above the noise"
+        return f"{shown}; selected: {chosen}"
+
+
+def _finite(x):
+    x = float(x)
+    return x if np.isfinite(x) else None
+
+
+def dahl_state(v, t, alpha):
+    """The normalised Dahl state :math:`\\dot z = \\alpha (v - |v| z)`, z(0) = 0, v held over
+    each interval (exact per interval): the Dahl friction is :math:`F_h z`.
+
+    Parameters
+    ----------
+    v : ndarray, shape (n,)
+        Flow (velocity, m/s or rad/s).
+    t : ndarray, shape (n,)
+        Times, s.
+    alpha : float
+        :math:`\\sigma / F_h`, per unit of displacement (1/m, 1/rad).
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 1.0, 101)
+    >>> round(float(dahl_state(np.ones(101), t, 50.0)[-1]), 6)     # steady sliding: z -> 1
+    1.0
+    """
+    v, t = np.asarray(v, float), np.asarray(t, float)
+    z = np.zeros(v.size)
+    decay = np.exp(-alpha * np.abs(v[:-1]) * np.diff(t))
+    target = np.sign(v[:-1])
+    for k in range(v.size - 1):
+        z[k + 1] = target[k] + (z[k] - target[k]) * decay[k]
+    return z
+
+
+def _lagged(m, t, tau):
+    """First-order lag of a held signal, started at its first value."""
+    y = np.empty_like(m)
+    y[0] = m[0]
+    decay = np.exp(-np.diff(t) / tau)
+    for k in range(m.size - 1):
+        y[k + 1] = m[k] + (y[k] - m[k]) * decay[k]
+    return y
+
+
+def _rms(x) -> float:
+    x = np.asarray(x, float)
+    value = float(np.sqrt(np.mean(x ** 2))) if x.size else 0.0
+    return value if value > 0 and np.isfinite(value) else 1.0
+
+
+def _signals(graph, junction: str, regime_variables) -> dict:
+    """Expressions to read along the run at `junction`: label -> expression."""
+    bonds = [b for b, _ in graph.bonds_of(junction)]
+    out = {"flow": f"f_{bonds[0].name}", "effort": f"e_{bonds[0].name}"}
+    if graph.elements[junction].kind == "1":
+        out.update({f"pressure:{expr}": expr for expr in pressure_variables(graph).values()})
+        out.update({f"signal:{expr}": expr for expr in modulating_signals(graph, junction, regime_variables).values()})
+    for element, _ in junction_elements(graph, junction):
+        if element.kind == "C" and element.state:
+            out[f"content:{element.name}"] = element.state
+    return out
+
+
+def _kind_variants(kind, one, values, t, domain) -> list:
+    """``(variant, detail, names, columns (n, m))`` of `kind` at a junction (`one`: a 1-junction)
+    from the nominal `values` (label -> ndarray, :func:`_signals`)."""
+    where = KIND_FEATURES[kind][0]
+    if ("1" if one else "0") not in where:
+        return []
+    v = values["flow"]
+    V = _rms(v)
+    sign = np.tanh(v / (SIGN_FRACTION * V))
+    dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
+    span = float(t[-1] - t[0]) if t.size > 1 else 1.0
+    contents = {k.split(":", 1)[1]: q for k, q in values.items() if k.startswith("content:")}
+    if kind == "coulomb_friction":
+        return [(None, "", ["sign(v)"], sign[:, None])]
+    if kind == "viscous_friction":
+        return [(None, "", ["v"], v[:, None])]
+    if kind == "coulomb_viscous_friction":
+        return [(None, "", ["sign(v)", "v"], np.stack([sign, v], axis=1))]
+    if kind == "stribeck_friction":
+        return [(None, f"v_s = {f * V:.3g}", ["sign(v)", "exp(-(v/v_s)^2) sign(v)"],
+                 np.stack([sign, np.exp(-(v / (f * V)) ** 2) * sign], axis=1)) for f in _STRIBECK]
+    if kind == "pressure_dependent_friction":
+        return [(k.split(":", 1)[1], "", ["sign(v)", "(P - P_mean) sign(v)"],
+                 np.stack([sign, (p - p.mean()) * sign], axis=1))
+                for k, p in values.items() if k.startswith("pressure:") and np.ptp(p) > 0]
+    if kind == "modulated_friction":
+        out = []
+        for k, m in values.items():
+            if not k.startswith("signal:") or not np.ptp(m) > 0:
+                continue
+            for n in _LAG_STEPS:
+                tau = min(max(n * dt, dt / 2), max(span / 5, dt))
+                lag = _lagged(m, t, tau)
+                out.append((k.split(":", 1)[1], f"lag {tau:.3g} s", ["sign(v)", "(lag(m) - m_mean) sign(v)"],
+                            np.stack([sign, (lag - lag.mean()) * sign], axis=1)))
+        return out
+    if kind == "hysteresis":
+        x = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))])
+        X = _rms(x - x.mean())
+        return [(None, f"sigma/F_h = {a / X:.3g}", ["z_dahl"], dahl_state(v, t, a / X)[:, None]) for a in _DAHL]
+    if kind == "constant_load":
+        return [(None, "", ["1"], np.ones((t.size, 1)))]
+    if kind == "leak":
+        e = values["effort"]
+        p_amb = P_AMBIENT if domain == "pneumatic" and float(np.mean(e)) > 5e4 else 0.0
+        return [(None, "", ["e - P_amb"], (e - p_amb)[:, None])]
+    out = []
+    for c, q in contents.items():
+        if not np.ptp(q) > 0:
+            continue
+        Q = _rms(q)
+        if kind == "nonlinear_stiffness":
+            out.append((c, "", ["q^3", "q"], np.stack([q ** 3, q], axis=1)))
+        elif kind == "backlash":
+            out += [(c, f"b = {f * Q:.3g}", ["clip(q, -b, b)"], np.clip(q, -f * Q, f * Q)[:, None]) for f in _PLAY]
+        elif kind == "saturation":
+            for hi, lo in _STOPS:
+                top, bottom = np.quantile(q, hi), np.quantile(q, lo)
+                cols = [np.maximum(q - top, 0.0)] + ([np.minimum(q - bottom, 0.0)] if one else [])
+                out.append((c, f"q in [{bottom:.3g}, {top:.3g}]", ["max(q - q_hi, 0)", "min(q - q_lo, 0)"][:len(cols)],
+                            np.stack(cols, axis=1)))
+    return out
+
+
+def regress_kinds(responses: dict, r, w, *, price: float = FEATURE_PRICE, validation: float = VALIDATION,
+                  parameters=None):
+    """Rank kind groups by validated least squares of the residual on their responses.
+
+    Parameters
+    ----------
+    responses : dict key -> (names, S (rows, ny, m))
+        Per kind group (a kind and variant), the linearised responses of the outputs to
+        its feature columns at the kept rows.
+    r : ndarray, shape (rows, ny)
+        Residual at the kept rows (output units).
+    w : ndarray, shape (ny,)
+        Output weights, 1/sigma^2.
+    price, validation : float
+        Relative price per parameter; share of the rows (the last ones) held out.
+    parameters : dict key -> int, optional
+        Parameters each group is priced by (default: its number of columns).
+
+    Returns
+    -------
+    (dict key -> (share, score, beta, significant, excess, drop), list of keys selected, float)
+        Per group: validated share, penalised score (relative to the no-correction SSE),
+        coefficients fitted on all rows (in the responses' sign), significance, the share of
+        the validation SSE *beyond the noise* explained (the noise: one variance per weighted
+        value) and the drop of the weighted validation SSE (noise variances); the forward
+        selection's groups and their joint validated share.
+    """
+    rows, ny = r.shape
+    split = int(round((1.0 - validation) * rows))
+    sw = np.sqrt(np.asarray(w, float))
+    b = r * sw[None, :]
+    b_fit, b_val = b[:split].reshape(-1), b[split:].reshape(-1)
+    sse0 = float(b_val @ b_val)
+    if not sse0 > 0:
+        return {}, [], 0.0
+
+    def fit(S):
+        A = S * sw[None, :, None]
+        A_fit, A_val = A[:split].reshape(-1, S.shape[2]), A[split:].reshape(-1, S.shape[2])
+        scale = np.sqrt(np.sum(A_fit ** 2, axis=0))
+        scale[~(scale > 0)] = 1.0
+        coef, _, rank, _ = np.linalg.lstsq(A_fit / scale, b_fit, rcond=1e-10)
+        err = b_val - (A_val / scale) @ coef
+        return float(err @ err), int(rank)
+
+    noise = float(b_val.size)
+    excess0 = max(sse0 - noise, MIN_DROP_PER_COLUMN)
+    out = {}
+    for key, (_, S) in responses.items():
+        if not np.isfinite(S).all() or S.shape[0] != rows:
+            continue
+        sse, rank = fit(S)
+        A_all = (S * sw[None, :, None]).reshape(-1, S.shape[2])
+        beta = np.linalg.lstsq(A_all, b.reshape(-1), rcond=1e-10)[0]
+        share = 1.0 - sse / sse0
+        k = (parameters or {}).get(key, S.shape[2])
+        significant = share >= MIN_SHARE and sse0 - sse >= MIN_DROP_PER_COLUMN * max(rank, 1)
+        excess = min((sse0 - sse) / excess0, 1.0)
+        out[key] = (share, sse / sse0 * (1.0 + price) ** k, beta, bool(significant), float(excess), sse0 - sse)
+    # forward selection: a kind is added while it lowers the penalised score, drops the SSE by at
+    # least MIN_DROP_PER_COLUMN noise variances per column and by 30 % of what is left above the
+    # noise (N: the validation values, each of unit noise variance after weighting), and what is
+    # left is still 5 % of the excess the residual started with
+    selected, current, cols, sse_now = [], 1.0, [], sse0
+    for _ in range(MAX_SELECTED):
+        if selected and sse_now - noise <= 0.05 * (sse0 - noise):
+            break
+        trial = []
+        for key in out:
+            if key in selected or not out[key][3] or any(k[0] == key[0] for k in selected):
+                continue
+            S = np.concatenate(cols + [responses[key][1]], axis=2)
+            sse, _ = fit(S)
+            k = sum((parameters or {}).get(g, responses[g][1].shape[2]) for g in selected + [key])
+            trial.append((sse / sse0 * (1.0 + price) ** k, sse, key))
+        if not trial:
+            break
+        score, sse, key = min(trial, key=lambda x: x[0])
+        drop = sse_now - sse
+        if (score >= current or drop < MIN_DROP_PER_COLUMN * responses[key][1].shape[2]
+                or drop < 0.3 * max(sse_now - noise, 0.0)):
+            break
+        selected.append(key)
+        cols.append(responses[key][1])
+        current, sse_now = score, sse
+    best_share = 1.0 - sse_now / sse0
+    return out, selected, best_share
+
+
+def feature_evidence(graph, places, experiment, *, x0=None, regime_variables=None, estimates=None) -> dict:
+    """The feature regression (module docstring) at each junction place of `places`.
+
+    The features and the linearised responses are taken along the *corrected* run: the
+    model with the location's estimate :math:`\\hat d` injected at the junction (close to
+    the plant where the missing effect is strong, as a cubic spring that halves the
+    motion), and the residual regressed is the linearised nominal one,
+    :math:`r_c + S_c \\hat d \\approx S_c F \\beta` (a Gauss-Newton step from the estimate).
+    Without an estimate the run is the nominal one.
+
+    Parameters
+    ----------
+    graph : BondGraph
+        The nominal model.
+    places : iterable of Place
+        Places; inputs and outputs are skipped (they keep their own structured corrections).
+    experiment : Experiment
+        The part of the recording the location ran on (model units).
+    x0 : dict str -> float, optional
+        State at its first sample.
+    regime_variables : dict, optional
+        From :func:`diagnosis.locate.regime_variables`: which signals may modulate a friction.
+    estimates : dict Place -> ndarray, optional
+        The location's estimated extra effort / flow per junction at the experiment's
+        times (``PlaceScore.estimate``; NaN outside its window counts as 0).
+
+    Returns
+    -------
+    dict Place -> FeatureEvidence
+        Places whose run or linearisation fails are left out.
+    """
+    out = {}
+    for p in places:
+        if p.kind != "junction" or not experiment.outputs:
+            continue
+        d_hat = next((e for q, e in (estimates or {}).items() if (q.kind, q.name) == (p.kind, p.name)), None)
+        try:
+            ev = _evidence_at(graph, p, experiment, x0, regime_variables, d_hat)
+        except (BondcosimError, FloatingPointError, np.linalg.LinAlgError, ValueError):
+            ev = None
+        if ev is not None:
+            out[p] = ev
+    return out
+
+
+def _evidence_at(graph, p, experiment, x0, regime_variables, d_hat):
+    """:func:`feature_evidence` at one junction place (None when a run is not finite)."""
+    from bondgraph.io_json import graph_from_dict
+
+    from .catalogue_common import junction_domain
+    from .graph_location_graph import augment, junction_unit, with_inputs
+    from .graph_location_linear import LinearisedResponse
+    from .residuals import OutputSimulator, noise_sigma
+
+    outputs = list(experiment.outputs)
+    aug, d_inputs = augment(graph, [p.name])
+    d = d_inputs[p.name]
+    data = aug.to_dict()
+    labels = {}
+    for label, expr in _signals(graph, p.name, regime_variables).items():
+        key = f"feature_{len(labels)}"
+        labels[key] = label
+        data["outputs"].append({"name": key, "expression": str(expr), "unit": ""})
+    aug = graph_from_dict(data, source=f"features of {graph.name}")
+    d_hat = (np.zeros_like(experiment.t) if d_hat is None
+             else np.nan_to_num(np.asarray(d_hat, float), nan=0.0, posinf=0.0, neginf=0.0))
+    exp = with_inputs(experiment, {d: d_hat}, {d: junction_unit(graph, p.name)})
+    sim = OutputSimulator(aug, exp, outputs=outputs + list(labels))
+    run = sim.run(None, x0)
+    t = run.t
+    n = t.size
+    measured = {o: np.asarray(experiment.outputs[o], float) for o in outputs}
+    residual = {o: measured[o] - run.outputs[o] for o in outputs}
+    values = {label: np.asarray(run.outputs[key], float) for key, label in labels.items()}
+    if not all(np.isfinite(v).all() for v in list(residual.values()) + list(values.values())):
+        return None
+    lin = LinearisedResponse(sim.model, run, sim.model.param_vector(None), [d], outputs)
+    rows = np.arange(0, n, max(1, int(np.ceil(n / _MAX_ROWS))))
+    # the weights from the nominal residual's noise, as the location's
+    sigma = [max(noise_sigma(measured[o], residual[o]), 1e-3 * float(np.std(measured[o])), 1e-300)
+             for o in outputs]
+    w = 1.0 / np.square(sigma)
+    one = graph.elements[p.name].kind == "1"
+    groups = {}
+    for kind in KIND_FEATURES:
+        for variant, detail, cols, F in _kind_variants(kind, one, values, t, junction_domain(graph, p.name)):
+            groups[(kind, variant, detail)] = (cols, F)
+    if not groups:
+        return None
+    keys = list(groups)
+    F_all = np.concatenate([d_hat[:, None]] + [groups[k][1] for k in keys], axis=1)
+    S_all = lin.response(np.zeros(F_all.shape[1], dtype=int), F_all, rows)
+    r = np.stack([residual[o][rows] for o in outputs], axis=1) + S_all[:, :, 0]   # linearised nominal residual
+    edges = 1 + np.cumsum([0] + [groups[k][1].shape[1] for k in keys])
+    responses = {k: (groups[k][0], S_all[:, :, a:b]) for k, a, b in zip(keys, edges[:-1], edges[1:])}
+    prices = {k: KIND_FEATURES[k[0]][2] for k in keys}
+    ranked, selected, joint = regress_kinds(responses, r, w, parameters=prices)
+    best = {}
+    for (kind, variant, detail), (share, score, beta, sig, excess, drop) in ranked.items():
+        if (kind, variant) not in best or score < best[(kind, variant)].score:
+            names = responses[(kind, variant, detail)][0]
+            best[(kind, variant)] = KindEvidence(kind, variant, detail, float(share), float(score),
+                                                 {nm: -float(c) for nm, c in zip(names, beta)}, sig,
+                                                 excess, float(drop))
+    kinds = sorted(best.values(), key=lambda k: k.score)
+    chosen = [f"{k[0]} ({k[1]})" if k[1] else k[0] for k in selected]
+    return FeatureEvidence(p, kinds, chosen, float(joint), junction_unit(graph, p.name))
+
+
+#: pruning (on the validated shares of the residual beyond the noise): only where the best
+#: kind's features explain at least this share ...
+PRUNE_FROM = 0.5
+#: ... a candidate whose kind's features leave more than PRUNE_FACTOR times what the best
+#: leave unexplained, and more than PRUNE_FLOOR of the residual, is not fitted (the
+#: PRUNE_KEEP best kinds always are)
+PRUNE_FACTOR, PRUNE_FLOOR, PRUNE_KEEP = 10.0, 0.25, 3
+#: a near-tie in :func:`diagnosis.fit.choose` goes to another kind when its features leave at
+#: most this share of what the default winner's leave unexplained beyond the noise (and drop the
+#: weighted SSE by :data:`MIN_DROP_PER_COLUMN` noise variances more)
+PREFER_RATIO = 0.5
+
+
+def evidence_lookup(evidence: dict):
+    """``fit_or_candidate -> KindEvidence or None`` over the evidence of several places."""
+    def lookup(item):
+        cand = getattr(item, "candidate", item)
+        place = getattr(cand, "place", None)
+        if place is None:
+            return None
+        for ev in evidence.values():
+            if (ev.place.kind, ev.place.name) == (place.kind, place.name):
+                return ev.for_candidate(cand)
+        return None
+    return lookup
+
+
+def prune_candidates(cands: list, evidence: dict) -> tuple[list, list]:
+    """The candidates worth a fit by simulation, and those the feature evidence rules out.
+
+    At a place whose best significant kind explains at least :data:`PRUNE_FROM` of the
+    residual, a candidate with features is dropped when it is not among the
+    :data:`PRUNE_KEEP` best and its features leave more than :data:`PRUNE_FACTOR` times
+    the best's unexplained share (beyond the noise) and more than :data:`PRUNE_FLOOR`.  Candidates without
+    features (inputs, outputs, heat transfer, twins) are always kept.
+    """
+    keep, dropped = [], []
+    for cand in cands:
+        place = getattr(cand, "place", None)
+        place_ev = next((e for e in evidence.values() if place is not None
+                         and (e.place.kind, e.place.name) == (place.kind, place.name)), None)
+        ev = place_ev.for_candidate(cand) if place_ev is not None else None
+        best = place_ev.best() if place_ev is not None else None
+        if ev is None or best is None or best.excess_share < PRUNE_FROM or ev in place_ev.kinds[:PRUNE_KEEP]:
+            keep.append(cand)
+            continue
+        left, best_left = 1.0 - ev.excess_share, max(1.0 - best.excess_share, 0.0)
+        (dropped if left > max(PRUNE_FACTOR * best_left, PRUNE_FLOOR) else keep).append(cand)
+    return keep, dropped
+
+
+def prefer_by_evidence(default, near: list, lookup):
+    """Among `near` (fits within a parameter's price of the best held-out score), the fit the
+    feature evidence prefers to `default`, or `default`.
+
+    Another kind is preferred only when both have evidence, its features are significant,
+    leave at most :data:`PREFER_RATIO` of what `default`'s leave unexplained beyond the
+    noise and drop the weighted SSE by :data:`MIN_DROP_PER_COLUMN` noise variances more;
+    among such, the lowest penalised feature score.
+    """
+    base = lookup(default)
+    if base is None:
+        return default
+    better = []
+    for f in near:
+        ev = lookup(f)
+        if (f is default or ev is None or not ev.significant or f.candidate.kind == default.candidate.kind
+                or ev.drop - base.drop < MIN_DROP_PER_COLUMN
+                or 1.0 - ev.excess_share > PREFER_RATIO * (1.0 - base.excess_share)):
+            continue
+        better.append((ev.score, f))
+    return min(better, key=lambda x: x[0])[1] if better else default

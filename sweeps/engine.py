@@ -254,25 +254,40 @@ def _failed_rows(chunk, exc) -> list:
              "worker": "", **{f"param.{k}": v for k, v in r.params.items()}} for r in chunk]
 
 
-def _dask_loop(client, runner, chunks, n_workers, record, bar, on_chunk):
+def _dask_loop(client, runner, chunks, n_workers, record, bar, on_chunk, *, retries: int = 2):
+    """Run the chunks on the cluster, recording rows as chunks finish.  A run's own failure is a
+    failed row from inside :func:`run_chunk`; a chunk whose future fails (its worker died, the
+    task was lost) is infrastructure, so it is submitted again, up to `retries` times, before its
+    runs are recorded as failed with the error."""
     from distributed import as_completed
     from distributed.client import FutureCancelledError
     shipped = client.submit(_identity, runner, pure=False, key=f"sweep-runner-{os.urandom(4).hex()}")
-    futures = {client.submit(run_chunk, shipped, chunk, pure=False,
-                             key=f"sweep-chunk-{chunk[0].run_id}-{os.urandom(4).hex()}"): chunk
-               for chunk in chunks}
+
+    def submit(chunk):
+        return client.submit(run_chunk, shipped, chunk, pure=False,
+                             key=f"sweep-chunk-{chunk[0].run_id}-{os.urandom(4).hex()}")
+
+    futures = {submit(chunk): chunk for chunk in chunks}
+    attempts = {chunk[0].run_id: 1 for chunk in chunks}
     size = len(chunks[0])
     pending = len(futures)
     bar.update(running=min(pending, n_workers) * size)
     try:
-        for future in as_completed(futures):
+        queue = as_completed(list(futures))
+        for future in queue:
             chunk = futures[future]
             try:
                 rows = future.result()
                 future.release()        # the rows are here now: no worker need keep (or recompute) them
             except MetricError:
                 raise
-            except (FutureCancelledError, Exception) as exc:  # KilledWorker and the like: the chunk failed
+            except (FutureCancelledError, Exception) as exc:  # KilledWorker and the like
+                if attempts[chunk[0].run_id] <= retries:
+                    attempts[chunk[0].run_id] += 1
+                    again = submit(chunk)
+                    futures[again] = chunk
+                    queue.add(again)
+                    continue
                 rows = _failed_rows(chunk, exc)
             n_bad = record(rows)
             pending -= 1

@@ -108,7 +108,8 @@ def test_a_worker_killed_mid_sweep_loses_no_row(tmp_path):
 
         result = run_sweep(spec, tmp_path / "dask", scheduler=cluster.scheduler_address, chunk_size=2,
                            progress=None, plots=False, on_chunk=kill_one)
-    assert killed and len(result.table) == 12 and (result.table["status"] == "ok").all()
+    assert killed and len(result.table) == 12
+    assert (result.table["status"] == "ok").all(), result.table[["run_id", "status", "error"]].to_string()
     serial = run_sweep(spec, tmp_path / "serial", workers=0, progress=None, plots=False)
     np.testing.assert_array_equal(result.table["metric.x.final"], serial.table["metric.x.final"])
     np.testing.assert_array_equal(result.table["param.k"], serial.table["param.k"])

@@ -170,7 +170,7 @@ class Candidate:
         return f"{self.kind} at {self.place}"
 
 
-def candidates(graph, place: Place, *, regime_variables=None, experiment=None) -> list[Candidate]:
+def candidates(graph, place: Place, *, regime_variables=None, experiment=None, x0=None) -> list[Candidate]:
     """The kinds that make physical sense at `place`, with guesses scaled from the data.
 
     Parameters
@@ -186,6 +186,8 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None) -
     experiment : Experiment, optional
         Recorded inputs/outputs (model units); scales for guesses and bounds come from
         a nominal simulation on it.  Without it every scale is 1 (SI).
+    x0 : dict or array, optional
+        The state that simulation starts from (the recording's; default the model's).
 
     Returns
     -------
@@ -205,7 +207,7 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None) -
     >>> offset.explain({"offset_x": 0.01})
     'the x sensor reads 0.01 m off: a sensor offset on output x'
     """
-    site = site_of(graph, place, regime_variables=regime_variables, experiment=experiment)
+    site = site_of(graph, place, regime_variables=regime_variables, experiment=experiment, x0=x0)
     out = [Candidate(kind.name, place, list(prop.params), regime=prop.regime, constants=tuple(prop.constants),
                      target=prop.target, initial=dict(prop.initial), starts=tuple(prop.starts))
            for kind in REGISTRY.values() if site.door in kind.doors for prop in kind.propose(site)]
@@ -216,9 +218,9 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None) -
                                       and c.regime is not None and c.regime not in named))
 
 
-def site_of(graph, place: Place, *, regime_variables=None, experiment=None) -> Site:
+def site_of(graph, place: Place, *, regime_variables=None, experiment=None, x0=None) -> Site:
     """What the kinds see at `place` (:class:`~diagnosis.kinds.base.Site`): its door, the names
-    taken, and the scales and nominal values read off a simulation of `experiment`; a place the
+    taken, and the scales and nominal values read off a simulation of `experiment` from `x0`; a place the
     model does not have is an :class:`UnknownNameError` listing those it has."""
     if not isinstance(place, Place):
         raise DiagnosisError(f"place must be a diagnosis.place.Place, got {place!r}")
@@ -229,7 +231,7 @@ def site_of(graph, place: Place, *, regime_variables=None, experiment=None) -> S
             junctions = [n for n, e in graph.elements.items() if e.kind in ("0", "1")]
             raise UnknownNameError("junction", place.name, junctions, model=graph.name)
         signals = modulating_signals(graph, place.name, regime_variables) if element.kind == "1" else {}
-        scales, values = junction_scales(graph, place.name, experiment, signals)
+        scales, values = junction_scales(graph, place.name, experiment, signals, x0=x0)
         return Site(graph, place, element.kind, taken, scales, dict(values or {}), regime_variables, signals)
     span, dt = experiment_times(experiment) if experiment is not None else (1.0, 0.01)
     if place.kind == "input":

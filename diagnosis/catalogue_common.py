@@ -15,7 +15,17 @@ from bondgraph.params import DOMAINS
 
 from .errors import DiagnosisError
 
-__all__ = ["ParamSpec", "fresh_name", "junction_elements", "junction_domain", "junction_units", "domain_units"]
+__all__ = ["RELEASED", "released", "ParamSpec", "fresh_name", "junction_elements", "junction_domain", "junction_units", "domain_units"]
+
+
+#: The value of a limit with no evidence behind it (a saturation side no training sample
+#: reaches): "no limit", finite because simulations refuse infinite parameters.
+RELEASED = 1e300
+
+
+def released(value: float) -> bool:
+    """Whether a limit's `value` is :data:`RELEASED` (either sign)."""
+    return abs(float(value)) >= RELEASED
 
 
 @dataclass(frozen=True)

@@ -51,7 +51,7 @@ def rms(values) -> float:
     return float(np.sqrt(np.mean(values ** 2))) if values.size else 0.0
 
 
-def simulate_expressions(graph, experiment, expressions: dict) -> dict:
+def simulate_expressions(graph, experiment, expressions: dict, x0=None) -> dict:
     """Values of `expressions` along the nominal simulation of `experiment`.
 
     Parameters
@@ -61,6 +61,8 @@ def simulate_expressions(graph, experiment, expressions: dict) -> dict:
         Recorded inputs (model units, zero-order hold) and time, s.
     expressions : dict str -> str
         Label -> expression of states, inputs, parameters and bond variables.
+    x0 : dict or array, optional
+        The initial state (default the model's).
 
     Returns
     -------
@@ -72,7 +74,7 @@ def simulate_expressions(graph, experiment, expressions: dict) -> dict:
     labels = {f"scale_{k}": label for k, label in enumerate(expressions)}
     try:
         g = graph.with_outputs({key: str(expressions[label]) for key, label in labels.items()})
-        result = OutputSimulator(g, experiment, outputs=list(labels))()
+        result = OutputSimulator(g, experiment, outputs=list(labels))(None, x0)
     except BondcosimError:
         return {}
     return {label: np.asarray(result[key], dtype=float) for key, label in labels.items()}
@@ -84,11 +86,12 @@ def experiment_times(experiment) -> tuple[float, float]:
     return float(t[-1] - t[0]), float(np.median(np.diff(t)))
 
 
-def junction_scales(graph, junction: str, experiment, signals=None) -> tuple[Scales, dict]:
+def junction_scales(graph, junction: str, experiment, signals=None, x0=None) -> tuple[Scales, dict]:
     """Scales at a junction and the nominal values the catalogue needs there, from ONE simulation.
 
     `signals` (label -> expression, optional): further variables to read, keyed
-    ``signal:<label>`` (the signals that may modulate a friction there).
+    ``signal:<label>`` (the signals that may modulate a friction there); `x0` the state the
+    simulation starts from (default the model's).
 
     Returns
     -------
@@ -110,7 +113,7 @@ def junction_scales(graph, junction: str, experiment, signals=None) -> tuple[Sca
         other = graph.elements[b.head.element if end == "tail" else b.tail.element]
         if other.kind == "C":
             exprs[f"state:{other.state}"] = other.state
-    values = simulate_expressions(graph, experiment, exprs)
+    values = simulate_expressions(graph, experiment, exprs, x0=x0)
     if not values:
         return Scales(span=span, dt=dt), {}
     flows = [values[f"f_{b.name}"] for b in bonds]

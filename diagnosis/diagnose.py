@@ -41,7 +41,7 @@ from plants import load as load_model
 from .errors import DiagnosisError
 from .rounds import JointRefit, Round
 
-__all__ = ["diagnose", "MIN_PLACE_SHARE", "MAX_FIT_SAMPLES"]
+__all__ = ["diagnose", "located_places", "MIN_PLACE_SHARE", "MAX_FIT_SAMPLES"]
 
 #: places whose correction explains less than this share of the residual get no candidates
 MIN_PLACE_SHARE = 0.02
@@ -119,15 +119,42 @@ def _fit_window(train, run, x0):
     return part, x0
 
 
+#: Places the location cannot tell from the ``top``-th: what they leave unexplained is within
+#: this factor of what it leaves.
+PLACE_TIE = 1.10
+
+
+def located_places(scores, top: int) -> list:
+    """The place scores whose candidates are fitted: the ``top`` best, and every further place
+    the location cannot tell from the ``top``-th (the share of the residual it leaves is within
+    :data:`PLACE_TIE` of that place's: a series spring's 1-junction and the 0-junctions of the
+    torque it carries explain the same), at most ``2 top``; none explaining under
+    :data:`MIN_PLACE_SHARE`."""
+    kept = [s for s in scores if s.explained >= MIN_PLACE_SHARE]
+    if len(kept) <= top or top < 1:
+        return kept[:max(top, 0)]
+    last = 1.0 - kept[top - 1].explained
+    tied = [s for s in kept[top:2 * top] if 1.0 - s.explained <= PLACE_TIE * last]
+    return kept[:top] + tied
+
+
 def _start_inconsistent(res, diverged, n_train) -> bool:
     """Whether the model's default initial state contradicts the recording's start.
 
-    So it is when the nominal simulation diverges, or when its error over the first
-    samples (the window :mod:`diagnosis.initial_state` fits on) is more than twice
-    the error over the rest of the training part on some output: a transient of
-    the model's own, which decays.  An error that persists or grows (an offset, a
-    missing friction) is left to the candidates: fitting the start to it would
-    absorb the effect into the state.
+    So it is when the nominal simulation diverges, or when both
+
+    * its error over the first samples (the window :mod:`diagnosis.initial_state` fits on)
+      is more than twice the error over the rest of the training part on some output: a
+      transient of the model's own, which decays; and
+    * the outputs disagree at the first sample itself: on some output, the residual's value
+      at the start, from a quadratic fitted to its first :data:`START_SAMPLES` samples, is
+      more than 4 standard errors (of that noise) from zero.  A missing effort or flow
+      acting from the start (a load on a rig at rest) moves the outputs away from the
+      model's gradually, from zero; a wrong initial state shows at once.  (A start that
+      differs only in unmeasured states shows no jump: it is left to the candidates.)
+
+    An error that persists or grows (an offset, a missing friction) is left to the
+    candidates: fitting the start to it would absorb the effect into the state.
     """
     from .initial_state import window_length
     if diverged:
@@ -135,12 +162,29 @@ def _start_inconsistent(res, diverged, n_train) -> bool:
     w = window_length(n_train)
     if n_train < 2 * w:
         return False
-    for r in res.residual.values():
+    for o, r in res.residual.items():
         head = float(np.sqrt(np.mean(r[:w] ** 2)))
         rest = float(np.sqrt(np.mean(r[w:n_train] ** 2)))
-        if head > 2.0 * rest:
+        if head > 2.0 * rest and _jumps_at_start(r, res.noise.get(o, 0.0)):
             return True
     return False
+
+
+#: Samples at the start of the recording on which the residual's initial value is estimated.
+START_SAMPLES = 20
+
+
+def _jumps_at_start(residual, sigma: float) -> bool:
+    """Whether `residual` starts away from zero: the intercept of a quadratic least-squares fit
+    to its first :data:`START_SAMPLES` samples (in sample units) is more than 4 of its standard
+    errors from zero, for white noise of standard deviation `sigma`."""
+    k = min(START_SAMPLES, residual.size)
+    if k < 4 or sigma <= 0:
+        return True
+    basis = np.vander(np.arange(k, dtype=float), 3, increasing=True)
+    coef, *_ = np.linalg.lstsq(basis, residual[:k], rcond=None)
+    se = sigma * float(np.sqrt(np.linalg.inv(basis.T @ basis)[0, 0]))
+    return abs(float(coef[0])) > 4.0 * se
 
 
 def _nominal_residuals(sim, graph, exp, x0):
@@ -258,7 +302,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         Bad arguments.
     """
     from .catalogue import candidates
-    from .fit import choose, fit_candidate, noise_floor
+    from .fit import fit_candidate, noise_floor
     from .graph_location import locate_on_graph
     from .initial_state import estimate_initial_state
     from .locate import locate_regime, regime_variables, significant_windows
@@ -311,9 +355,9 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         except (np.linalg.LinAlgError, FloatingPointError) as exc:   # numerics, not the user's input
             raise DiagnosisError(f"graph location of {graph.name!r} failed on {rec.source}: "
                                  f"{type(exc).__name__}: {exc}") from exc
-        place_list = [s.place for s in scores[:int(top)] if s.explained >= MIN_PLACE_SHARE]
+        place_list = [s.place for s in located_places(scores, int(top))]
 
-    cands = [c for p in place_list for c in candidates(graph, p, regime_variables=rv, experiment=train)]
+    cands = [c for p in place_list for c in candidates(graph, p, regime_variables=rv, experiment=train, x0=x0)]
     evidence, cands, pruned = _features(graph, scores, place_list, train, x0, rv, cands, say, "feature regression")
     fit_part, fit_x0 = _fit_window(train, res.run, x0)
     fits = []
@@ -322,14 +366,14 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         fits.append(fit_candidate(graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0,
                                   through=train))
     fits += _twin_fits(graph, fits, train, rv, lambda cand: fit_candidate(
-        graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0, through=train), say, "fitting")
+        graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0, through=train), say, "fitting", x0)
     if uncertain:
         say("fitting", f"nominal parameters {', '.join(uncertain)} alone")
         fits.append(fit_candidate(graph, None, fit_part, held, uncertain=uncertain, x0=fit_x0,
                                   through=train))
     say("choosing")
     floor = noise_floor(held, res.noise)
-    chosen = choose(nominal, fits, noise=floor, evidence=_lookup(evidence)) if fits else None
+    chosen = _choose(nominal, fits, floor, evidence, res, exp, train, diverged)
 
     say("improved model")
     if chosen is None:
@@ -384,12 +428,33 @@ def _features(graph, scores, places, train, x0, rv, cands, say, label):
     return evidence, kept, [str(c) for c in pruned]
 
 
+def _choose(reference, fits, floor, evidence, res, exp, train, diverged):
+    """:func:`~diagnosis.fit.choose` on the held-out part; when it answers "none", the training
+    part's answer among the fits the held-out part cannot judge
+    (:mod:`diagnosis.training_judge`: fits whose held-out prediction is the reference's)."""
+    from .fit import choose, noise_floor
+    from .residuals import nrmse
+    from .training_judge import choose_on_training, mark_silent
+    if not fits:
+        return None
+    n = train.t.size
+    if not diverged:
+        mark_silent(fits, res.simulated, exp.outputs, res.noise, n)
+    for f in fits:
+        f.y = None
+    chosen = choose(reference, fits, noise=floor, evidence=_lookup(evidence))
+    if chosen is not None or diverged:
+        return chosen
+    nominal_train = {o: nrmse(train.outputs[o], res.simulated[o][:n]) for o in exp.outputs}
+    return choose_on_training(nominal_train, fits, floor=noise_floor(train, res.noise), n_train=n)
+
+
 def _lookup(evidence):
     from .features import evidence_lookup
     return evidence_lookup(evidence) if evidence else None
 
 
-def _twin_fits(graph, fits, train, rv, fit, say, label) -> list:
+def _twin_fits(graph, fits, train, rv, fit, say, label, x0=None) -> list:
     """Fits of the same kind at all twins of the best single-place fits' places
     (:mod:`diagnosis.twins`): an effect on every copy of a repeated component."""
     from .catalogue import candidates
@@ -397,7 +462,7 @@ def _twin_fits(graph, fits, train, rv, fit, say, label) -> list:
     from .twins import twin_groups
 
     groups = twin_groups(graph, fits, candidate_places(graph, experiment=train),
-                         lambda place: candidates(graph, place, regime_variables=rv, experiment=train),
+                         lambda place: candidates(graph, place, regime_variables=rv, experiment=train, x0=x0),
                          experiment=train)
     out = []
     for i, group in enumerate(groups, 1):
@@ -417,7 +482,7 @@ def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, 
     when something was kept, ``graph`` and ``y`` (its simulated outputs).
     """
     from .catalogue import candidates
-    from .fit import choose, fit_candidate
+    from .fit import fit_candidate
     from .graph_location import locate_on_graph
     from .locate import regime_variables
     from .residuals import OutputSimulator, residuals
@@ -431,10 +496,10 @@ def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, 
     except (np.linalg.LinAlgError, FloatingPointError) as exc:   # numerics: no further effect
         return Round(None, [], dict(reference), dict(reference), scores=[],
                      note=f"graph location failed: {type(exc).__name__}: {exc}")
-    places = [s for s in scores[:top] if s.explained >= MIN_PLACE_SHARE]
+    places = located_places(scores, top)
     done = {(c.kind, c.place) for r in rounds if r.chosen is not None and r.chosen.candidate is not None
             for c in getattr(r.chosen.candidate, "members", (r.chosen.candidate,))}
-    cands = [c for s in places for c in candidates(graph, s.place, regime_variables=rv, experiment=train)
+    cands = [c for s in places for c in candidates(graph, s.place, regime_variables=rv, experiment=train, x0=x0)
              if (c.kind, c.place) not in done]
     evidence, cands, pruned = _features(graph, scores, [s.place for s in places], train, x0, rv, cands, say,
                                         f"{label}: feature regression")
@@ -444,9 +509,9 @@ def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, 
         say(f"{label}: fitting", f"{cand} ({i}/{len(cands)})")
         fits.append(fit_candidate(graph, cand, fit_part, held, x0=fit_x0, through=train))
     fits += _twin_fits(graph, fits, train, rv, lambda cand: fit_candidate(
-        graph, cand, fit_part, held, x0=fit_x0, through=train), say, f"{label}: fitting")
+        graph, cand, fit_part, held, x0=fit_x0, through=train), say, f"{label}: fitting", x0)
     say(f"{label}: choosing")
-    chosen = choose(reference, fits, noise=floor, evidence=_lookup(evidence)) if fits else None
+    chosen = _choose(reference, fits, floor, evidence, res, exp, train, "")
     out = Round(chosen, fits, dict(reference), dict(reference), scores=scores,
                 features=list(evidence.values()), pruned=pruned)
     if chosen is not None:
@@ -470,7 +535,10 @@ def _joint_refit(graph, effects, exp, train, held, mask, x0, reference, floor, u
     from .fit import excess_error, fit_candidate
     from .residuals import OutputSimulator, residuals
 
-    names = [p.name for e in effects for p in e.candidate.params] + list(uncertain)
+    from .catalogue_common import released
+    values = graph.parameters()   # a released saturation limit stays released
+    names = [p.name for e in effects for p in e.candidate.params
+             if p.name not in values or not released(values[p.name].value)] + list(uncertain)
     res = residuals(graph, exp, simulator=OutputSimulator(graph, exp), x0=x0)
     part, part_x0 = _fit_window(train, res.run, x0)
     fit = fit_candidate(graph, None, part, held, uncertain=names, x0=part_x0, through=train)

@@ -54,8 +54,17 @@ def _effects(fit, refit=None) -> list[dict]:
         names = {p.name for p in cand.params}
         params = {k: float(v) for k, v in values.items() if k in names}
         out.append({"kind": cand.kind, "attached_to": str(cand.place), "parameters": params,
-                    "explanation": cand.explain(params)})
+                    "explanation": cand.explain(params), "judged_on": fit.extra.get("judge", "held-out")})
     return out
+
+
+def _judged_on_training(fit) -> str:
+    """Why an effect was accepted on the training part (:mod:`diagnosis.training_judge`)."""
+    return (f"Judged on the training part: the held-out part never reaches the regime where this effect "
+            f"acts (its prediction there differs from the model's by "
+            f"{fit.extra.get('holdout_change', 0.0):.2g} noise standard deviations), so the held-out error "
+            f"can neither confirm nor refute it; on the training part it explains "
+            f"{100 * fit.extra.get('train_share', 0.0):.0f} % of the error beyond the noise.")
 
 
 def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, rv, scores, fits,
@@ -156,6 +165,8 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
         first = physics[:len(getattr(chosen.candidate, "members", (None,)))]   # round 1: one per twin place
         lines.append(f"Missing physics: {m['kind']} at {', '.join(e['attached_to'] for e in first)}. "
                      f"{'; '.join(e['explanation'] for e in first)}")
+        if chosen.extra.get("judge") == "training":
+            lines.append(_judged_on_training(chosen))
         if chosen.extra.get("preferred_over"):
             lines.append(f"Held-out error nearly tied it with {chosen.extra['preferred_over']}; the feature "
                          f"regression decided.")
@@ -197,6 +208,8 @@ def _further_text(rounds, outputs):
         where = ", ".join(m["attached_to"] for m in found)
         lines.append(f"Also missing (round {i}): {found[0]['kind']} at {where}. "
                      f"{'; '.join(m['explanation'] for m in found)} (held-out NRMSE {gain}).")
+        if c.extra.get("judge") == "training":
+            lines.append(_judged_on_training(c))
     joint = next((r.joint for r in rounds if r.joint is not None), None)
     if joint is not None:
         gain = ", ".join(f"{o} {joint.reference[o]:.3g} -> {joint.improved[o]:.3g}" for o in outputs)

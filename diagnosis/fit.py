@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .catalogue_common import ParamSpec
+from .catalogue_common import RELEASED, ParamSpec
 from .errors import BondcosimError, DiagnosisError
 
 __all__ = ["CandidateFit", "fit_candidate", "choose", "noise_floor", "needs_explaining", "usable_fits",
@@ -73,6 +73,11 @@ class CandidateFit:
         The candidate graph (with the guesses as defaults; pass `values` as parameters).
     n_simulations : int
         Simulations run.
+    extra : dict
+        What the choice and the report add (e.g. ``"judge"``, ``"preferred_over"``).
+    y : dict str -> ndarray or None
+        The fitted model's outputs on the training then the held-out samples (dropped once
+        :func:`diagnosis.training_judge.mark_silent` has read them).
     """
 
     candidate: object
@@ -85,6 +90,7 @@ class CandidateFit:
     graph: object = None
     n_simulations: int = 0
     extra: dict = field(default_factory=dict)
+    y: dict | None = None
 
     @property
     def kind(self) -> str:
@@ -194,13 +200,16 @@ def _started_mid_run(candidate, train, x0):
 
 
 def _release_unsupported_limits(objective, specs, theta, lower, upper):
-    """A saturation limit that the training part gives no evidence for, i.e. whose release
-    to its outer bound (no limit on that side) raises the training cost by less than 1 %,
-    is released: a limit left where the training data happen to end would clip the
-    held-out part, which may go further."""
+    """A saturation limit that the training part gives no evidence for, i.e. whose move
+    to its outer bound raises the training cost by less than 1 %, is released: it becomes
+    :data:`~diagnosis.catalogue_common.RELEASED` (no limit on that side).  A limit left where the training data happen to
+    end, or at the fit's bound just beyond them, would clip the held-out part, which may
+    go further.  Returns ``(theta, released)``, `released` the names of those limits with
+    their released value."""
     theta = np.array(theta, dtype=float)
     r = objective(theta)
     base = 0.5 * float(r @ r)
+    released = {}
     for i, spec in enumerate(specs):
         side = spec.name.split("_")[1] if spec.name.count("_") >= 2 else ""
         if side not in ("min", "max"):
@@ -211,7 +220,8 @@ def _release_unsupported_limits(objective, specs, theta, lower, upper):
         cost = 0.5 * float(r @ r)
         if cost <= 1.01 * base:
             theta, base = trial, min(base, cost)
-    return theta
+            released[spec.name] = -RELEASED if side == "min" else RELEASED
+    return theta, released
 
 
 def _best_start(objective, candidate, theta0):
@@ -312,9 +322,10 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
         message = f"{result.message} ({result.nfev} evaluations, {objective.n_runs} simulations)"
     else:
         theta, converged, message = theta0, True, "nothing to fit"
+    released = {}
     if candidate is not None and candidate.kind == "saturation" and specs:
-        theta = _release_unsupported_limits(objective, specs, theta, lower, upper)
-    values = objective.params(theta)
+        theta, released = _release_unsupported_limits(objective, specs, theta, lower, upper)
+    values = {**objective.params(theta), **released}
     if candidate is not None:
         values = candidate.settle(values, train)
     try:   # one run of training + held-out part (the training outputs are its first samples)
@@ -331,7 +342,7 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     return CandidateFit(candidate, values, train_nrmse, holdout_nrmse, len(specs), converged,
                         message if converged else f"{label} did not converge: {message}", model,
                         objective.n_runs + 1,
-                        {"train_cost": 0.5 * float(sum(v ** 2 for v in train_nrmse.values()))})
+                        {"train_cost": 0.5 * float(sum(v ** 2 for v in train_nrmse.values()))}, y)
 
 
 def noise_floor(holdout, noise_sigma: dict | None = None) -> dict:

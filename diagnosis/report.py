@@ -4,7 +4,7 @@ Schema of :meth:`DiagnosisReport.to_json` (issue 6, section 2e)::
 
     {"location": {"junction": str, "bond": str, "windows": [[t0, t1], ...], "regime": str},
      "missing_physics": [{"kind": str, "attached_to": str, "parameters": {name: value},
-                          "explanation": str}],
+                          "explanation": str, "judged_on": "held-out" | "training"}],
      "fit": {"holdout": [t0, t1], "nominal": {output: nrmse}, "improved": {output: nrmse},
              "window": [t0, t1], "start": str},
      "improved_model": path}
@@ -14,6 +14,8 @@ Schema of :meth:`DiagnosisReport.to_json` (issue 6, section 2e)::
 element name, or ``"input NAME"`` / ``"output NAME"`` for actuator and sensor
 effects; ``""`` for none); ``bond`` is ``""`` when there is none;
 ``improved_model`` is ``null`` until :meth:`DiagnosisReport.save`;
+``judged_on`` is ``"training"`` for an effect the held-out part cannot judge
+(:mod:`diagnosis.training_judge`), else ``"held-out"``;
 ``fit.window`` is the part of the training samples the candidates were fitted on
 and ``fit.start`` the state their simulations started from.
 ``features`` (present when round 1 located a junction) holds the feature regression
@@ -82,7 +84,9 @@ class DiagnosisReport:
     location : dict
         ``junction``, ``bond``, ``windows`` (list of [t0, t1], s), ``regime``.
     missing_physics : list of dict
-        ``kind``, ``attached_to``, ``parameters`` (name -> SI value), ``explanation``.
+        ``kind``, ``attached_to``, ``parameters`` (name -> SI value), ``explanation``,
+        ``judged_on`` (``"held-out"``, or ``"training"`` when the held-out part never reaches
+        the effect's regime: :mod:`diagnosis.training_judge`).
     fit : dict
         ``holdout`` [t0, t1] (s), ``nominal`` and ``improved`` held-out NRMSE per output.
     text : str
@@ -137,7 +141,8 @@ class DiagnosisReport:
                          "regime": str(loc.get("regime", ""))},
             "missing_physics": [{"kind": m["kind"], "attached_to": m["attached_to"],
                                  "parameters": {k: _finite(v) for k, v in m["parameters"].items()},
-                                 "explanation": m["explanation"]} for m in self.missing_physics],
+                                 "explanation": m["explanation"],
+                                 "judged_on": m.get("judged_on", "held-out")} for m in self.missing_physics],
             "fit": {"holdout": [_finite(v) for v in self.fit["holdout"]],
                     "nominal": {k: _finite(v) for k, v in self.fit["nominal"].items()},
                     "improved": {k: _finite(v) for k, v in self.fit["improved"].items()},

@@ -97,7 +97,8 @@ def test_report_saves_schema_plots_and_an_improved_graph(coulomb, tmp_path):
     data = json.loads(open(paths["json"]).read())
     assert set(data) == {"location", "missing_physics", "fit", "improved_model", "features"}   # features: a junction was located
     assert set(data["location"]) == {"junction", "bond", "windows", "regime"}
-    assert set(data["missing_physics"][0]) == {"kind", "attached_to", "parameters", "explanation"}
+    assert set(data["missing_physics"][0]) == {"kind", "attached_to", "parameters", "explanation", "judged_on"}
+    assert data["missing_physics"][0]["judged_on"] == "held-out"
     assert set(data["fit"]) == {"holdout", "nominal", "improved", "window", "start"}
     assert data["fit"]["window"][0] == 0.0 and data["fit"]["start"] == "the model's initial state"
     assert data["improved_model"] == paths["model"]

@@ -24,10 +24,13 @@ class Leak(Kind):
         e_mean = float(e.mean()) if e is not None else 0.0
         p_amb = P_AMBIENT if junction_domain(graph, j) == "pneumatic" and e_mean > 5e4 else 0.0
         dev, F = max(abs(e_mean - p_amb), site.scales.effort), site.scales.flow
+        c = fresh_name(site.taken, f"c_leak_{j}")
+        # a leak's flow may be any fraction of the junction's flows: starts over five decades
         return [Proposal(
-            (ParamSpec(fresh_name(site.taken, f"c_leak_{j}"), 0.1 * F / dev, 0.0, 100 * F / dev,
+            (ParamSpec(c, 0.1 * F / dev, 0.0, 100 * F / dev,
                        f"({f_unit})/({e_unit})" if e_unit else "", f"leak conductance at {j}"),),
-            constants=((fresh_name(site.taken, f"P_amb_{j}"), p_amb, e_unit, f"ambient pressure the leak at {j} vents to"),))]
+            constants=((fresh_name(site.taken, f"P_amb_{j}"), p_amb, e_unit, f"ambient pressure the leak at {j} vents to"),),
+            starts=tuple({c: k * F / dev} for k in (1e-5, 1e-4, 1e-3, 1e-2)))]
 
     def build(self, graph, cand, values):
         j = cand.place.name

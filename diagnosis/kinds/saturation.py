@@ -17,7 +17,7 @@ import numpy as np
 import sympy as sp
 from bondgraph import R
 
-from ..catalogue_common import ParamSpec, fresh_name, junction_domain
+from ..catalogue_common import RELEASED, ParamSpec, fresh_name, junction_domain, released
 from .base import Kind, Proposal, hang, register
 from .signal_common import input_record
 from .storage_common import capacitors, stiffness_scale, units_of
@@ -58,29 +58,39 @@ class Saturation(Kind):
 
     def settle(self, cand, values, experiment):
         """An input limit that no training sample goes beyond has no evidence behind it: it is
-        moved to its outer bound (no limit on that side)."""
+        released (:data:`~diagnosis.catalogue_common.RELEASED`: no limit on that side)."""
         if cand.place.kind == "input" and experiment is not None and cand.place.name in experiment.inputs:
             u = np.asarray(experiment.inputs[cand.place.name], dtype=float)
             low, high = cand.params
             if not np.any(u < values[low.name]):
-                values[low.name] = low.lower
+                values[low.name] = -RELEASED
             if not np.any(u > values[high.name]):
-                values[high.name] = high.upper
+                values[high.name] = RELEASED
         return values
 
     def explain(self, cand, values, show):
         name = cand.place.name
         p = [spec.name for spec in cand.params]
         if cand.place.kind == "output":
-            return (f"the {name} sensor reads nothing beyond {show(p[0])} .. {show(p[1])}: "
+            return (f"the {name} sensor reads nothing {_range(values, p, show)}: "
                     f"the range of the {name} sensor (saturation of output {name})")
         if cand.place.kind == "input":
-            return f"the input {name} has no effect beyond {show(p[0])} .. {show(p[1])}: saturation of input {name}"
+            return f"the input {name} has no effect {_range(values, p, show)}: saturation of input {name}"
         if len(p) == 1:
             return (f"the storage {cand.target} at {name} holds no more than {show(p[0])}: what exceeds it "
                     f"overflows (saturation of {cand.target})")
         return (f"the content of {cand.target} at {name} stays within {show(p[0])} .. {show(p[1])}: end stops "
                 f"(saturation of {cand.target})")
+
+
+def _range(values, names, show) -> str:
+    """``beyond lo .. hi``, or the one finite side of a range whose other limit was released."""
+    lo, hi = names
+    if released(values[lo]) and not released(values[hi]):
+        return f"above {show(hi)}"
+    if not released(values[lo]) and released(values[hi]):
+        return f"below {show(lo)}"
+    return f"beyond {show(lo)} .. {show(hi)}"
 
 
 def _content_limit(site, element, q) -> Proposal:

@@ -1,0 +1,130 @@
+"""When the held-out part cannot judge: candidates whose effect the held-out part never shows.
+
+The held-out part judges a candidate only where the candidate predicts something different
+there.  An effect that acts in a regime the held-out part never reaches (a sensor that clips
+at a level the last 30 % of the record stays away from, an end stop hit twice in the first
+minute) changes the prediction of the held-out part by less than the noise: the held-out
+error can neither confirm nor refute it, and :func:`diagnosis.fit.choose` answers "none"
+although the training part shows the effect plainly.
+
+:func:`choose_on_training` is the fallback for that case, and only for it.  A fit is
+*silent on the held-out part* when, on every output, its held-out prediction differs from
+the nominal one by less than the noise (rms of the difference below one noise standard
+deviation, :func:`holdout_change`); a fit that changes the held-out prediction is judged
+there, by :func:`~diagnosis.fit.choose`, and never here.  Among the silent fits, the one with
+the best training score (the held-out rule's excess error and parameter price, on the
+training part) is accepted when
+
+* the nominal training error needs explaining (its excess over the noise floor counts, as in
+  rule 1 of :func:`~diagnosis.fit.choose`);
+* it explains at least :data:`MIN_TRAIN_SHARE` (50 %) of the nominal training excess error
+  (more than the held-out rule's 30 %: the training part also fitted it);
+* the drop of its training sum of squares, in noise variances, is at least
+  :data:`EVIDENCE_PER_PARAMETER` (Bayesian information criterion's ``ln n``, at least 10) per
+  fitted parameter: chance fits of noise do not pass;
+* at most half of that drop lies in the first :data:`START_SHARE` (5 %) of the training part:
+  an effect seen only at the start is as likely a wrong initial state as missing physics.
+
+The report says when the training part judged (:attr:`CandidateFit.extra` ``"judge"``).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["holdout_change", "mark_silent", "choose_on_training", "MIN_TRAIN_SHARE",
+           "EVIDENCE_PER_PARAMETER", "START_SHARE"]
+
+#: Share of the nominal training excess error a training-judged fit must explain.
+MIN_TRAIN_SHARE = 0.5
+#: Least drop of the training sum of squares, in noise variances, per fitted parameter.
+EVIDENCE_PER_PARAMETER = 10.0
+#: The start of the training part, as a share of it, that may not hold most of the evidence.
+START_SHARE = 0.05
+
+
+def holdout_change(y_fit: dict, y_nominal: dict, sigma: dict) -> float:
+    """The largest, over outputs, rms difference between two held-out predictions in noise
+    standard deviations (``inf`` when a prediction is missing or not finite)."""
+    worst = 0.0
+    for o, ref in y_nominal.items():
+        y = y_fit.get(o) if y_fit else None
+        if y is None or sigma.get(o, 0.0) <= 0:
+            return float("inf")
+        d = np.asarray(y, float) - np.asarray(ref, float)
+        if not np.all(np.isfinite(d)):
+            return float("inf")
+        worst = max(worst, float(np.sqrt(np.mean(d ** 2))) / sigma[o])
+    return worst
+
+
+def mark_silent(fits, nominal_y: dict, measured: dict, sigma: dict, n_train: int) -> None:
+    """Record, on each fit with a prediction (``fit.y``, training then held-out samples), its
+    held-out change against the nominal prediction `nominal_y` (same samples) in noise
+    standard deviations (``extra["holdout_change"]``) and, for the training part, the drop of
+    the noise-weighted sum of squares against the nominal (``extra["train_evidence"]``) and
+    the share of it in the first :data:`START_SHARE` of the part (``extra["start_share"]``).
+    The prediction is then dropped (it is large and used nowhere else)."""
+    n_start = max(1, int(START_SHARE * n_train))
+    for fit in fits:
+        y = getattr(fit, "y", None)
+        if not y:
+            continue
+        held = {o: y[o][n_train:] for o in nominal_y}
+        fit.extra["holdout_change"] = holdout_change(held, {o: v[n_train:] for o, v in nominal_y.items()}, sigma)
+        drop = np.zeros(n_train)
+        for o, ref in nominal_y.items():
+            m = np.asarray(measured[o][:n_train], float)
+            if sigma.get(o, 0.0) <= 0:
+                continue
+            drop += ((m - ref[:n_train]) ** 2 - (m - np.asarray(y[o][:n_train], float)) ** 2) / sigma[o] ** 2
+        total = float(np.sum(drop)) if np.all(np.isfinite(drop)) else float("-inf")
+        fit.extra["train_evidence"] = total
+        fit.extra["start_share"] = float(np.sum(drop[:n_start]) / total) if total > 0 else 1.0
+        fit.y = None
+
+
+def choose_on_training(nominal_train: dict, fits, *, floor: dict, n_train: int):
+    """The training part's answer among the fits silent on the held-out part, or None.
+
+    Parameters
+    ----------
+    nominal_train : dict str -> float
+        Training NRMSE of the nominal model per output.
+    fits : iterable of CandidateFit
+        With ``extra`` marked by :func:`mark_silent`.
+    floor : dict str -> float
+        The training part's noise floor per output (NRMSE), :func:`diagnosis.fit.noise_floor`.
+    n_train : int
+        Training samples (the information criterion's ``n``).
+
+    Returns
+    -------
+    CandidateFit or None
+        With ``extra["judge"] = "training"`` and ``extra["train_share"]``.
+    """
+    from .fit import PARAMETER_PRICE, excess_error, needs_explaining, usable_fits
+    significant = needs_explaining(nominal_train, floor)
+    if not significant:
+        return None
+    e0 = excess_error(nominal_train, floor, significant)
+    if not np.isfinite(e0) or e0 <= 0:
+        return None
+    per_parameter = max(EVIDENCE_PER_PARAMETER, float(np.log(max(n_train, 2))))
+    names = list(nominal_train)
+    silent = [f for f in usable_fits(fits, names) if f.candidate is not None
+              and f.extra.get("holdout_change", np.inf) < 1.0
+              and all(np.isfinite(f.train_nrmse.get(o, np.nan)) for o in names)]
+
+    def score(f):
+        return (excess_error(f.train_nrmse, floor, significant) + 1e-4 * e0) * (1 + PARAMETER_PRICE) ** f.n_params
+
+    if not silent:
+        return None
+    best = min(silent, key=score)   # only the best may answer: a worse fit is not preferred for passing
+    share = 1.0 - excess_error(best.train_nrmse, floor, significant) / e0
+    if (share < MIN_TRAIN_SHARE or best.extra.get("train_evidence", 0.0) < per_parameter * max(best.n_params, 1)
+            or best.extra.get("start_share", 1.0) > 0.5):
+        return None
+    best.extra["judge"] = "training"
+    best.extra["train_share"] = float(share)
+    return best

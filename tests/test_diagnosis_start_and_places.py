@@ -1,0 +1,85 @@
+"""What the diagnosis starts from and where it looks: a load acting from rest is not absorbed
+into an estimated initial state, places the location cannot separate are all fitted, and the
+catalogue's scales are read from the recording's initial state."""
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import plants.library as library
+from diagnosis.benchmark.plants import PLANTS
+from diagnosis.benchmark.effects import make_effect
+from diagnosis.benchmark.simulate import simulate_truth
+from diagnosis.catalogue import candidates
+from diagnosis.diagnose import _jumps_at_start, diagnose, located_places
+from diagnosis.place import Place
+from diagnosis.recording import Experiment
+
+LOAD = 0.2     # N, a constant force on the mass from t = 0
+
+
+def _msd_with_load(path, seed=3, sigma=0.002):
+    """The benchmark's hand-written msd truth (not the catalogue's code) at rest at t = 0, with
+    a constant force LOAD added at the mass; x and v measured."""
+    plant = PLANTS["msd"]()
+    t = np.arange(0, 30.0, 1 / plant.rate)
+    rng = np.random.default_rng(seed)
+    F = np.repeat(rng.uniform(-2, 2, t.size // 50 + 1), 50)[:t.size]
+
+    load = make_effect("constant_load", plant, "junction", "v_mass", LOAD, {}, {"sign": 1.0})
+    y = simulate_truth(plant, t, {"F": F}, load)
+    x = y["x"] + rng.normal(0.0, sigma, t.size)
+    v = y["v"] + rng.normal(0.0, sigma, t.size)
+    rows = "\n".join(f"{a:.4f},{b:.4f},{c:.6f},{d:.6f}" for a, b, c, d in zip(t, F, x, v))
+    path.write_text("t,F,x,v\n" + rows + "\n")
+    return path
+
+
+def test_a_load_acting_from_rest_is_named_not_absorbed_into_the_start(tmp_path):
+    report = diagnose("mass-spring-damper", str(_msd_with_load(tmp_path / "load.csv")), inputs=["F=F:N"],
+                      outputs=["x=x:m", "v=v:m/s"], max_effects=1)
+    data = report.to_json()
+    assert data["fit"]["start"] == "the model's initial state"
+    effect = data["missing_physics"][0]
+    assert (effect["kind"], effect["attached_to"]) == ("constant_load", "junction v_mass")
+    (value,) = effect["parameters"].values()
+    assert abs(value) == pytest.approx(LOAD, rel=0.05)
+
+
+def test_jump_at_start_is_an_intercept_beyond_four_standard_errors():
+    rng = np.random.default_rng(0)
+    noise = rng.normal(0.0, 1.0, 20)
+    k = np.arange(20.0)
+    assert not _jumps_at_start(noise + 0.05 * k ** 2, 1.0)       # grows from zero: a missing effort
+    assert _jumps_at_start(noise + 8.0, 1.0)                      # starts elsewhere: a wrong state
+    assert not _jumps_at_start(noise, 1.0)
+
+
+def _score(name, explained):
+    return SimpleNamespace(place=name, explained=explained)
+
+
+def test_places_the_location_cannot_separate_are_all_kept():
+    scores = [_score(n, e) for n, e in (("a", 0.9817), ("b", 0.9817), ("c", 0.9817), ("d", 0.9808),
+                                        ("e", 0.9157), ("f", 0.01))]
+    assert [s.place for s in located_places(scores, 3)] == ["a", "b", "c", "d"]
+    assert [s.place for s in located_places(scores[:3] + scores[4:], 3)] == ["a", "b", "c"]
+    assert [s.place for s in located_places([_score("a", 0.5), _score("f", 0.01)], 3)] == ["a"]
+
+
+def test_the_catalogue_reads_its_scales_from_the_given_initial_state():
+    graph = library.build("mass-spring-damper")
+    t = np.arange(0.0, 10.0, 0.02)
+    exp = Experiment(t, {"F": np.zeros(t.size)}, {"x": np.zeros(t.size)}, {"F": "N", "x": "m"})
+    place = Place("junction", "v_mass")
+    at_rest = {c.kind: c for c in candidates(graph, place, experiment=exp)}
+    moving = {c.kind: c for c in candidates(graph, place, experiment=exp, x0={"q_k": 0.5, "p_m": 0.0})}
+    # with no force and a resting start nothing moves: the unit fallback; from 0.5 m the mass rings
+    assert at_rest["viscous_friction"].params[0].guess != moving["viscous_friction"].params[0].guess
+
+
+def test_a_leak_is_started_over_five_decades():
+    graph = library.build("pam")
+    (leak,) = [c for c in candidates(graph, Place("junction", "chamber1")) if c.kind == "leak"]
+    starts = sorted(s[leak.params[0].name] for s in leak.starts)
+    assert len(starts) == 4 and starts[-1] / starts[0] == pytest.approx(1e3)

@@ -1,0 +1,101 @@
+"""The training part judges an effect the held-out part never shows (diagnosis.training_judge).
+
+Truth (hand-written RK4, not the catalogue's code): the library mass-spring-damper driven hard
+for the first 8 s and gently after; its position sensor reads nothing above 0.6 m, a level
+reached only in the first 8 s.  The held-out part (the last 30 %) stays far below it, so the
+held-out error cannot tell the clipped sensor from the nominal model.
+"""
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from diagnosis.diagnose import diagnose
+from diagnosis.fit import CandidateFit
+from diagnosis.training_judge import choose_on_training, holdout_change
+
+FS, SPAN, SIGMA = 50.0, 20.0, 5e-3       # Hz, s, m
+Y_MAX = 0.6                             # m, the sensor's upper limit
+
+
+def _truth(t, force, m=1.0, b=0.4, k=4.0, substeps=20):
+    """m v' = F - b v - k x, x' = v; F held per sample; classic RK4 written out here."""
+    def rate(s, f):
+        return np.array([s[1], (f - b * s[1] - k * s[0]) / m])
+
+    s, out = np.zeros(2), np.zeros(t.size)
+    for i in range(t.size - 1):
+        h = (t[i + 1] - t[i]) / substeps
+        for _ in range(substeps):
+            k1 = rate(s, force[i])
+            k2 = rate(s + h / 2 * k1, force[i])
+            k3 = rate(s + h / 2 * k2, force[i])
+            k4 = rate(s + h * k3, force[i])
+            s = s + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        out[i + 1] = s[0]
+    return out
+
+
+def _recording(path, clip, seed=5):
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, SPAN, 1.0 / FS)
+    amplitude = np.where(t < 4.0, 4.0, 0.1)
+    force = amplitude * (np.sin(2 * np.pi * 0.3 * t) + 0.5 * np.sin(2 * np.pi * 0.7 * t + 1.0))
+    x = _truth(t, force)
+    if clip:
+        x = np.minimum(x, Y_MAX)
+    x = x + rng.normal(0.0, SIGMA, t.size)
+    lines = ["t,F,x"] + [f"{a:.6f},{f:.9g},{p:.6g}" for a, f, p in zip(t, force, x)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.fixture(scope="module")
+def clipped(tmp_path_factory):
+    path = _recording(tmp_path_factory.mktemp("clip") / "msd_clipped.csv", clip=True)
+    return diagnose("mass-spring-damper", str(path), inputs=["F=F:N"], outputs=["x=x:m"], max_effects=1)
+
+
+def test_a_sensor_range_seen_only_in_training_is_named_and_judged_there(clipped):
+    data = clipped.to_json()
+    (effect,) = data["missing_physics"]
+    assert (effect["kind"], effect["attached_to"], effect["judged_on"]) == ("saturation", "output x", "training")
+    low, high = (effect["parameters"][n] for n in ("y_min_x", "y_max_x"))
+    assert high == pytest.approx(Y_MAX, abs=3 * SIGMA)
+    assert low <= -1e299                          # never reached: released, not left at a bound
+    assert f"reads nothing above {high:.3g} m" in effect["explanation"]
+    assert "Judged on the training part" in clipped.text
+    # the held-out part cannot show it: its error is the nominal's
+    assert data["fit"]["improved"]["x"] == pytest.approx(data["fit"]["nominal"]["x"], rel=0.02)
+
+
+def test_without_the_clip_nothing_is_found(tmp_path):
+    path = _recording(tmp_path / "msd_free.csv", clip=False)
+    report = diagnose("mass-spring-damper", str(path), inputs=["F=F:N"], outputs=["x=x:m"], max_effects=1)
+    assert report.kind == "none"
+
+
+def _fit(train, holdout_change_sd, start_share=0.0, evidence=1e4, n_params=1):
+    fit = CandidateFit(SimpleNamespace(kind="saturation"), {}, {"x": train}, {"x": 0.1}, n_params, True, "")
+    fit.extra.update(holdout_change=holdout_change_sd, start_share=start_share, train_evidence=evidence)
+    return fit
+
+
+def test_the_training_part_answers_only_for_fits_the_held_out_part_cannot_judge():
+    floor = {"x": 0.01}
+    assert choose_on_training({"x": 0.2}, [_fit(0.02, 0.5)], floor=floor, n_train=1000).extra["judge"] == "training"
+    # a fit that changes the held-out prediction is the held-out part's to judge
+    assert choose_on_training({"x": 0.2}, [_fit(0.02, 1.5)], floor=floor, n_train=1000) is None
+    # explaining under half of the training excess, or evidence mostly at the start, or too little
+    assert choose_on_training({"x": 0.2}, [_fit(0.17, 0.5)], floor=floor, n_train=1000) is None
+    assert choose_on_training({"x": 0.2}, [_fit(0.02, 0.5, start_share=0.8)], floor=floor, n_train=1000) is None
+    assert choose_on_training({"x": 0.2}, [_fit(0.02, 0.5, evidence=5.0)], floor=floor, n_train=1000) is None
+    # a nominal whose training error is the noise needs nothing
+    assert choose_on_training({"x": 0.0101}, [_fit(0.01, 0.5)], floor=floor, n_train=1000) is None
+
+
+def test_holdout_change_in_noise_units():
+    y = np.zeros(100)
+    assert holdout_change({"x": y + 0.02}, {"x": y}, {"x": 0.01}) == pytest.approx(2.0)
+    assert holdout_change({"x": y}, {"x": y}, {"x": 0.01}) == 0.0
+    assert holdout_change({}, {"x": y}, {"x": 0.01}) == np.inf

@@ -125,13 +125,14 @@ PLACE_TIE = 1.10
 
 
 def located_places(scores, top: int) -> list:
-    """The place scores whose candidates are fitted: the ``top`` best, and every further place
-    the location cannot tell from the ``top``-th (the share of the residual it leaves is within
-    :data:`PLACE_TIE` of that place's: a series spring's 1-junction and the 0-junctions of the
-    torque it carries explain the same), at most ``2 top``; none explaining under
-    :data:`MIN_PLACE_SHARE`."""
+    """The place scores whose candidates are fitted: the ``top`` best, and, when the ``top``-th
+    explains most of the residual (half or more), every further place the location cannot tell
+    from it (the share of the residual it leaves is within :data:`PLACE_TIE` of that place's:
+    a series spring's 1-junction and the 0-junctions of the torque it carries explain the
+    same), at most ``2 top``; none explaining under :data:`MIN_PLACE_SHARE`.  (Where the
+    location explains little, it separates little: more places would only crowd the fits.)"""
     kept = [s for s in scores if s.explained >= MIN_PLACE_SHARE]
-    if len(kept) <= top or top < 1:
+    if len(kept) <= top or top < 1 or kept[top - 1].explained < 0.5:
         return kept[:max(top, 0)]
     last = 1.0 - kept[top - 1].explained
     tied = [s for s in kept[top:2 * top] if 1.0 - s.explained <= PLACE_TIE * last]

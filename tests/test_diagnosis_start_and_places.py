@@ -65,6 +65,9 @@ def test_places_the_location_cannot_separate_are_all_kept():
     assert [s.place for s in located_places(scores, 3)] == ["a", "b", "c", "d"]
     assert [s.place for s in located_places(scores[:3] + scores[4:], 3)] == ["a", "b", "c"]
     assert [s.place for s in located_places([_score("a", 0.5), _score("f", 0.01)], 3)] == ["a"]
+    # a location that explains little separates little: no ties added
+    low = [_score(n, e) for n, e in (("a", 0.66), ("b", 0.47), ("c", 0.293), ("d", 0.2855))]
+    assert [s.place for s in located_places(low, 3)] == ["a", "b", "c"]
 
 
 def test_the_catalogue_reads_its_scales_from_the_given_initial_state():

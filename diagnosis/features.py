@@ -25,7 +25,9 @@ penalised validation error :math:`\\mathrm{SSE}_{val}(k) (1 + \\rho)^{m_k}`
 :data:`KIND_FEATURES`); a forward selection over kind groups (at most
 :data:`MAX_SELECTED`) says which kinds together explain the estimate.
 
-The features per kind (:data:`KIND_FEATURES`, the one table), with
+The features per kind are each kind's own (:meth:`diagnosis.kinds.base.Kind.features`, from the
+junction's :class:`~diagnosis.kinds.feature_signals.FeatureSignals`; :data:`KIND_FEATURES`
+lists them), with
 :math:`v` the junction's common flow (a velocity at a mechanical 1-junction),
 :math:`s = \\tanh(v / v_\\varepsilon)` a nearly sharp sign (:math:`v_\\varepsilon`
 :data:`SIGN_FRACTION` = 1 % of the RMS flow), :math:`q` the content of a C on the
@@ -69,7 +71,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .catalogue_common import junction_elements
-from .kinds.leak import P_AMBIENT
+from .kinds import REGISTRY
+from .kinds.feature_signals import SIGN_FRACTION, FeatureSignals, dahl_state
 from .kinds.modulated_friction import modulating_signals
 from .catalogue_scales import pressure_variables
 from .errors import BondcosimError
@@ -79,27 +82,12 @@ __all__ = ["KIND_FEATURES", "SIGN_FRACTION", "FEATURE_PRICE", "MAX_SELECTED", "K
            "feature_evidence", "regress_kinds", "dahl_state"]
 
 #: kind -> (junction kinds it applies at, the feature columns in words, the parameters it is
-#: priced by: the catalogue candidate's, a grid choice such as a Stribeck velocity counting as
-#: one); the builders below (:func:`_kind_variants`) follow this table and nothing else
-KIND_FEATURES = {
-    "coulomb_friction": ("1", ("sign(v)",), 1),
-    "viscous_friction": ("1", ("v",), 1),
-    "coulomb_viscous_friction": ("1", ("sign(v)", "v"), 2),
-    "stribeck_friction": ("1", ("sign(v)", "exp(-(v/v_s)^2) sign(v)"), 3),
-    "pressure_dependent_friction": ("1", ("sign(v)", "(P - P_mean) sign(v)"), 2),
-    "modulated_friction": ("1", ("sign(v)", "(lag(m) - m_mean) sign(v)"), 3),
-    "hysteresis": ("1", ("z_dahl",), 2),
-    "constant_load": ("01", ("1",), 1),
-    "nonlinear_stiffness": ("1", ("q^3", "q"), 2),
-    "backlash": ("1", ("clip(q, -b, b)",), 1),
-    "saturation": ("01", ("max(q - q_hi, 0)", "min(q - q_lo, 0)"), 2),
-    "leak": ("0", ("e - P_amb",), 1),
-}
+#: priced by), read off each kind's class (:attr:`~diagnosis.kinds.base.Kind.feature_doors`,
+#: ``feature_names``, ``feature_price``; the columns are its
+#: :meth:`~diagnosis.kinds.base.Kind.features`), in the catalogue order
+KIND_FEATURES = {name: (kind.feature_doors, kind.feature_names, kind.feature_price)
+                 for name, kind in REGISTRY.items() if kind.feature_doors}
 
-#: width of the smoothed sign of the friction features, as a fraction of the RMS flow: a nearly
-#: sharp sign (the catalogue's elements smooth at 5 % so that an integrator can step over the
-#: reversal; a feature column has no integrator to protect)
-SIGN_FRACTION = 0.01
 #: relative price of each parameter on the validation error (parsimony)
 FEATURE_PRICE = 0.05
 #: kinds the forward selection adds at most
@@ -110,11 +98,6 @@ VALIDATION = 0.3
 #: noise variances), for a kind to count as significant
 MIN_SHARE, MIN_DROP_PER_COLUMN = 0.02, 25.0
 _MAX_ROWS = 10000
-_STRIBECK = (0.1, 0.3, 1.0)          # v_s / RMS flow
-_DAHL = (1.0, 3.0, 10.0, 30.0, 100.0)   # alpha * RMS displacement
-_PLAY = (0.1, 0.3, 1.0)              # b / RMS content
-_STOPS = ((0.75, 0.25), (0.9, 0.1), (0.97, 0.03))   # quantiles of q at the limits
-_LAG_STEPS = (2.0, 20.0, 200.0)      # modulating lag, sample intervals
 
 
 @dataclass
@@ -227,50 +210,6 @@ def _finite(x):
     return x if np.isfinite(x) else None
 
 
-def dahl_state(v, t, alpha):
-    """The normalised Dahl state :math:`\\dot z = \\alpha (v - |v| z)`, z(0) = 0, v held over
-    each interval (exact per interval): the Dahl friction is :math:`F_h z`.
-
-    Parameters
-    ----------
-    v : ndarray, shape (n,)
-        Flow (velocity, m/s or rad/s).
-    t : ndarray, shape (n,)
-        Times, s.
-    alpha : float
-        :math:`\\sigma / F_h`, per unit of displacement (1/m, 1/rad).
-
-    Examples
-    --------
-    >>> t = np.linspace(0.0, 1.0, 101)
-    >>> round(float(dahl_state(np.ones(101), t, 50.0)[-1]), 6)     # steady sliding: z -> 1
-    1.0
-    """
-    v, t = np.asarray(v, float), np.asarray(t, float)
-    z = np.zeros(v.size)
-    decay = np.exp(-alpha * np.abs(v[:-1]) * np.diff(t))
-    target = np.sign(v[:-1])
-    for k in range(v.size - 1):
-        z[k + 1] = target[k] + (z[k] - target[k]) * decay[k]
-    return z
-
-
-def _lagged(m, t, tau):
-    """First-order lag of a held signal, started at its first value."""
-    y = np.empty_like(m)
-    y[0] = m[0]
-    decay = np.exp(-np.diff(t) / tau)
-    for k in range(m.size - 1):
-        y[k + 1] = m[k] + (y[k] - m[k]) * decay[k]
-    return y
-
-
-def _rms(x) -> float:
-    x = np.asarray(x, float)
-    value = float(np.sqrt(np.mean(x ** 2))) if x.size else 0.0
-    return value if value > 0 and np.isfinite(value) else 1.0
-
-
 def _signals(graph, junction: str, regime_variables) -> dict:
     """Expressions to read along the run at `junction`: label -> expression."""
     bonds = [b for b, _ in graph.bonds_of(junction)]
@@ -286,66 +225,12 @@ def _signals(graph, junction: str, regime_variables) -> dict:
 
 def _kind_variants(kind, one, values, t, domain) -> list:
     """``(variant, detail, names, columns (n, m))`` of `kind` at a junction (`one`: a 1-junction)
-    from the nominal `values` (label -> ndarray, :func:`_signals`)."""
-    where = KIND_FEATURES[kind][0]
-    if ("1" if one else "0") not in where:
+    from the nominal `values` (label -> ndarray, :func:`_signals`): the kind's
+    :meth:`~diagnosis.kinds.base.Kind.features`, where it applies."""
+    definition = REGISTRY[kind]
+    if ("1" if one else "0") not in definition.feature_doors:
         return []
-    v = values["flow"]
-    V = _rms(v)
-    sign = np.tanh(v / (SIGN_FRACTION * V))
-    dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
-    span = float(t[-1] - t[0]) if t.size > 1 else 1.0
-    contents = {k.split(":", 1)[1]: q for k, q in values.items() if k.startswith("content:")}
-    if kind == "coulomb_friction":
-        return [(None, "", ["sign(v)"], sign[:, None])]
-    if kind == "viscous_friction":
-        return [(None, "", ["v"], v[:, None])]
-    if kind == "coulomb_viscous_friction":
-        return [(None, "", ["sign(v)", "v"], np.stack([sign, v], axis=1))]
-    if kind == "stribeck_friction":
-        return [(None, f"v_s = {f * V:.3g}", ["sign(v)", "exp(-(v/v_s)^2) sign(v)"],
-                 np.stack([sign, np.exp(-(v / (f * V)) ** 2) * sign], axis=1)) for f in _STRIBECK]
-    if kind == "pressure_dependent_friction":
-        return [(k.split(":", 1)[1], "", ["sign(v)", "(P - P_mean) sign(v)"],
-                 np.stack([sign, (p - p.mean()) * sign], axis=1))
-                for k, p in values.items() if k.startswith("pressure:") and np.ptp(p) > 0]
-    if kind == "modulated_friction":
-        out = []
-        for k, m in values.items():
-            if not k.startswith("signal:") or not np.ptp(m) > 0:
-                continue
-            for n in _LAG_STEPS:
-                tau = min(max(n * dt, dt / 2), max(span / 5, dt))
-                lag = _lagged(m, t, tau)
-                out.append((k.split(":", 1)[1], f"lag {tau:.3g} s", ["sign(v)", "(lag(m) - m_mean) sign(v)"],
-                            np.stack([sign, (lag - lag.mean()) * sign], axis=1)))
-        return out
-    if kind == "hysteresis":
-        x = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))])
-        X = _rms(x - x.mean())
-        return [(None, f"sigma/F_h = {a / X:.3g}", ["z_dahl"], dahl_state(v, t, a / X)[:, None]) for a in _DAHL]
-    if kind == "constant_load":
-        return [(None, "", ["1"], np.ones((t.size, 1)))]
-    if kind == "leak":
-        e = values["effort"]
-        p_amb = P_AMBIENT if domain == "pneumatic" and float(np.mean(e)) > 5e4 else 0.0
-        return [(None, "", ["e - P_amb"], (e - p_amb)[:, None])]
-    out = []
-    for c, q in contents.items():
-        if not np.ptp(q) > 0:
-            continue
-        Q = _rms(q)
-        if kind == "nonlinear_stiffness":
-            out.append((c, "", ["q^3", "q"], np.stack([q ** 3, q], axis=1)))
-        elif kind == "backlash":
-            out += [(c, f"b = {f * Q:.3g}", ["clip(q, -b, b)"], np.clip(q, -f * Q, f * Q)[:, None]) for f in _PLAY]
-        elif kind == "saturation":
-            for hi, lo in _STOPS:
-                top, bottom = np.quantile(q, hi), np.quantile(q, lo)
-                cols = [np.maximum(q - top, 0.0)] + ([np.minimum(q - bottom, 0.0)] if one else [])
-                out.append((c, f"q in [{bottom:.3g}, {top:.3g}]", ["max(q - q_hi, 0)", "min(q - q_lo, 0)"][:len(cols)],
-                            np.stack(cols, axis=1)))
-    return out
+    return list(definition.features(FeatureSignals(np.asarray(t, float), values, one, domain)))
 
 
 def regress_kinds(responses: dict, r, w, *, price: float = FEATURE_PRICE, validation: float = VALIDATION,

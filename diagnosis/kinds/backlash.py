@@ -3,17 +3,29 @@ play of :math:`\\pm b`, :math:`e = \\Phi(q - \\mathrm{clip}(q, -b, b))` (a compl
 with a dead zone of total width 2b).  One candidate per C on the junction."""
 from __future__ import annotations
 
+import numpy as np
 import sympy as sp
 
 from ..catalogue_common import ParamSpec, fresh_name
 from .base import Kind, Proposal, register
+from .feature_signals import FeatureGroup, rms
 from .storage_common import capacitors, displacement_scale, units_of
+
+
+#: the half-widths of the play the features try, as fractions of the C content's RMS
+FEATURE_GRID = (0.1, 0.3, 1.0)
 
 
 @register
 class Backlash(Kind):
     name = "backlash"
     doors = ("1",)
+    feature_doors, feature_names, feature_price = "1", ("clip(q, -b, b)",), 1
+
+    def features(self, s):
+        """Per moving C content q: the part inside a play of half-width b on a grid of its RMS."""
+        return [FeatureGroup(c, f"b = {f * rms(q):.3g}", ["clip(q, -b, b)"], np.clip(q, -f * rms(q), f * rms(q))[:, None])
+                for c, q in s.labelled("content").items() for f in FEATURE_GRID]
 
     def propose(self, site):
         out = []

@@ -102,6 +102,13 @@ class Kind:
     name: ClassVar[str] = ""
     #: where it may attach: some of :data:`DOORS`
     doors: ClassVar[tuple] = ()
+    #: the junction kinds (``"1"``, ``"0"``) at which :meth:`features` applies ("" none)
+    feature_doors: ClassVar[str] = ""
+    #: the feature columns in words (the documentation's table)
+    feature_names: ClassVar[tuple] = ()
+    #: the parameters its feature group is priced by (the candidate's; a grid choice such as a
+    #: Stribeck velocity counting as one)
+    feature_price: ClassVar[int] = 0
 
     def propose(self, site: Site) -> list[Proposal]:
         """The candidates of this kind at `site` (none where the domain does not fit)."""
@@ -124,10 +131,12 @@ class Kind:
         """Fitted `values` with what the training data cannot tell released (unchanged here)."""
         return values
 
-    def features(self, cand, site: Site | None = None):
-        """What this kind's effect looks like in the residual, for the feature regression
-        (None: no features declared)."""
-        return None
+    def features(self, signals) -> list:
+        """What this kind's effect looks like at a junction, for the feature regression
+        (:mod:`diagnosis.features`): its :class:`~diagnosis.kinds.feature_signals.FeatureGroup`
+        s from the junction's :class:`~diagnosis.kinds.feature_signals.FeatureSignals`, one per
+        variant (none here: the kind declares no features)."""
+        return []
 
     def __repr__(self) -> str:
         return f"<kind {self.name} at {', '.join(self.doors)}>"

@@ -9,16 +9,23 @@ derives and exports like any element; with the power convention of an R the load
 """
 from __future__ import annotations
 
+import numpy as np
+
 from bondgraph import R
 
 from ..catalogue_common import ParamSpec, fresh_name, junction_domain, junction_units
 from .base import Kind, Proposal, hang, register
+from .feature_signals import FeatureGroup
 
 
 @register
 class ConstantLoad(Kind):
     name = "constant_load"
     doors = ("1", "0")
+    feature_doors, feature_names, feature_price = "01", ("1",), 1
+
+    def features(self, s):
+        return [FeatureGroup(None, "", ["1"], np.ones((s.t.size, 1)))]
 
     def propose(self, site):
         j = site.name

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from .base import Kind, register
+from .feature_signals import FeatureGroup
 from .friction_common import friction_r, level, sign, smoothing_flow, with_level_starts
 
 
@@ -10,6 +11,10 @@ from .friction_common import friction_r, level, sign, smoothing_flow, with_level
 class CoulombFriction(Kind):
     name = "coulomb_friction"
     doors = ("1",)
+    feature_doors, feature_names, feature_price = "1", ("sign(v)",), 1
+
+    def features(self, s):
+        return [FeatureGroup(None, "", ["sign(v)"], s.sign[:, None])]
 
     def propose(self, site):
         return [with_level_starts([level(site, "Fc", f"Coulomb friction level at {site.name}")],

@@ -4,7 +4,10 @@ lubricated guide or a ball screw has both; fitted one at a time, the first absor
 second)."""
 from __future__ import annotations
 
+import numpy as np
+
 from .base import Kind, register
+from .feature_signals import FeatureGroup
 from .friction_common import friction_r, level, sign, smoothing_flow, viscous, with_level_starts
 
 
@@ -12,6 +15,10 @@ from .friction_common import friction_r, level, sign, smoothing_flow, viscous, w
 class CoulombViscousFriction(Kind):
     name = "coulomb_viscous_friction"
     doors = ("1",)
+    feature_doors, feature_names, feature_price = "1", ("sign(v)", "v"), 2
+
+    def features(self, s):
+        return [FeatureGroup(None, "", ["sign(v)", "v"], np.stack([s.sign, s.v], axis=1))]
 
     def propose(self, site):
         return [with_level_starts([level(site, "Fc", f"Coulomb friction level at {site.name}"), viscous(site)],

@@ -10,17 +10,31 @@ References
 """
 from __future__ import annotations
 
+import numpy as np
+
 from bondgraph import EquationElement
 
 from ..catalogue_common import ParamSpec, junction_units
 from .base import Kind, hang, register
+from .feature_signals import FeatureGroup, dahl_state, rms
 from .friction_common import displacement_unit, namer, with_level_starts
+
+
+#: the Dahl stiffness over level sigma/F_h the features try, times the RMS displacement
+FEATURE_GRID = (1.0, 3.0, 10.0, 30.0, 100.0)
 
 
 @register
 class Hysteresis(Kind):
     name = "hysteresis"
     doors = ("1",)
+    feature_doors, feature_names, feature_price = "1", ("z_dahl",), 2
+
+    def features(self, s):
+        """The Dahl state for sigma/F_h on a grid of the RMS displacement."""
+        X = rms(s.displacement)
+        return [FeatureGroup(None, f"sigma/F_h = {a / X:.3g}", ["z_dahl"], dahl_state(s.v, s.t, a / X)[:, None])
+                for a in FEATURE_GRID]
 
     def propose(self, site):
         j, E, X = site.name, site.scales.effort, site.scales.displacement

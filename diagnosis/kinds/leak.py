@@ -4,10 +4,13 @@ to the pressure difference.  :math:`P_{amb}` is fixed: 101325 Pa for a pneumatic
 mean pressure exceeds 50 kPa (absolute pressures), else 0 (gauge pressures, other domains)."""
 from __future__ import annotations
 
+import numpy as np
+
 from bondgraph import R
 
 from ..catalogue_common import ParamSpec, fresh_name, junction_domain, junction_units
 from .base import Kind, Proposal, hang, register
+from .feature_signals import FeatureGroup
 
 P_AMBIENT = 101325.0  # Pa
 
@@ -16,6 +19,12 @@ P_AMBIENT = 101325.0  # Pa
 class Leak(Kind):
     name = "leak"
     doors = ("0",)
+    feature_doors, feature_names, feature_price = "0", ("e - P_amb",), 1
+
+    def features(self, s):
+        e = np.asarray(s.values["effort"], float)
+        p_amb = P_AMBIENT if s.domain == "pneumatic" and float(np.mean(e)) > 5e4 else 0.0
+        return [FeatureGroup(None, "", ["e - P_amb"], (e - p_amb)[:, None])]
 
     def propose(self, site):
         j, graph = site.name, site.graph

@@ -30,6 +30,7 @@ from bondgraph.editing_inputs import expression_fields, mentions
 
 from ..catalogue_common import ParamSpec, fresh_name, junction_domain, junction_elements, junction_units
 from .base import Kind, Proposal, hang, register
+from .feature_signals import FeatureGroup, lagged
 from .friction_common import smoothing_flow
 
 __all__ = ["ModulatedFriction", "modulating_signals"]
@@ -80,10 +81,27 @@ def _driving_inputs(graph, junction: str) -> set:
     return found & names
 
 
+#: the modulating signal's lags the features try, in sample intervals
+FEATURE_LAG_STEPS = (2.0, 20.0, 200.0)
+
+
 @register
 class ModulatedFriction(Kind):
     name = "modulated_friction"
     doors = ("1",)
+    feature_doors, feature_names, feature_price = "1", ("sign(v)", "(lag(m) - m_mean) sign(v)"), 3
+
+    def features(self, s):
+        """Sign, and the sign times each modulating signal through a lag of 2, 20 and 200
+        sample intervals (at most a fifth of the record)."""
+        out = []
+        for expr, m in s.labelled("signal").items():
+            for n in FEATURE_LAG_STEPS:
+                tau = min(max(n * s.dt, s.dt / 2), max(s.span / 5, s.dt))
+                lag = lagged(m, s.t, tau)
+                out.append(FeatureGroup(expr, f"lag {tau:.3g} s", ["sign(v)", "(lag(m) - m_mean) sign(v)"],
+                                        np.stack([s.sign, (lag - lag.mean()) * s.sign], axis=1)))
+        return out
 
     def propose(self, site):
         """One candidate per modulating signal that varies in the nominal simulation

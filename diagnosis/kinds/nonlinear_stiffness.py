@@ -5,10 +5,12 @@ identified from data carries the cubic term's average in its linear value.  One 
 on the junction."""
 from __future__ import annotations
 
+import numpy as np
 import sympy as sp
 
 from ..catalogue_common import ParamSpec, fresh_name, junction_units
 from .base import Kind, Proposal, register
+from .feature_signals import FeatureGroup
 from .storage_common import capacitors, displacement_scale, units_of
 
 
@@ -16,6 +18,12 @@ from .storage_common import capacitors, displacement_scale, units_of
 class NonlinearStiffness(Kind):
     name = "nonlinear_stiffness"
     doors = ("1", "0")
+    feature_doors, feature_names, feature_price = "1", ("q^3", "q"), 2
+
+    def features(self, s):
+        """Per moving C content q: the cubic term and the refitted linear one."""
+        return [FeatureGroup(c, "", ["q^3", "q"], np.stack([q ** 3, q], axis=1))
+                for c, q in s.labelled("content").items()]
 
     def propose(self, site):
         e_unit, _ = junction_units(site.graph, site.name)

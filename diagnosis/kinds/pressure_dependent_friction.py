@@ -6,9 +6,12 @@ first (:func:`~diagnosis.catalogue.candidates` orders them).  :math:`P_{ref}` is
 nominal simulation (fixed), so :math:`c_0` is the Coulomb level at the mean pressure."""
 from __future__ import annotations
 
+import numpy as np
+
 from ..catalogue_common import ParamSpec, junction_units
 from ..catalogue_scales import pressure_variables
 from .base import Kind, register
+from .feature_signals import FeatureGroup
 from .friction_common import friction_r, level, namer, sign, smoothing_flow, with_level_starts
 
 
@@ -16,6 +19,13 @@ from .friction_common import friction_r, level, namer, sign, smoothing_flow, wit
 class PressureDependentFriction(Kind):
     name = "pressure_dependent_friction"
     doors = ("1",)
+    feature_doors, feature_names, feature_price = "1", ("sign(v)", "(P - P_mean) sign(v)"), 2
+
+    def features(self, s):
+        """Sign, and the sign times each moving pressure's deviation from its mean."""
+        return [FeatureGroup(expr, "", ["sign(v)", "(P - P_mean) sign(v)"],
+                             np.stack([s.sign, (p - p.mean()) * s.sign], axis=1))
+                for expr, p in s.labelled("pressure").items()]
 
     def propose(self, site):
         j, E = site.name, site.scales.effort

@@ -19,14 +19,32 @@ from bondgraph import R
 
 from ..catalogue_common import RELEASED, ParamSpec, fresh_name, junction_domain, released
 from .base import Kind, Proposal, hang, register
+from .feature_signals import FeatureGroup
 from .signal_common import input_record
 from .storage_common import capacitors, stiffness_scale, units_of
+
+
+#: the limits the features try: (upper, lower) quantiles of the C's content
+FEATURE_STOPS = ((0.75, 0.25), (0.9, 0.1), (0.97, 0.03))
 
 
 @register
 class Saturation(Kind):
     name = "saturation"
     doors = ("1", "0", "input", "output")
+    feature_doors, feature_names, feature_price = "01", ("max(q - q_hi, 0)", "min(q - q_lo, 0)"), 2
+
+    def features(self, s):
+        """Per moving C content q: what exceeds limits at quantiles of q (both sides at a
+        1-junction's end stops, the upper one at a 0-junction's overflow)."""
+        out = []
+        for c, q in s.labelled("content").items():
+            for hi, lo in FEATURE_STOPS:
+                top, bottom = np.quantile(q, hi), np.quantile(q, lo)
+                cols = [np.maximum(q - top, 0.0)] + ([np.minimum(q - bottom, 0.0)] if s.one else [])
+                out.append(FeatureGroup(c, f"q in [{bottom:.3g}, {top:.3g}]",
+                                        ["max(q - q_hi, 0)", "min(q - q_lo, 0)"][:len(cols)], np.stack(cols, axis=1)))
+        return out
 
     def propose(self, site):
         if site.door == "input":

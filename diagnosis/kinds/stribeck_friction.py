@@ -3,15 +3,29 @@
 :math:`F_c + \\Delta F_s`; viscous friction is its own kind)."""
 from __future__ import annotations
 
+import numpy as np
+
 from ..catalogue_common import ParamSpec, junction_units
 from .base import Kind, register
+from .feature_signals import FeatureGroup
 from .friction_common import friction_r, level, namer, sign, smoothing_flow, with_level_starts
+
+
+#: the Stribeck velocities the features try, as fractions of the RMS flow
+FEATURE_GRID = (0.1, 0.3, 1.0)
 
 
 @register
 class StribeckFriction(Kind):
     name = "stribeck_friction"
     doors = ("1",)
+    feature_doors, feature_names, feature_price = "1", ("sign(v)", "exp(-(v/v_s)^2) sign(v)"), 3
+
+    def features(self, s):
+        """Sign and Stribeck decay, the decay velocity on a grid of the RMS flow."""
+        return [FeatureGroup(None, f"v_s = {f * s.v_rms:.3g}", ["sign(v)", "exp(-(v/v_s)^2) sign(v)"],
+                             np.stack([s.sign, np.exp(-(s.v / (f * s.v_rms)) ** 2) * s.sign], axis=1))
+                for f in FEATURE_GRID]
 
     def propose(self, site):
         j, V = site.name, site.scales.flow

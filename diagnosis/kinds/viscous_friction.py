@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from .base import Kind, register
+from .feature_signals import FeatureGroup
 from .friction_common import friction_r, viscous, with_level_starts
 
 
@@ -9,6 +10,10 @@ from .friction_common import friction_r, viscous, with_level_starts
 class ViscousFriction(Kind):
     name = "viscous_friction"
     doors = ("1",)
+    feature_doors, feature_names, feature_price = "1", ("v",), 1
+
+    def features(self, s):
+        return [FeatureGroup(None, "", ["v"], s.v[:, None])]
 
     def propose(self, site):
         return [with_level_starts([viscous(site)])]

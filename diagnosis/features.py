@@ -406,7 +406,7 @@ def _evidence_at(graph, p, experiment, x0, regime_variables, d_hat):
     w = 1.0 / np.square(sigma)
     one = graph.elements[p.name].kind == "1"
     groups = {}
-    for kind in KIND_FEATURES:
+    for kind in [name for name, definition in REGISTRY.items() if definition.feature_doors]:
         for variant, detail, cols, F in _kind_variants(kind, one, values, t, junction_domain(graph, p.name)):
             groups[(kind, variant, detail)] = (cols, F)
     if not groups:
@@ -417,7 +417,7 @@ def _evidence_at(graph, p, experiment, x0, regime_variables, d_hat):
     r = np.stack([residual[o][rows] for o in outputs], axis=1) + S_all[:, :, 0]   # linearised nominal residual
     edges = 1 + np.cumsum([0] + [groups[k][1].shape[1] for k in keys])
     responses = {k: (groups[k][0], S_all[:, :, a:b]) for k, a, b in zip(keys, edges[:-1], edges[1:])}
-    prices = {k: KIND_FEATURES[k[0]][2] for k in keys}
+    prices = {k: REGISTRY[k[0]].feature_price for k in keys}
     ranked, selected, joint = regress_kinds(responses, r, w, parameters=prices)
     best = {}
     for (kind, variant, detail), (share, score, beta, sig, excess, drop) in ranked.items():

@@ -351,6 +351,7 @@ def test_a_new_kind_is_one_class_in_the_registry(monkeypatch):
     from diagnosis.catalogue_common import fresh_name, junction_domain, junction_units
     from diagnosis.kinds import REGISTRY, Kind, Proposal
     from diagnosis.kinds.base import hang
+    from diagnosis.kinds.feature_signals import FeatureGroup, FeatureSignals
 
     class QuadraticDrag(Kind):
         name = "quadratic_drag"
@@ -370,6 +371,11 @@ def test_a_new_kind_is_one_class_in_the_registry(monkeypatch):
         def explain(self, cand, values, show):
             return f"the motion at {cand.place.name} meets a drag of {show(cand.params[0].name)} times its speed squared"
 
+        feature_doors, feature_names, feature_price = "1", ("v |v|",), 1
+
+        def features(self, s):
+            return [FeatureGroup(None, "", ["v |v|"], (s.v * np.abs(s.v))[:, None])]
+
     monkeypatch.setitem(REGISTRY, "quadratic_drag", QuadraticDrag())
     msd = library.build("mass-spring-damper")
     drag = _one(msd, Place("junction", "v_mass"), "quadratic_drag")
@@ -377,6 +383,13 @@ def test_a_new_kind_is_one_class_in_the_registry(monkeypatch):
     v = S("p_m") / S("m")
     _differs_by(drag.build(msd, {"c_d_v_mass": 0.2}), msd, "p_m", -S("c_d_v_mass") * v * sp.Abs(v))
     assert "0.2" in drag.explain({"c_d_v_mass": 0.2})
+    # its features take part in the regression like the built-in kinds'
+    from diagnosis.features import _kind_variants
+    t = np.linspace(0.0, 1.0, 11)
+    (group,) = _kind_variants("quadratic_drag", True, {"flow": t - 0.5}, t, "translation")
+    assert group.columns[:, 0] == pytest.approx((t - 0.5) * np.abs(t - 0.5))
+    assert _kind_variants("quadratic_drag", False, {"flow": t}, t, "translation") == []
+    assert isinstance(FeatureSignals(t, {"flow": t}, True, "translation").sign, np.ndarray)
 
 
 def test_the_registry_is_the_vocabulary_and_refuses_bad_kinds():
@@ -385,7 +398,10 @@ def test_the_registry_is_the_vocabulary_and_refuses_bad_kinds():
     assert all(k.name == name and set(k.doors) <= set(DOORS) for name, k in REGISTRY.items())
     msd = library.build("mass-spring-damper")
     assert all("1" in c.definition.doors for c in candidates(msd, Place("junction", "v_mass")))
-    assert all(c.definition.features(c) is None for c in candidates(msd, Place("output", "x")))
+    # sensor kinds have no junction features; every kind with features names its columns
+    assert all(not REGISTRY[k].feature_doors and REGISTRY[k].features(None) == []
+               for k in ("sensor_offset", "sensor_gain", "valve_lag", "transport_delay", "heat_transfer"))
+    assert all(k.feature_names and k.feature_price >= 1 for k in REGISTRY.values() if k.feature_doors)
 
     class Twice(Kind):
         name, doors = "leak", ("0",)

@@ -108,6 +108,41 @@ def test_cylinder_seal_friction_reaches_the_load_cell():
     assert np.all(friction[v < -1e-3] > 5.0) and np.all(friction[v > 1e-3] < -5.0)
 
 
+@pytest.mark.parametrize("make, junction, spring, output", [(exoskeleton, "dw_s", "k_s", "tau_s"),
+                                                             (exoskeleton, "dw_eh", "k_eh", "tau_b"),
+                                                             (drivetrain, "dw_shaft", "k_s", "tau_s")])
+def test_a_sensor_on_a_spring_reads_its_changed_law_as_the_library_graph_does(make, junction, spring, output):
+    """A cubic hardening of a series spring, in the truth (an effort at its junction and in the
+    sensor that reads the spring) and in the library graph with the catalogue's
+    nonlinear_stiffness at the equivalent values (k3 = m, linear value k - m alpha <q^2>):
+    the torque outputs agree."""
+    from diagnosis.benchmark.effects import make_effect
+    from diagnosis.catalogue import candidates
+    from diagnosis.place import Place
+
+    plant = make()
+    t = np.arange(int(round(2.0 * plant.rate)) + 1) / plant.rate
+    u = random_inputs(plant, t, seed=3)
+    k = next(s.stiffness for s in plant.storages if s.name == spring)
+    base = simulate_truth(plant, t, u)
+    q_rms = float(np.sqrt(np.mean(base["_signals"][spring] ** 2))) if "_signals" in base else None
+    if q_rms is None:
+        base = simulate_truth(plant, t, u, signals=True)
+        q_rms = float(np.sqrt(np.mean(base["_signals"][spring] ** 2)))
+    m, alpha, q2 = 0.5 * k / q_rms ** 2, 0.5, q_rms ** 2          # the cubic doubles the spring at q_rms
+    truth = simulate_truth(plant, t, u, make_effect("nonlinear_stiffness", plant, "storage", spring, m, {},
+                                                    {"alpha": alpha, "q2": q2}))
+    graph = library.build(plant.model)
+    (cand,) = [c for c in candidates(graph, Place("junction", junction))
+               if c.kind == "nonlinear_stiffness" and c.target == spring]
+    values = {cand.params[0].name: m, cand.params[1].name: k - m * alpha * q2}
+    res = simulate(cand.build(graph, values), (0.0, t[-1]), inputs={n: (t, v) for n, v in u.items()},
+                   output_interval=1.0 / plant.rate, x0=plant.nominal_x0, params=values)
+    change = np.std(truth[output] - base[output])
+    assert change > 0.02 * np.std(base[output])                   # the effect shows in the sensor
+    assert np.max(np.abs(res[output] - truth[output])) < 0.02 * change
+
+
 @pytest.mark.parametrize("name", ["drivetrain", "carriage", "hydraulic", "msd", "dc-motor", "rlc", "tanks",
                                   "geared-inertias"])
 def test_plants_equal_their_library_graphs(name):

@@ -215,6 +215,23 @@ class TruthEffect(NoEffect):
             return {j: -level * math.tanh(x / eps)}, np.zeros(0)
         raise BenchmarkError(f"effect {k} cannot act at {self.door} {self.name}")
 
+    @property
+    def changes_sensed_storage(self) -> bool:
+        return self.door == "storage" and self.kind in ("nonlinear_stiffness", "backlash") and bool(self.storage.sensed)
+
+    def read_by_sensors(self, y, ext):
+        """`y` with a changed storage law in the outputs that read the storage's effort
+        (``StorageSpec.sensed``): the change of its effort is ``-sign`` times the effort it adds
+        at its junction (`ext`, this effect's :meth:`extra` at the same instant).  An end stop
+        or overflow is an element of its own, which those sensors do not read."""
+        if not self.changes_sensed_storage:
+            return y
+        y = dict(y)
+        change = -self.storage.sign * ext.get(self.junction, 0.0)
+        for name in self.storage.sensed:
+            y[name] = y[name] + change
+        return y
+
     def sensed(self, y):
         if self.door != "output":
             return y

@@ -108,7 +108,9 @@ class StorageSpec:
     ``stiffness`` its nominal linear coefficient (effort per content) when the
     law is linear, else ``None``.  ``sign``: +1 when an added spring effort
     ``e(q)`` enters ``junction`` as ``-e(q)`` (a spring opposing the motion that
-    loads it), -1 when it enters as ``+e(q)``.
+    loads it), -1 when it enters as ``+e(q)``.  ``sensed``: the outputs that read this
+    element's effort (a torque sensor on a series spring, a pressure sensor on an oil volume, a
+    capacitor's voltage): a change of its law is in their reading too.
     """
 
     name: str
@@ -116,6 +118,7 @@ class StorageSpec:
     stiffness: float | None
     sign: float = 1.0
     content_range: tuple[float, float] | None = None
+    sensed: tuple[str, ...] = ()
 
 
 @dataclass

@@ -96,7 +96,7 @@ def exoskeleton() -> TruthPlant:
                    JunctionSpec("w_sint", "1", rot), JunctionSpec("w_sext", "1", rot),
                    JunctionSpec("dw_g", "1", rot), JunctionSpec("dw_s", "1", rot),
                    JunctionSpec("dw_eh", "1", rot)),
-        storages=(StorageSpec("k_g", "dw_g", p["k_g"]), StorageSpec("k_s", "dw_s", p["k_s"]),
-                  StorageSpec("k_eh", "dw_eh", p["k_eh"])),
+        storages=(StorageSpec("k_g", "dw_g", p["k_g"]), StorageSpec("k_s", "dw_s", p["k_s"], sensed=("tau_s",)),
+                  StorageSpec("k_eh", "dw_eh", p["k_eh"], sensed=("tau_b",))),
         rate=200.0, duration=10.0, method="lsoda",
         description="back-support exoskeleton drive, seed 004 (stiff: LSODA)")

@@ -80,7 +80,7 @@ def rlc() -> TruthPlant:
         signals=lambda x, u: {"i_loop": x[0], "Cs": x[1]},
         measure=lambda x, u: {"v_C": x[1] / Cv, "i": x[0]},
         junctions=(JunctionSpec("i_loop", "1", "electrical"),),
-        storages=(StorageSpec("Cs", "i_loop", 1.0 / Cv),),
+        storages=(StorageSpec("Cs", "i_loop", 1.0 / Cv, sensed=("v_C",)),),
         rate=1000.0, duration=6.0, substeps=4,
         description="series RLC circuit")
 

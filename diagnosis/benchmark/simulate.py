@@ -42,6 +42,13 @@ class NoEffect:
         plant's local signals `sig` and the commands `u` as recorded (before any lag)."""
         return {}, np.zeros(0)
 
+    #: whether :meth:`read_by_sensors` changes anything (then the simulation computes `extra`)
+    changes_sensed_storage = False
+
+    def read_by_sensors(self, y: dict, ext: dict) -> dict:
+        """The outputs with a changed storage law in those that read the storage (none here)."""
+        return y
+
     def sensed(self, y: dict) -> dict:
         """Outputs as the sensors report them."""
         return y
@@ -134,17 +141,16 @@ def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None, *, x0
 
     out = {o.name: np.full(n, np.nan) for o in plant.outputs}
     local = {}
+    reads_storage = effect.changes_sensed_storage
     for k in range(n):
         if not np.all(np.isfinite(states[k])):
             break
         x, z = states[k, :nx], states[k, nx:]
         uk = {name: u[name][k] for name in names}
         ue = effect.inputs_now(uk, z)
-        if plant.feedthrough:
-            ext, _ = effect.extra(plant.signals(x, ue), uk, z)
-            y = effect.sensed(plant.measure(x, ue, ext))
-        else:
-            y = effect.sensed(plant.measure(x, ue))
+        ext = effect.extra(plant.signals(x, ue), uk, z)[0] if plant.feedthrough or reads_storage else {}
+        y = plant.measure(x, ue, ext) if plant.feedthrough else plant.measure(x, ue)
+        y = effect.sensed(effect.read_by_sensors(y, ext))
         for o in plant.outputs:
             out[o.name][k] = y[o.name]
         if signals:

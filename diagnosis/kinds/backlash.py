@@ -31,9 +31,12 @@ class Backlash(Kind):
         out = []
         for element in capacitors(site):
             c, X = element.name, displacement_scale(site, element)
+            b = fresh_name(site.taken, f"b_play_{c}")
+            # the cost is flat where the play is too small to act and kinked where it engages:
+            # starts over two decades of the displacement scale
             out.append(Proposal(target=c, params=(
-                ParamSpec(fresh_name(site.taken, f"b_play_{c}"), 0.1 * X, 0.0, 3 * X, units_of(element)[1],
-                          f"half-width of the play in front of {c}"),)))
+                ParamSpec(b, 0.1 * X, 0.0, 3 * X, units_of(element)[1], f"half-width of the play in front of {c}"),),
+                starts=tuple({b: f * X} for f in (0.03, 0.3, 1.0))))
         return out
 
     def build(self, graph, cand, values):

@@ -176,10 +176,11 @@ def _every_place(graph, experiment):
             + [Place("output", n) for n in experiment.outputs])
 
 
-def _holdout_nrmse(sim, params, x0, experiment, mask):
-    from .residuals import nrmse
-    y = sim(params, x0)
-    return {o: nrmse(experiment.outputs[o][mask], y[o][mask]) for o in experiment.outputs}, y
+def _holdout_nrmse(sim, params, x0, judge):
+    """The held-out NRMSE of `sim`'s model by `judge` (:mod:`diagnosis.segments`), its open-loop
+    outputs and the whole :class:`~diagnosis.segments.Judged`."""
+    judged = judge.evaluate(sim, params, x0)
+    return judged.nrmse, judged.y, judged
 
 
 def _noise_overrides(noise, exp) -> dict:
@@ -263,7 +264,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     from .initial_state import estimate_initial_state
     from .locate import locate_regime, regime_variables, significant_windows
     from .recording import bind
-    from .residuals import OutputSimulator, nrmse
+    from .residuals import OutputSimulator
+    from .segments import choose_judge
 
     if int(top) < 1:
         raise DiagnosisError(f"top must be a positive number of places; found {top!r}")
@@ -275,7 +277,6 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     rec = _as_recording(recording, time)
     exp = bind(rec, graph, inputs, outputs)
     train, held = exp.split(holdout)
-    mask = exp.t >= held.t[0]
 
     say("nominal simulation", f"{exp.t.size} samples, {exp.span[1] - exp.span[0]:.4g} s")
     sim = OutputSimulator(graph, exp)
@@ -293,13 +294,17 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
             x0 = est.values
             res, diverged = _nominal_residuals(sim, graph, exp, x0)
             res.noise.update(_noise_overrides(noise, exp))
+    floor = noise_floor(held, res.noise)
+    say("held-out judge")
+    judge, nominal_judged = choose_judge(sim, exp, held, res, diverged, floor, x0)
+    nominal = dict(nominal_judged.nrmse)
+    if judge.kind == "segments":
+        say("held-out judge", f"segment simulation error: {judge.reason}")
     if diverged:
         say("nominal diverges", diverged)
-        nominal = {o: float("inf") for o in exp.outputs}
         windows, rv, scores = [], {}, []
         place_list = _every_place(graph, exp)
     else:
-        nominal = {o: nrmse(exp.outputs[o][mask], res.simulated[o][mask]) for o in exp.outputs}
         windows = _merge([w for o in exp.outputs
                           for w in significant_windows(exp.t, res.residual[o], res.noise[o])])
         say("regime variables")
@@ -320,18 +325,19 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     for i, cand in enumerate(cands, 1):
         say("fitting", f"{cand} ({i}/{len(cands)})")
         fits.append(fit_candidate(graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0,
-                                  through=train))
+                                  through=train, judge=judge))
     fits += _twin_fits(graph, fits, train, rv, lambda cand: fit_candidate(
-        graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0, through=train), say, "fitting")
+        graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0, through=train, judge=judge),
+        say, "fitting")
     if uncertain:
         say("fitting", f"nominal parameters {', '.join(uncertain)} alone")
         fits.append(fit_candidate(graph, None, fit_part, held, uncertain=uncertain, x0=fit_x0,
-                                  through=train))
+                                  through=train, judge=judge))
     say("choosing")
-    floor = noise_floor(held, res.noise)
     chosen = choose(nominal, fits, noise=floor, evidence=_lookup(evidence)) if fits else None
 
     say("improved model")
+    improved_judged = nominal_judged
     if chosen is None:
         improved_graph, improved, y_imp = graph, dict(nominal), res.run.outputs
     else:
@@ -339,7 +345,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         base = (chosen.candidate.build(graph, {k: v for k, v in chosen.values.items() if k in cand_names})
                 if chosen.candidate is not None else graph)
         improved_graph = _with_values(base, {k: v for k, v in chosen.values.items() if k not in cand_names})
-        improved, y_imp = _holdout_nrmse(OutputSimulator(improved_graph, exp), None, x0, exp, mask)
+        improved, y_imp, improved_judged = _holdout_nrmse(OutputSimulator(improved_graph, exp), None, x0, judge)
     rounds = [Round(chosen, fits, dict(nominal), dict(improved), seconds=_time.perf_counter() - say.start,
                     diverged=diverged, window=[float(fit_part.t[0]), float(fit_part.t[-1])], floor=floor,
                     start=start, features=list(evidence.values()), pruned=pruned)]
@@ -347,27 +353,28 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     if chosen is not None and chosen.candidate is not None:
         while len(rounds) < int(max_effects):
             start = _time.perf_counter()
-            found = _further_round(improved_graph, exp, train, held, mask, x0, improved, floor,
+            found = _further_round(improved_graph, exp, train, held, judge, x0, improved, floor,
                                    rounds, top=int(top), say=say, label=f"round {len(rounds) + 1}")
             found.seconds = _time.perf_counter() - start
             rounds.append(found)
             if found.chosen is None:
                 break
-            improved_graph, improved, y_imp = found.graph, found.improved, found.y
+            improved_graph, improved, y_imp, improved_judged = found.graph, found.improved, found.y, found.judged
         effects = [r.chosen for r in rounds if r.chosen is not None]
         if len(effects) >= 2:
             say("joint refit", f"{len(effects)} effects")
-            joint = _joint_refit(improved_graph, effects, exp, train, held, mask, x0, improved, floor,
+            joint = _joint_refit(improved_graph, effects, exp, train, held, judge, x0, improved, floor,
                                  uncertain)
             rounds[-1].joint = joint
             if joint.kept:
-                improved_graph, improved, y_imp = joint.graph, joint.improved, joint.y
+                improved_graph, improved, y_imp, improved_judged = joint.graph, joint.improved, joint.y, joint.judged
 
     from .diagnose_text import assemble
     return assemble(graph=graph, rec=rec, exp=exp, held=held, res=res, nominal=nominal,
                     improved=improved, y_imp=y_imp, windows=windows, rv=rv, scores=scores,
                     fits=fits, chosen=chosen, improved_graph=improved_graph,
-                    locate_regime=locate_regime, timings=say.done, rounds=rounds)
+                    locate_regime=locate_regime, timings=say.done, rounds=rounds, judge=judge,
+                    judged=(nominal_judged, improved_judged))
 
 
 def _features(graph, scores, places, train, x0, rv, cands, say, label):
@@ -406,7 +413,7 @@ def _twin_fits(graph, fits, train, rv, fit, say, label) -> list:
     return out
 
 
-def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, *, top, say, label):
+def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds, *, top, say, label):
     """One more effect on `graph` (the improved graph so far) against its own residual.
 
     Location, candidates at the ``top`` places (minus the kinds already added at
@@ -442,9 +449,9 @@ def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, 
     fits = []
     for i, cand in enumerate(cands, 1):
         say(f"{label}: fitting", f"{cand} ({i}/{len(cands)})")
-        fits.append(fit_candidate(graph, cand, fit_part, held, x0=fit_x0, through=train))
+        fits.append(fit_candidate(graph, cand, fit_part, held, x0=fit_x0, through=train, judge=judge))
     fits += _twin_fits(graph, fits, train, rv, lambda cand: fit_candidate(
-        graph, cand, fit_part, held, x0=fit_x0, through=train), say, f"{label}: fitting")
+        graph, cand, fit_part, held, x0=fit_x0, through=train, judge=judge), say, f"{label}: fitting")
     say(f"{label}: choosing")
     chosen = choose(reference, fits, noise=floor, evidence=_lookup(evidence)) if fits else None
     out = Round(chosen, fits, dict(reference), dict(reference), scores=scores,
@@ -452,13 +459,13 @@ def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, 
     if chosen is not None:
         names = {p.name for p in chosen.candidate.params}
         better = chosen.candidate.build(graph, {k: v for k, v in chosen.values.items() if k in names})
-        out.improved, out.y = _holdout_nrmse(OutputSimulator(better, exp), None, x0, exp, mask)
+        out.improved, out.y, out.judged = _holdout_nrmse(OutputSimulator(better, exp), None, x0, judge)
         out.graph = better
     return out
 
 
 
-def _joint_refit(graph, effects, exp, train, held, mask, x0, reference, floor, uncertain):
+def _joint_refit(graph, effects, exp, train, held, judge, x0, reference, floor, uncertain):
     """All accepted effects' parameters (and the `uncertain` ones) refitted together on the
     training part of `graph` (the improved graph), started from their round-by-round values.
 
@@ -473,14 +480,14 @@ def _joint_refit(graph, effects, exp, train, held, mask, x0, reference, floor, u
     names = [p.name for e in effects for p in e.candidate.params] + list(uncertain)
     res = residuals(graph, exp, simulator=OutputSimulator(graph, exp), x0=x0)
     part, part_x0 = _fit_window(train, res.run, x0)
-    fit = fit_candidate(graph, None, part, held, uncertain=names, x0=part_x0, through=train)
+    fit = fit_candidate(graph, None, part, held, uncertain=names, x0=part_x0, through=train, judge=judge)
     out = JointRefit(fit, dict(reference), dict(reference))
     if not all(np.isfinite(v) for v in fit.values.values()) or not np.all(np.isfinite(
             list(fit.holdout_nrmse.values()))):
         return out
     better = _with_values(graph, fit.values)
-    improved, y = _holdout_nrmse(OutputSimulator(better, exp), None, x0, exp, mask)
+    improved, y, judged = _holdout_nrmse(OutputSimulator(better, exp), None, x0, judge)
     outputs = list(reference)
     kept = excess_error(improved, floor, outputs) <= excess_error(reference, floor, outputs)
-    out.improved, out.kept, out.graph, out.y = improved, kept, better, y
+    out.improved, out.kept, out.graph, out.y, out.judged = improved, kept, better, y, judged
     return out

@@ -298,6 +298,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     say("held-out judge")
     judge, nominal_judged = choose_judge(sim, exp, held, res, diverged, floor, x0)
     nominal = dict(nominal_judged.nrmse)
+    if judge.floor:                  # the segment error's own floor: noise plus the restarts' noise
+        floor = dict(judge.floor)
     if judge.kind == "segments":
         say("held-out judge", f"segment simulation error: {judge.reason}")
     if diverged:

@@ -138,20 +138,22 @@ class _StateProblem:
         r = [(self.y[o] - out[o]) / self.sig[o] for o in self.outputs]
         return np.concatenate(r + [PULL * np.sqrt(self.size) * theta])
 
-    def solve(self):
-        """``(state, cost)``, cost the weighted sum of squares; ``(None, inf)`` when it fails."""
+    def solve(self, with_jacobian=False):
+        """``(state, cost)``, cost the weighted sum of squares; ``(None, inf)`` when it fails;
+        with `with_jacobian` also the residual's Jacobian in the scaled offset (None on failure)."""
         n = len(self.prior)
         try:
             fit = least_squares(self, np.zeros(n), method="trf", x_scale=1.0, max_nfev=20 * n + 20,
                                 xtol=1e-6, ftol=1e-6)
         except (ValueError, FloatingPointError, np.linalg.LinAlgError):
-            return None, np.inf
-        if not np.all(np.isfinite(fit.x)):
-            return None, np.inf
-        return self.prior + fit.x * self.scale, 2.0 * float(fit.cost)
+            fit = None
+        if fit is None or not np.all(np.isfinite(fit.x)):
+            return (None, np.inf, None) if with_jacobian else (None, np.inf)
+        out = (self.prior + fit.x * self.scale, 2.0 * float(fit.cost))
+        return out + (np.asarray(fit.jac, dtype=float),) if with_jacobian else out
 
 
-def fit_state(w_sim, y: dict, noise: dict, prior, scale=None, *, params=None) -> np.ndarray | None:
+def fit_state(w_sim, y: dict, noise: dict, prior, scale=None, *, params=None, covariance=False):
     """The state at the first sample of a window, fitted to its measured outputs.
 
     The same noise-weighted least squares with a weak pull towards `prior` as
@@ -172,16 +174,28 @@ def fit_state(w_sim, y: dict, noise: dict, prior, scale=None, *, params=None) ->
         Typical magnitude of each state (default: the prior's magnitude, else 1).
     params : dict, optional
         Parameter values of the model (SI).
+    covariance : bool
+        Also return the covariance of the estimate (SI), the Gauss-Newton
+        :math:`S (J^T J)^{-1} S` at the solution (:math:`J` the noise-weighted residual's Jacobian,
+        :math:`S` the diagonal of `scale`): what the measurement noise leaves uncertain.
 
     Returns
     -------
     ndarray or None
-        The fitted state; None when the model cannot run from any tried state.
+        The fitted state; None when the model cannot run from any tried state.  With
+        `covariance`, ``(state, covariance)`` (covariance None when the fit failed).
     """
     prior = np.asarray(prior, dtype=float)
     if not prior.size:
-        return prior
+        return (prior, np.zeros((0, 0))) if covariance else prior
     if scale is None:
         scale = np.where(np.abs(prior) > 0, np.abs(prior), 1.0)
-    problem = _StateProblem(w_sim, y, noise, prior, np.asarray(scale, dtype=float), params)
-    return problem.solve()[0]
+    scale = np.asarray(scale, dtype=float)
+    problem = _StateProblem(w_sim, y, noise, prior, scale, params)
+    if not covariance:
+        return problem.solve()[0]
+    x, _, jac = problem.solve(with_jacobian=True)
+    if x is None:
+        return None, None
+    cov = np.linalg.pinv(jac.T @ jac)
+    return x, cov * np.outer(scale, scale)

@@ -31,9 +31,12 @@ with the nominal restarted from the truth's state every tenth of the record).
 2. it drifts: it has a mode that does not decay over the held-out part (an eigenvalue of
    :math:`\\partial f/\\partial x` at one of five points of its run with real part above
    :math:`-1/(10\\,T_{held})`: an integrator, an unstable mode), **and** on some output that needs
-   explaining its open-loop held-out NRMSE is more than :data:`DRIFT_RATIO` (2) times its
-   segment NRMSE: restarting from the data removes most of its error, so that error is
-   accumulated drift, not a wrong response.
+   explaining its open-loop held-out error, less what an output offset and gain fitted on the
+   training part explain (when they lower it), is more than :data:`DRIFT_RATIO` (2) times its segment NRMSE:
+   restarting from the data removes most of its error, so that error is accumulated drift, not
+   a wrong response.  (A restart absorbs a sensor's offset or gain too, which is no drift and
+   persists from the training part into the held-out part: a carriage whose position sensor
+   reads 10 % high keeps the open-loop judge.)
 
 Otherwise open-loop stays the judge (a stable plant, or an integrating one whose nominal does
 not drift on this recording, such as a carriage whose velocity sensor reads off).
@@ -48,7 +51,7 @@ from .errors import BondcosimError
 
 __all__ = ["SegmentPlan", "Judged", "Judge", "plan_segments", "choose_judge", "slowest_decay",
            "SEGMENTS", "MIN_SEGMENT_SAMPLES", "ESTIMATION_SHARE", "MIN_ESTIMATION_SAMPLES",
-           "MAX_ESTIMATION_SAMPLES", "DRIFT_RATIO", "SLOW_MODE"]
+           "MAX_ESTIMATION_SAMPLES", "DRIFT_RATIO", "SLOW_MODE", "FLOOR_MARGIN"]
 
 #: segments the held-out part is cut into (fewer when it is short)
 SEGMENTS = 5
@@ -61,6 +64,10 @@ MIN_ESTIMATION_SAMPLES, MAX_ESTIMATION_SAMPLES = 10, 200
 DRIFT_RATIO = 2.0
 #: a mode whose time constant exceeds this many held-out spans (or grows) does not decay
 SLOW_MODE = 10.0
+#: the segment error's noise floor is known only roughly (a noise estimate that quantisation
+#: can fool, a linearised propagation of the restarts' state noise): an output counts as
+#: unexplained only beyond this multiple of it
+FLOOR_MARGIN = 1.5
 
 
 @dataclass(frozen=True)
@@ -125,6 +132,8 @@ class Judged:
         segments), None under the open-loop judge.
     states : ndarray or None
         Open-loop states on the whole grid (None when the run diverged).
+    floor : dict str -> float or None
+        The segment judge's noise floor as an NRMSE, when asked for (:meth:`Judge.evaluate`).
     """
 
     nrmse: dict
@@ -132,6 +141,7 @@ class Judged:
     y: dict
     segments: dict | None = None
     states: np.ndarray | None = None
+    floor: dict | None = None
 
 
 def _slice(exp, a, b):
@@ -160,6 +170,8 @@ class Judge:
     noise : dict str -> float
         Noise standard deviation per output (model units), weights of the state estimates.
     plan : SegmentPlan
+    floor : dict str -> float or None
+        The noise floor of the segment error (an NRMSE per output), set by :func:`choose_judge`.
     """
 
     kind: str
@@ -167,10 +179,12 @@ class Judge:
     held: object
     noise: dict
     plan: SegmentPlan
+    floor: dict | None = None
 
-    def evaluate(self, sim, params=None, x0=None) -> Judged:
+    def evaluate(self, sim, params=None, x0=None, *, floor=False) -> Judged:
         """Judge the model of `sim` (an OutputSimulator on the whole grid, whose last
-        ``held.t.size`` samples are the held-out part) with parameters `params` from `x0`."""
+        ``held.t.size`` samples are the held-out part) with parameters `params` from `x0`;
+        with `floor`, also the segment error's noise floor for this model (:meth:`segment_error`)."""
         n_held = self.held.t.size
         outputs = list(sim.output_names)
         try:
@@ -183,18 +197,29 @@ class Judge:
         if self.kind != "segments":
             return Judged(dict(open_loop), open_loop, y, None, states)
         prior = None if states is None else states[-n_held:]
-        nrmse, seg = self.segment_error(sim, params, prior)
-        return Judged(nrmse, open_loop, y, seg, states)
+        nrmse, seg, noise_floor = self.segment_error(sim, params, prior, floor=floor)
+        return Judged(nrmse, open_loop, y, seg, states, noise_floor)
 
-    def segment_error(self, sim, params=None, prior=None):
-        """``(nrmse, outputs)`` of the segment simulations (module docstring); `prior`: states on
-        the held-out part to pull each segment's estimate towards (None: the model's default)."""
+    def segment_error(self, sim, params=None, prior=None, *, floor=False):
+        """``(nrmse, outputs, floor)`` of the segment simulations (module docstring); `prior`:
+        states on the held-out part to pull each segment's estimate towards (None: the model's
+        default).
+
+        With `floor`, the error the procedure leaves for this model if it were right: the
+        measurement noise plus the noise of each segment's estimated state carried into its
+        scored samples, :math:`\nu_o^2 = (\sigma_o^2 + \overline{\mathrm{diag}(S P S^T)}) /
+        \mathrm{std}(y_o)^2`, with :math:`P` the estimate's covariance
+        (:func:`~diagnosis.initial_state.fit_state`) and :math:`S` the scored outputs'
+        sensitivity to the state (differences over one standard deviation of each state), times
+        :data:`FLOOR_MARGIN`; otherwise None.  The measurement noise alone would understate it: a velocity estimated
+        from a few noisy positions carries its error into every later position."""
         held, plan = self.held, self.plan
         outputs = list(sim.output_names)
         default = sim.initial_state(None)
         spread = (np.nanstd(prior, axis=0) if prior is not None and np.isfinite(prior).all()
                   else np.zeros_like(default))
         sq = {o: 0.0 for o in outputs}
+        spread_var = {o: 0.0 for o in outputs}
         count = 0
         seg = {o: np.full(held.t.size, np.nan) for o in outputs}
         from .initial_state import fit_state
@@ -204,14 +229,18 @@ class Judge:
             scale = np.maximum(np.maximum(np.abs(start), spread), 1e-9)
             scale = np.where(scale > 1e-9, scale, 1.0)
             win = _slice(held, a, e)
-            x = fit_state(sim.on(win), {o: np.asarray(win.outputs[o], float) for o in outputs}, self.noise,
-                          start, scale, params=params)
+            x, cov = fit_state(sim.on(win), {o: np.asarray(win.outputs[o], float) for o in outputs}, self.noise,
+                               start, scale, params=params, covariance=True)
+            seg_sim = sim.on(_slice(held, a, b))
             try:
                 if x is None:
                     raise BondcosimError("no state fits the segment's first samples")
-                out = sim.on(_slice(held, a, b))(params, x)
+                out = seg_sim(params, x)
                 if not all(np.isfinite(out[o]).all() for o in outputs):
                     raise BondcosimError("non-finite outputs")
+                if floor:
+                    for o, v in _carried_variance(seg_sim, params, x, cov, out, e - a).items():
+                        spread_var[o] += v
             except BondcosimError:           # a diverging segment predicts the held-out mean
                 out = {o: np.full(b - a, float(np.mean(held.outputs[o]))) for o in outputs}
             for o in outputs:
@@ -219,15 +248,58 @@ class Judge:
                 sq[o] += float(r @ r)
                 seg[o][e:b] = out[o][e - a:]
             count += b - e
-        nrmse = {o: float(np.sqrt(sq[o] / max(count, 1)) / (float(np.std(held.outputs[o])) or 1.0))
-                 for o in outputs}
-        return nrmse, seg
+        std = {o: float(np.std(held.outputs[o])) or 1.0 for o in outputs}
+        nrmse = {o: float(np.sqrt(sq[o] / max(count, 1)) / std[o]) for o in outputs}
+        noise_floor = ({o: FLOOR_MARGIN * float(np.sqrt(self.noise.get(o, 0.0) ** 2 + spread_var[o] / max(count, 1)))
+                        / std[o] for o in outputs} if floor else None)
+        return nrmse, seg, noise_floor
 
     def to_json(self) -> dict:
         out = {"judge": self.kind, "judge_reason": self.reason}
         if self.kind == "segments":
             out["segments"] = self.plan.to_json()
         return out
+
+
+def _carried_variance(seg_sim, params, x, cov, out, first) -> dict:
+    """Sum over the scored samples (from `first` on) of each output's variance carried from the
+    estimated state's covariance `cov` (one run per state, displaced by its standard deviation)."""
+    outputs = list(out)
+    total = {o: 0.0 for o in outputs}
+    if cov is None or not np.isfinite(cov).all() or not x.size:
+        return total
+    sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    cols = {o: [] for o in outputs}
+    for i in range(x.size):
+        if sd[i] <= 0:
+            for o in outputs:
+                cols[o].append(np.zeros(out[o].size - first))
+            continue
+        moved = x.copy()
+        moved[i] += sd[i]
+        y = seg_sim(params, moved)
+        for o in outputs:
+            cols[o].append((y[o][first:] - out[o][first:]) / sd[i])
+    for o in outputs:
+        S = np.column_stack(cols[o])
+        var = np.einsum("ki,ij,kj->k", S, cov, S)
+        total[o] = float(np.sum(np.where(np.isfinite(var), var, 0.0)))
+    return total
+
+
+def _beyond_sensor(y, y_hat, n_held) -> float:
+    """Held-out NRMSE of the open-loop residual ``y - y_hat`` (whole record, the last `n_held`
+    samples held out) left by an output offset and gain ``a + b y_hat`` fitted on the training
+    part: a restart absorbs a sensor's error as well as a drift, but only a sensor's error
+    persists from the training part into the held-out part with the same offset and gain."""
+    y, y_hat = np.asarray(y, float), np.asarray(y_hat, float)
+    if not np.isfinite(y_hat).all():
+        return float("inf")
+    basis = np.column_stack([np.ones_like(y_hat), y_hat])
+    r = y - y_hat
+    coef, *_ = np.linalg.lstsq(basis[:-n_held], r[:-n_held], rcond=None)
+    left = r[-n_held:] - basis[-n_held:] @ coef
+    return float(np.sqrt(np.mean(left ** 2)) / (float(np.std(y[-n_held:])) or 1.0))
 
 
 def slowest_decay(sim, run, params=None, points: int = 5) -> float:
@@ -274,20 +346,26 @@ def choose_judge(sim, exp, held, res, diverged: str, floor: dict, x0=None):
     segments = Judge("segments", "", held, dict(res.noise), plan)
     if diverged:
         segments.reason = f"the nominal model diverges on the recording ({diverged})"
-        return segments, segments.evaluate(sim, None, x0)
+        judged = segments.evaluate(sim, None, x0, floor=True)
+        segments.floor = judged.floor
+        return segments, judged
     decay = slowest_decay(sim, res.run)
     if decay <= -1.0 / (SLOW_MODE * span):
         judge = Judge("open-loop", f"every mode of the nominal model decays within the held-out part "
                       f"(slowest eigenvalue real part {decay:.3g} 1/s)", held, dict(res.noise), plan)
         return judge, judge.evaluate(sim, None, x0)
-    judged = segments.evaluate(sim, None, x0)
-    drift = [o for o in needs_explaining(judged.open_loop, floor)
-             if judged.open_loop[o] > DRIFT_RATIO * judged.nrmse[o]]
+    judged = segments.evaluate(sim, None, x0, floor=True)
+    n_held = held.t.size
+    beyond = {o: min(judged.open_loop[o], _beyond_sensor(exp.outputs[o], judged.y[o], n_held))
+              for o in judged.open_loop}
+    drift = [o for o in needs_explaining(judged.open_loop, floor) if beyond[o] > DRIFT_RATIO * judged.nrmse[o]]
     if drift:
         segments.reason = (f"the nominal model has a mode that does not decay (eigenvalue real part "
                            f"{decay:.3g} 1/s) and its open-loop held-out error is mostly drift: "
-                           + ", ".join(f"{o} open-loop {judged.open_loop[o]:.3g} against {judged.nrmse[o]:.3g} "
-                                       f"restarted every {plan.seconds:.3g} s" for o in drift))
+                           + ", ".join(f"{o} open-loop {judged.open_loop[o]:.3g} ({beyond[o]:.3g} beyond an "
+                                       f"output offset and gain) against {judged.nrmse[o]:.3g} restarted "
+                                       f"every {plan.seconds:.3g} s" for o in drift))
+        segments.floor = judged.floor
         return segments, judged
     judge = Judge("open-loop", f"the nominal model has a mode that does not decay (eigenvalue real part "
                   f"{decay:.3g} 1/s), but restarting it from the data does not remove most of its "

@@ -1,0 +1,144 @@
+"""The held-out judge (diagnosis.segments) on recordings of hand-written truths (own RK4, not
+the catalogue's code): a force-driven carriage whose nominal drifts (the segment judge is
+chosen, the concealed Coulomb friction is named and the held-out segment error falls by far
+more than half) and a stable mass-spring-damper (open-loop stays the judge)."""
+import numpy as np
+import pytest
+
+from diagnosis.diagnose import diagnose
+from diagnosis.fit import noise_floor
+from diagnosis.recording import Experiment
+from diagnosis.residuals import OutputSimulator, residuals
+from diagnosis.segments import Judge, choose_judge, plan_segments, slowest_decay
+from plants import build
+
+FS = 100.0      # Hz
+SPAN = 20.0     # s
+SIGMA = 1e-3    # m, position noise
+MASS = 20.0     # kg, the library carriage
+FC = 1.5        # N, the concealed Coulomb level (carriage)
+V_SMOOTH = 0.01  # m/s, width of the truth's smoothed sign
+
+
+def _rk4(rate, t, force, substeps=10):
+    """States of x' = rate(x, F) at the sample times, F held over each interval; classic RK4
+    written out here (not bondgraph's), from rest."""
+    state, out = np.zeros(2), np.zeros((t.size, 2))
+    for i in range(t.size - 1):
+        h = (t[i + 1] - t[i]) / substeps
+        for _ in range(substeps):
+            k1 = rate(state, force[i])
+            k2 = rate(state + h / 2 * k1, force[i])
+            k3 = rate(state + h / 2 * k2, force[i])
+            k4 = rate(state + h * k3, force[i])
+            state = state + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        out[i + 1] = state
+    return out
+
+
+def _carriage_rate(fc):
+    """m v' = F - fc tanh(v / V_SMOOTH), x' = v (the library carriage plus a Coulomb friction)."""
+    return lambda s, f: np.array([s[1], (f - fc * np.tanh(s[1] / V_SMOOTH)) / MASS])
+
+
+def _msd_rate(fc, m=1.0, b=0.4, k=4.0):
+    """m v' = F - b v - k x - fc tanh(v / 0.1), x' = v (the library mass-spring-damper plus Coulomb)."""
+    return lambda s, f: np.array([s[1], (f - b * s[1] - k * s[0] - fc * np.tanh(s[1] / 0.1)) / m])
+
+
+def _write(path, t, force, x, seed):
+    x = x + np.random.default_rng(seed).normal(0.0, SIGMA, t.size)
+    lines = ["t,F,x"] + [f"{a:.6f},{f:.9g},{p:.9g}" for a, f, p in zip(t, force, x)]
+    path.write_text("\n".join(lines) + "\n")
+    return str(path)
+
+
+def _carriage_recording(path, fc, seed=1):
+    t = np.arange(0.0, SPAN, 1.0 / FS)
+    force = 6.0 * np.sin(2 * np.pi * 0.4 * t) + 3.0 * np.sin(2 * np.pi * 1.1 * t + 1.0)
+    return _write(path, t, force, _rk4(_carriage_rate(fc), t, force)[:, 0], seed)
+
+
+def _msd_recording(path, fc, seed=2):
+    t = np.arange(0.0, SPAN, 1.0 / FS)
+    force = 2.0 * np.sin(2 * np.pi * 0.3 * t) + np.sin(2 * np.pi * 0.7 * t + 1.0)
+    return _write(path, t, force, _rk4(_msd_rate(fc), t, force, substeps=4)[:, 0], seed)
+
+
+BIND = dict(inputs=["F=F:N"], outputs=["x=x:m"])
+REST = {"p_m": 0.0, "x_pos": 0.0}
+
+
+def test_segments_cut_the_held_out_part_in_five_halves_estimated_halves_scored():
+    held = Experiment(np.arange(600) / 100.0, {}, {"x": np.zeros(600)})
+    plan = plan_segments(held)
+    assert plan.starts == (0, 120, 240, 360, 480) and plan.length == 120 and plan.estimation == 60
+    assert plan.seconds == pytest.approx(1.2)
+    short = plan_segments(Experiment(np.arange(100) / 100.0, {}, {"x": np.zeros(100)}))
+    assert short.starts == (0, 50) and short.estimation == 25        # at least 40 samples a segment
+
+
+def test_the_right_model_restarted_from_the_data_leaves_about_the_noise(tmp_path):
+    from diagnosis.recording import Recording, bind
+    exp = bind(Recording.from_csv(_carriage_recording(tmp_path / "null.csv", 0.0)), build("carriage"),
+               **BIND)
+    train, held = exp.split(0.3)
+    sim = OutputSimulator(build("carriage"), exp)
+    judge = Judge("segments", "", held, {"x": SIGMA}, plan_segments(held))
+    judged = judge.evaluate(sim, None, REST)
+    floor = SIGMA / np.std(held.outputs["x"])
+    # a velocity estimated from 60 noisy samples over 0.6 s carries into the scored half
+    assert floor < judged.nrmse["x"] < 2.0 * floor
+    assert judged.open_loop["x"] < 2.0 * floor                       # no effect: no drift either
+    assert slowest_decay(sim, sim.run(None, REST)) == pytest.approx(0.0, abs=1e-9)   # an integrator
+
+
+@pytest.fixture(scope="module")
+def carriage_coulomb(tmp_path_factory):
+    path = _carriage_recording(tmp_path_factory.mktemp("carriage") / "coulomb.csv", FC)
+    return diagnose("carriage", path, x0=REST, **BIND)
+
+
+def test_a_drifting_carriage_is_judged_by_segments_and_its_friction_named(carriage_coulomb):
+    report = carriage_coulomb
+    fit = report.to_json()["fit"]
+    assert fit["judge"] == "segments"
+    assert fit["segments"] == {"count": 5, "length": pytest.approx(1.2), "samples": 120, "estimation_samples": 60}
+    # open-loop, the nominal's position has drifted by far more than its spread (NRMSE 62.5)
+    assert fit["open_loop"]["nominal"]["x"] > 30.0
+    assert fit["nominal"]["x"] == pytest.approx(0.29, rel=0.1)        # the nominal, restarted every 1.2 s
+    assert report.kind == "coulomb_friction"
+    assert report.missing_physics[0]["attached_to"] == "junction v_cart"
+    (level,) = report.missing_physics[0]["parameters"].values()
+    assert level == pytest.approx(FC, rel=0.1)
+    assert report.improvement()["x"] > 0.8                           # the held-out segment error: 0.29 -> 0.031
+    assert "Held-out judge: segment simulation error" in report.text
+    assert "Open-loop held-out NRMSE, for reference" in report.text
+
+
+def test_the_segment_plot_is_written(carriage_coulomb, tmp_path):
+    paths = carriage_coulomb.save(tmp_path / "report")
+    assert open(paths["holdout_fit"], "rb").read(8) == b"\x89PNG\r\n\x1a\n"
+    data = carriage_coulomb.plot_data
+    assert data.judge == "segments" and len(data.segment_starts) == 5
+    scored = np.isfinite(data.improved_segments["x"])
+    assert scored.sum() == 5 * 60                                    # the estimation halves are not shown
+
+
+def test_a_stable_msd_keeps_the_open_loop_judge(tmp_path):
+    from diagnosis.recording import Recording, bind
+    graph = build("mass-spring-damper")
+    path = _msd_recording(tmp_path / "msd.csv", 0.3)
+    exp = bind(Recording.from_csv(path), graph, **BIND)
+    train, held = exp.split(0.3)
+    sim = OutputSimulator(graph, exp)
+    res = residuals(graph, exp, simulator=sim)
+    judge, judged = choose_judge(sim, exp, held, res, "", noise_floor(held, res.noise))
+    assert judge.kind == "open-loop" and "decays" in judge.reason
+    assert slowest_decay(sim, res.run) == pytest.approx(-0.2, abs=1e-6)   # -b / 2m
+    assert judged.nrmse == judged.open_loop                            # the open-loop numbers
+    report = diagnose(graph, path, max_effects=1, **BIND)
+    fit = report.to_json()["fit"]
+    assert fit["judge"] == "open-loop" and "segments" not in fit
+    assert fit["nominal"] == fit["open_loop"]["nominal"] and fit["improved"] == fit["open_loop"]["improved"]
+    assert report.kind == "coulomb_friction" and report.improvement()["x"] > 0.9

@@ -398,9 +398,10 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
        extra parameter must buy a 10 % smaller excess error (the small
        :math:`10^{-4} E_0` term makes fits that are perfect to rounding tie,
        so the simpler one wins).  Fits whose score is within :data:`TIE` (2 %) of
-       the best, or whose held-out NRMSE (priced the same way) is within 2 % of
-       the best's (near the noise floor the excess magnifies differences the
-       held-out part cannot resolve), are tied: the held-out part cannot tell
+       the best, or whose held-out NRMSE on the outputs that need explaining
+       (priced the same way) is within 2 % of the best's (near the noise floor
+       the excess magnifies differences the held-out part cannot resolve; an
+       output at its floor would only add its noise to both), are tied: the held-out part cannot tell
        them apart (a constant load and a sensor offset look alike once a
        transient is over).  Among
        tied fits: fewer parameters, then the smaller training error (where the
@@ -469,8 +470,8 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
         value = sum(v ** 2 for v in f.train_nrmse.values()) if f.train_nrmse else np.inf
         return value if np.isfinite(value) else np.inf
 
-    def raw_score(f):
-        return sum(f.holdout_nrmse[o] ** 2 for o in names) * (1 + PARAMETER_PRICE) ** f.n_params
+    def raw_score(f):     # on the outputs that need explaining: the others only add their noise
+        return sum(f.holdout_nrmse[o] ** 2 for o in significant) * (1 + PARAMETER_PRICE) ** f.n_params
 
     leader = min(usable, key=score)
     tied = [f for f in usable if score(f) <= score(leader) * (1 + TIE)

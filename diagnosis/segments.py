@@ -8,13 +8,14 @@ a tank without outflow) makes that number mostly accumulated drift, metres of it
 diverging one leaves no number at all.  So there the judge is
 
 **the segment simulation error** (multiple shooting on the held-out part): the held-out part is
-cut into ``K = min(SEGMENTS, n // MIN_SEGMENT_SAMPLES)`` equal segments (at least one; 10 of 60
+cut into ``K = min(SEGMENTS, n // MIN_SEGMENT_SAMPLES)`` equal segments (at least one; 5 of 120
 samples each on a 3 s, 200 Hz held-out part).  Each segment's state is fitted to its first
-quarter (:data:`ESTIMATION_SHARE`, at least :data:`MIN_ESTIMATION_SAMPLES`, at most
+half (:data:`ESTIMATION_SHARE`, at least :data:`MIN_ESTIMATION_SAMPLES`, at most
 :data:`MAX_ESTIMATION_SAMPLES` samples) by :func:`diagnosis.initial_state.fit_state` (the
 noise-weighted least squares of the initial state, pulled weakly towards the state the model's
 open-loop run has there when that is finite, else towards the model's default), the segment is
 simulated from that state, and the error on its remaining samples is pooled over the segments,
+with its own noise floor (:meth:`Judge.segment_error`),
 
 .. math:: \\mathrm{NRMSE}_o = \\sqrt{\\tfrac1N \\textstyle\\sum_k \\sum_{i \\in k,\\,\\mathrm{scored}}
           (y_{o,i} - \\hat y_{o,i})^2} \\,/\\, \\mathrm{std}(y_o \\text{ on the held-out part}).
@@ -32,14 +33,18 @@ with the nominal restarted from the truth's state every tenth of the record).
    :math:`\\partial f/\\partial x` at one of five points of its run with real part above
    :math:`-1/(10\\,T_{held})`: an integrator, an unstable mode), **and** on some output that needs
    explaining its open-loop held-out error, less what an output offset and gain fitted on the
-   training part explain (when they lower it), is more than :data:`DRIFT_RATIO` (2) times its segment NRMSE:
-   restarting from the data removes most of its error, so that error is accumulated drift, not
+   training part explain (when they lower it), is more than :data:`DRIFT_RATIO` (2) times its
+   segment NRMSE: restarting from the data removes most of its error, so that error is accumulated drift, not
    a wrong response.  (A restart absorbs a sensor's offset or gain too, which is no drift and
    persists from the training part into the held-out part: a carriage whose position sensor
    reads 10 % high keeps the open-loop judge.)
 
 Otherwise open-loop stays the judge (a stable plant, or an integrating one whose nominal does
 not drift on this recording, such as a carriage whose velocity sensor reads off).
+
+The segment length is a stated default, not read from the dynamics: an integrator has no time
+constant to follow; a half of each segment for its state keeps the restarted velocity's noise
+small against the effect the scored half is to show.
 """
 from __future__ import annotations
 
@@ -207,12 +212,12 @@ class Judge:
 
         With `floor`, the error the procedure leaves for this model if it were right: the
         measurement noise plus the noise of each segment's estimated state carried into its
-        scored samples, :math:`\nu_o^2 = (\sigma_o^2 + \overline{\mathrm{diag}(S P S^T)}) /
-        \mathrm{std}(y_o)^2`, with :math:`P` the estimate's covariance
+        scored samples, :math:`\\nu_o^2 = (\\sigma_o^2 + \\overline{\\mathrm{diag}(S P S^T)}) /
+        \\mathrm{std}(y_o)^2`, with :math:`P` the estimate's covariance
         (:func:`~diagnosis.initial_state.fit_state`) and :math:`S` the scored outputs'
         sensitivity to the state (differences over one standard deviation of each state), times
-        :data:`FLOOR_MARGIN`; otherwise None.  The measurement noise alone would understate it: a velocity estimated
-        from a few noisy positions carries its error into every later position."""
+        :data:`FLOOR_MARGIN`; otherwise None.  The measurement noise alone would understate it: a
+        velocity estimated from a few noisy positions carries its error into every later position."""
         held, plan = self.held, self.plan
         outputs = list(sim.output_names)
         default = sim.initial_state(None)

@@ -142,3 +142,27 @@ def test_a_stable_msd_keeps_the_open_loop_judge(tmp_path):
     assert fit["judge"] == "open-loop" and "segments" not in fit
     assert fit["nominal"] == fit["open_loop"]["nominal"] and fit["improved"] == fit["open_loop"]["improved"]
     assert report.kind == "coulomb_friction" and report.improvement()["x"] > 0.9
+
+
+def _judge_of(path, model="carriage", x0=REST):
+    from diagnosis.recording import Recording, bind
+    graph = build(model)
+    exp = bind(Recording.from_csv(path), graph, **BIND)
+    train, held = exp.split(0.3)
+    sim = OutputSimulator(graph, exp)
+    res = residuals(graph, exp, simulator=sim, x0=x0)
+    return choose_judge(sim, exp, held, res, "", noise_floor(held, res.noise), x0)
+
+
+def test_a_sensor_gain_on_a_carriage_is_no_drift(tmp_path):
+    t = np.arange(0.0, SPAN, 1.0 / FS)
+    force = 6.0 * np.sin(2 * np.pi * 0.4 * t) + 3.0 * np.sin(2 * np.pi * 1.1 * t + 1.0)
+    x = _rk4(_carriage_rate(0.0), t, force)[:, 0]
+    judge, judged = _judge_of(_write(tmp_path / "gain.csv", t, force, 1.1 * x, 3))
+    # a restart absorbs most of a 10 % position gain, but an
+    # offset and gain fitted on the training part take all of it away: open-loop stays the judge
+    assert judged.open_loop["x"] > 0.5             # 0.1 x about a mean far from 0: NRMSE 0.89
+    assert judge.kind == "open-loop" and "no drift" in judge.reason
+    judge, judged = _judge_of(_carriage_recording(tmp_path / "friction.csv", FC))
+    assert judge.kind == "segments" and "mostly drift" in judge.reason
+    assert judge.floor["x"] > SIGMA / np.std(judge.held.outputs["x"])    # above the noise alone

@@ -6,7 +6,9 @@
    split off the held-out tail;
 2. simulate the nominal model on the whole recording (the held-out part
    continues from where the training part leaves the states), residuals,
-   noise level per output, nominal held-out NRMSE;
+   noise level per output; the held-out judge (:func:`diagnosis.segments.choose_judge`:
+   open-loop, or the segment simulation error where the nominal diverges or drifts),
+   by which the nominal and every later model get their held-out NRMSE;
 3. significant time windows (:func:`diagnosis.locate.significant_windows`),
    regime variables, graph location on the training part
    (:func:`diagnosis.graph_location.locate_on_graph`);
@@ -431,8 +433,14 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     from .locate import regime_variables
     from .residuals import OutputSimulator, residuals
 
+    from .errors import SimulationError
+
     say(f"{label}: residual of the improved model")
-    res = residuals(graph, exp, simulator=OutputSimulator(graph, exp), x0=x0)
+    try:
+        res = residuals(graph, exp, simulator=OutputSimulator(graph, exp), x0=x0)
+    except SimulationError as exc:      # judged by segments, the improved model may still diverge
+        return Round(None, [], dict(reference), dict(reference), scores=[],
+                     note=f"the improved model diverges open-loop ({exc}): no run to locate along")
     rv = {k: (v[:train.t.size], d) for k, (v, d) in regime_variables(graph, exp, res.run).items()}
     say(f"{label}: graph location", "training part")
     try:
@@ -472,16 +480,15 @@ def _joint_refit(graph, effects, exp, train, held, judge, x0, reference, floor, 
     training part of `graph` (the improved graph), started from their round-by-round values.
 
     Returns a :class:`~diagnosis.rounds.JointRefit`: ``fit`` (CandidateFit), ``reference`` and
-    ``improved`` held-out NRMSE (whole-recording simulations as for every round), ``kept`` (the
+    ``improved`` held-out NRMSE (by the diagnosis's held-out judge, as for every round), ``kept`` (the
     held-out excess error beyond the noise floor did not grow), ``graph`` and ``y`` of the
     refitted model.
     """
     from .fit import excess_error, fit_candidate
-    from .residuals import OutputSimulator, residuals
+    from .residuals import OutputSimulator
 
     names = [p.name for e in effects for p in e.candidate.params] + list(uncertain)
-    res = residuals(graph, exp, simulator=OutputSimulator(graph, exp), x0=x0)
-    part, part_x0 = _fit_window(train, res.run, x0)
+    part, part_x0 = _fit_window(train, None, x0)
     fit = fit_candidate(graph, None, part, held, uncertain=names, x0=part_x0, through=train, judge=judge)
     out = JointRefit(fit, dict(reference), dict(reference))
     if not all(np.isfinite(v) for v in fit.values.values()) or not np.all(np.isfinite(

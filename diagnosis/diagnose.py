@@ -145,14 +145,36 @@ def _start_inconsistent(res, diverged, n_train) -> bool:
     return False
 
 
+class _Diverged(str):
+    """The message of a nominal simulation's divergence (``""``: it did not diverge), with the
+    time it left the finite numbers (``at``, s; None when unknown)."""
+    at = None
+
+
 def _nominal_residuals(sim, graph, exp, x0):
-    """The nominal residuals from `x0`, and ``""`` or the message of its divergence."""
+    """The nominal residuals from `x0`, and ``""`` or the message of its divergence
+    (a :class:`_Diverged`)."""
     from .errors import SimulationError
     from .residuals import residuals
     try:
-        return residuals(graph, exp, simulator=sim, x0=x0), ""
+        return residuals(graph, exp, simulator=sim, x0=x0), _Diverged("")
     except SimulationError as exc:        # evidence of missing physics, not an error
-        return _diverged_residuals(sim, exp), str(exc)
+        message = _Diverged(str(exc))
+        message.at = exc.time
+        return _diverged_residuals(sim, exp), message
+
+
+def _before_divergence(part, diverged):
+    """The fit window of a diverging nominal: the samples of `part` before 90 % of the time it
+    ran finite (every candidate starts from the nominal's values, which would diverge later);
+    `part` itself when the time is unknown or too few samples are left."""
+    if not diverged or diverged.at is None:
+        return part
+    t0 = float(part.t[0])
+    stop = t0 + 0.9 * (float(diverged.at) - t0)
+    if np.count_nonzero(part.t <= stop) < 20 or stop >= part.t[-1]:
+        return part
+    return part.window(t0, stop)
 
 
 def _diverged_residuals(sim, experiment):
@@ -322,15 +344,18 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                                  f"{type(exc).__name__}: {exc}") from exc
         place_list = [s.place for s in scores[:int(top)] if s.explained >= MIN_PLACE_SHARE]
 
-    cands = [c for p in place_list for c in candidates(graph, p, regime_variables=rv, experiment=train)]
+    # a diverging nominal's candidates take their scales from where it still runs
+    cand_part = _before_divergence(train, diverged)
+    cands = [c for p in place_list for c in candidates(graph, p, regime_variables=rv, experiment=cand_part)]
     evidence, cands, pruned = _features(graph, scores, place_list, train, x0, rv, cands, say, "feature regression")
     fit_part, fit_x0 = _fit_window(train, res.run, x0)
+    fit_part = _before_divergence(fit_part, diverged)
     fits = []
     for i, cand in enumerate(cands, 1):
         say("fitting", f"{cand} ({i}/{len(cands)})")
         fits.append(fit_candidate(graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0,
                                   through=train, judge=judge))
-    fits += _twin_fits(graph, fits, train, rv, lambda cand: fit_candidate(
+    fits += _twin_fits(graph, fits, cand_part, rv, lambda cand: fit_candidate(
         graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0, through=train, judge=judge),
         say, "fitting")
     if uncertain:

@@ -29,13 +29,15 @@ with the nominal restarted from the truth's state every tenth of the record).
 **The rule** (:func:`choose_judge`): segments when
 
 1. the nominal model diverges on the recording, or
-2. it drifts: it has a mode that does not decay over the held-out part (an eigenvalue of
-   :math:`\\partial f/\\partial x` at one of five points of its run with real part above
-   :math:`-1/(10\\,T_{held})`: an integrator, an unstable mode), **and** on some output that needs
+2. it drifts: it has a mode that integrates what it leaves out (:func:`drifting_mode`: an
+   eigenvalue of :math:`\\partial f/\\partial x` at one of five points of its run that neither
+   decays nor turns within the held-out part, real part above :math:`-1/(10\\,T_{held})` and
+   imaginary part below :math:`2\\pi/T_{held}`, or grows by e within it: an integrator, a slow or
+   unstable mode; not an undamped oscillation), **and** on some output that needs
    explaining its open-loop held-out error, less what an output offset and gain fitted on the
    training part explain (when they lower it), is more than :data:`DRIFT_RATIO` (2) times its
-   segment NRMSE: restarting from the data removes most of its error, so that error is accumulated drift, not
-   a wrong response.  (A restart absorbs a sensor's offset or gain too, which is no drift and
+   segment NRMSE: restarting from the data removes most of its error, so that error is
+   accumulated drift, not a wrong response.  (A restart absorbs a sensor's offset or gain too, which is no drift and
    persists from the training part into the held-out part: a carriage whose position sensor
    reads 10 % high keeps the open-loop judge.)
 
@@ -54,7 +56,7 @@ import numpy as np
 
 from .errors import BondcosimError
 
-__all__ = ["SegmentPlan", "Judged", "Judge", "plan_segments", "choose_judge", "slowest_decay",
+__all__ = ["SegmentPlan", "Judged", "Judge", "plan_segments", "choose_judge", "drifting_mode",
            "SEGMENTS", "MIN_SEGMENT_SAMPLES", "ESTIMATION_SHARE", "MIN_ESTIMATION_SAMPLES",
            "MAX_ESTIMATION_SAMPLES", "DRIFT_RATIO", "SLOW_MODE", "FLOOR_MARGIN"]
 
@@ -67,7 +69,7 @@ ESTIMATION_SHARE = 0.5
 MIN_ESTIMATION_SAMPLES, MAX_ESTIMATION_SAMPLES = 10, 200
 #: open-loop / segment NRMSE of the nominal above which its error counts as drift
 DRIFT_RATIO = 2.0
-#: a mode whose time constant exceeds this many held-out spans (or grows) does not decay
+#: a mode whose time constant exceeds this many held-out spans does not decay
 SLOW_MODE = 10.0
 #: the segment error's noise floor is known only roughly (a noise estimate that quantisation
 #: can fool, a linearised propagation of the restarts' state noise): an output counts as
@@ -307,24 +309,40 @@ def _beyond_sensor(y, y_hat, n_held) -> float:
     return float(np.sqrt(np.mean(left ** 2)) / (float(np.std(y[-n_held:])) or 1.0))
 
 
-def slowest_decay(sim, run, params=None, points: int = 5) -> float:
-    """The largest real part of the eigenvalues of :math:`\\partial f/\\partial x` at `points`
-    samples spread over `run` (1/s): 0 for an integrator, > 0 for an unstable mode; -inf for a
-    model without states or where no Jacobian is finite."""
+def drifting_mode(sim, run, span: float, params=None, points: int = 5):
+    """An eigenvalue of :math:`\\partial f/\\partial x` (at `points` samples spread over `run`)
+    through which the model integrates what it leaves out, or None.
+
+    Such a mode neither decays nor oscillates within the held-out part of `span` seconds:
+    real part above :math:`-1/(10\\,T)` (:data:`SLOW_MODE`) and imaginary part below
+    :math:`2\\pi/T` (less than one turn), as a force-driven mass's 0 or a tank's slow outflow;
+    or it grows by e within the span (real part above :math:`1/T`).  An undamped oscillation
+    (a frictionless joint's spring) is none: a force error shifts it, it does not accumulate.
+    Returns the eigenvalue with the largest real part among those (1/s), None when there is none.
+    """
     m = sim.model
-    if not run.states.shape[1]:
-        return float("-inf")
+    n_states = run.states.shape[1]
+    if not n_states:
+        return None
     p = m.param_vector(params)
-    worst = float("-inf")
+    found = None
     for k in np.linspace(0, run.t.size - 1, points).astype(int):
         try:
             J = m.jac_x(run.states[k:k + 1], run.inputs[k:k + 1], t=float(run.t[k]), p=p)
         except (BondcosimError, FloatingPointError, np.linalg.LinAlgError):
             continue
-        J = np.asarray(J, float).reshape(run.states.shape[1], run.states.shape[1])
-        if np.isfinite(J).all():
-            worst = max(worst, float(np.max(np.linalg.eigvals(J).real)))
-    return worst
+        J = np.asarray(J, float).reshape(n_states, n_states)
+        if not np.isfinite(J).all():
+            continue
+        for lam in np.linalg.eigvals(J):
+            slow = lam.real > -1.0 / (SLOW_MODE * span) and abs(lam.imag) < 2 * np.pi / span
+            if (slow or lam.real > 1.0 / span) and (found is None or lam.real > found.real):
+                found = complex(lam)
+    return found
+
+
+def _eig(lam) -> str:
+    return f"{lam.real:.3g} 1/s" if abs(lam.imag) < 1e-12 else f"{lam.real:.3g} {lam.imag:+.3g}j 1/s"
 
 
 def choose_judge(sim, exp, held, res, diverged: str, floor: dict, x0=None):
@@ -354,10 +372,10 @@ def choose_judge(sim, exp, held, res, diverged: str, floor: dict, x0=None):
         judged = segments.evaluate(sim, None, x0, floor=True)
         segments.floor = judged.floor
         return segments, judged
-    decay = slowest_decay(sim, res.run)
-    if decay <= -1.0 / (SLOW_MODE * span):
-        judge = Judge("open-loop", f"every mode of the nominal model decays within the held-out part "
-                      f"(slowest eigenvalue real part {decay:.3g} 1/s)", held, dict(res.noise), plan)
+    mode = drifting_mode(sim, res.run, span)
+    if mode is None:
+        judge = Judge("open-loop", "every mode of the nominal model decays or oscillates within the held-out "
+                      "part (none integrates what the model leaves out)", held, dict(res.noise), plan)
         return judge, judge.evaluate(sim, None, x0)
     judged = segments.evaluate(sim, None, x0, floor=True)
     n_held = held.t.size
@@ -365,14 +383,14 @@ def choose_judge(sim, exp, held, res, diverged: str, floor: dict, x0=None):
               for o in judged.open_loop}
     drift = [o for o in needs_explaining(judged.open_loop, floor) if beyond[o] > DRIFT_RATIO * judged.nrmse[o]]
     if drift:
-        segments.reason = (f"the nominal model has a mode that does not decay (eigenvalue real part "
-                           f"{decay:.3g} 1/s) and its open-loop held-out error is mostly drift: "
+        segments.reason = (f"the nominal model has a mode that integrates what it leaves out (eigenvalue "
+                           f"{_eig(mode)}) and its open-loop held-out error is mostly drift: "
                            + ", ".join(f"{o} open-loop {judged.open_loop[o]:.3g} ({beyond[o]:.3g} beyond an "
                                        f"output offset and gain) against {judged.nrmse[o]:.3g} restarted "
                                        f"every {plan.seconds:.3g} s" for o in drift))
         segments.floor = judged.floor
         return segments, judged
-    judge = Judge("open-loop", f"the nominal model has a mode that does not decay (eigenvalue real part "
-                  f"{decay:.3g} 1/s), but restarting it from the data does not remove most of its "
+    judge = Judge("open-loop", f"the nominal model has a mode that integrates what it leaves out (eigenvalue "
+                  f"{_eig(mode)}), but restarting it from the data does not remove most of its "
                   f"held-out error (no drift)", held, dict(res.noise), plan)
     return judge, Judged(dict(judged.open_loop), judged.open_loop, judged.y, None, judged.states)

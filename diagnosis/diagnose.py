@@ -11,7 +11,8 @@
    by which the nominal and every later model get their held-out NRMSE;
 3. significant time windows (:func:`diagnosis.locate.significant_windows`),
    regime variables, graph location on the training part
-   (:func:`diagnosis.graph_location.locate_on_graph`);
+   (:func:`diagnosis.graph_location.locate_on_graph`; for a diverging nominal on restarted
+   windows, :func:`diagnosis.graph_location_segments.locate_on_segments`);
 4. candidates of the catalogue at the ``top`` places
    (:func:`diagnosis.catalogue.candidates`), each fitted on the training part
    (its first :data:`MAX_FIT_SAMPLES` samples for long recordings, started from
@@ -327,9 +328,13 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     if judge.kind == "segments":
         say("held-out judge", f"segment simulation error: {judge.reason}")
     if diverged:
+        from .graph_location_segments import locate_on_segments
         say("nominal diverges", diverged)
-        windows, rv, scores = [], {}, []
-        place_list = _every_place(graph, exp)
+        windows, rv = [], {}
+        say("graph location", "restarted windows of the training part")
+        scores = locate_on_segments(graph, train, res.noise, progress=progress)
+        place_list = ([s.place for s in scores[:int(top)] if s.explained >= MIN_PLACE_SHARE]
+                      or _every_place(graph, exp))
     else:
         windows = _merge([w for o in exp.outputs
                           for w in significant_windows(exp.t, res.residual[o], res.noise[o])])
@@ -347,7 +352,9 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     # a diverging nominal's candidates take their scales from where it still runs
     cand_part = _before_divergence(train, diverged)
     cands = [c for p in place_list for c in candidates(graph, p, regime_variables=rv, experiment=cand_part)]
-    evidence, cands, pruned = _features(graph, scores, place_list, train, x0, rv, cands, say, "feature regression")
+    # the feature regression runs along the nominal run: none where it diverges
+    evidence, cands, pruned = _features(graph, [] if diverged else scores, place_list, train, x0, rv, cands,
+                                        say, "feature regression")
     fit_part, fit_x0 = _fit_window(train, res.run, x0)
     fit_part = _before_divergence(fit_part, diverged)
     fits = []

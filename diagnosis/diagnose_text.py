@@ -155,11 +155,13 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
     lines += _judge_lines(judge, judged, list(exp.outputs))
     diverged = rounds[0].diverged if rounds else ""
     if diverged:
+        where = ("the places were located on windows of the training part restarted from states "
+                 "estimated from the data" if scores else
+                 "with no run to locate along, the candidates of every place were fitted")
         lines.append(f"The nominal model diverges on this recording ({diverged}). That is evidence of missing "
-                     f"physics, not an error: with no run to locate along, the candidates of every place "
-                     f"were fitted" + (", and each model is judged by its segment error." if judge is not None
-                                       and judge.kind == "segments" else
-                                       ", and the nominal held-out error counts as unbounded."))
+                     f"physics, not an error: {where}" + (", and each model is judged by its segment error."
+                                                          if judge is not None and judge.kind == "segments" else
+                                                          ", and the nominal held-out error counts as unbounded."))
     elif windows:
         shown = ", ".join(f"{a:.3g}-{b:.3g} s" for a, b in windows[:6])
         more = f" and {len(windows) - 6} more" if len(windows) > 6 else ""

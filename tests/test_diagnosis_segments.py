@@ -181,7 +181,7 @@ def _tanks_rate(extra):
     return rate
 
 
-def test_a_diverging_nominal_is_judged_by_segments_and_fitted_before_it_diverges(tmp_path):
+def test_a_diverging_nominal_is_located_on_restarted_windows_judged_by_segments(tmp_path):
     # the nominal lacks a 2e-5 m^3/s feed into tank 1: with the pump off for 300 s its lower tank
     # runs dry, and the orifice law's square root of a negative level leaves the finite numbers
     t = np.arange(0.0, 1500.0, 1.0)
@@ -205,6 +205,9 @@ def test_a_diverging_nominal_is_judged_by_segments_and_fitted_before_it_diverges
     fit = report.to_json()["fit"]
     assert fit["judge"] == "segments" and "diverges" in fit["judge_reason"]
     assert fit["open_loop"]["nominal"] == {"h1": None, "h2": None}
+    # located on restarted windows of the training part (multiple shooting): the feed's junction
+    assert str(report.scores[0].place) == "junction P1" and report.scores[0].explained > 0.9
+    assert "located on windows of the training part restarted" in report.text
     # every candidate starts from the nominal's values: fitted where the nominal still runs
     assert fit["window"][1] < 0.9 * 1050
     assert report.kind == "constant_load" and report.missing_physics[0]["attached_to"] == "junction P1"

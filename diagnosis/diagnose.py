@@ -6,10 +6,13 @@
    split off the held-out tail;
 2. simulate the nominal model on the whole recording (the held-out part
    continues from where the training part leaves the states), residuals,
-   noise level per output, nominal held-out NRMSE;
+   noise level per output; the held-out judge (:func:`diagnosis.segments.choose_judge`:
+   open-loop, or the segment simulation error where the nominal diverges or drifts),
+   by which the nominal and every later model get their held-out NRMSE;
 3. significant time windows (:func:`diagnosis.locate.significant_windows`),
    regime variables, graph location on the training part
-   (:func:`diagnosis.graph_location.locate_on_graph`);
+   (:func:`diagnosis.graph_location.locate_on_graph`; for a diverging nominal on restarted
+   windows, :func:`diagnosis.graph_location_segments.locate_on_segments`);
 4. candidates of the catalogue at the ``top`` places
    (:func:`diagnosis.catalogue.candidates`), each fitted on the training part
    (its first :data:`MAX_FIT_SAMPLES` samples for long recordings, started from
@@ -188,14 +191,36 @@ def _jumps_at_start(residual, sigma: float) -> bool:
     return abs(float(coef[0])) > 4.0 * se
 
 
+class _Diverged(str):
+    """The message of a nominal simulation's divergence (``""``: it did not diverge), with the
+    time it left the finite numbers (``at``, s; None when unknown)."""
+    at = None
+
+
 def _nominal_residuals(sim, graph, exp, x0):
-    """The nominal residuals from `x0`, and ``""`` or the message of its divergence."""
+    """The nominal residuals from `x0`, and ``""`` or the message of its divergence
+    (a :class:`_Diverged`)."""
     from .errors import SimulationError
     from .residuals import residuals
     try:
-        return residuals(graph, exp, simulator=sim, x0=x0), ""
+        return residuals(graph, exp, simulator=sim, x0=x0), _Diverged("")
     except SimulationError as exc:        # evidence of missing physics, not an error
-        return _diverged_residuals(sim, exp), str(exc)
+        message = _Diverged(str(exc))
+        message.at = exc.time
+        return _diverged_residuals(sim, exp), message
+
+
+def _before_divergence(part, diverged):
+    """The fit window of a diverging nominal: the samples of `part` before 90 % of the time it
+    ran finite (every candidate starts from the nominal's values, which would diverge later);
+    `part` itself when the time is unknown or too few samples are left."""
+    if not diverged or diverged.at is None:
+        return part
+    t0 = float(part.t[0])
+    stop = t0 + 0.9 * (float(diverged.at) - t0)
+    if np.count_nonzero(part.t <= stop) < 20 or stop >= part.t[-1]:
+        return part
+    return part.window(t0, stop)
 
 
 def _diverged_residuals(sim, experiment):
@@ -221,10 +246,11 @@ def _every_place(graph, experiment):
             + [Place("output", n) for n in experiment.outputs])
 
 
-def _holdout_nrmse(sim, params, x0, experiment, mask):
-    from .residuals import nrmse
-    y = sim(params, x0)
-    return {o: nrmse(experiment.outputs[o][mask], y[o][mask]) for o in experiment.outputs}, y
+def _holdout_nrmse(sim, params, x0, judge):
+    """The held-out NRMSE of `sim`'s model by `judge` (:mod:`diagnosis.segments`), its open-loop
+    outputs and the whole :class:`~diagnosis.segments.Judged`."""
+    judged = judge.evaluate(sim, params, x0)
+    return judged.nrmse, judged.y, judged
 
 
 def _noise_overrides(noise, exp) -> dict:
@@ -308,7 +334,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     from .initial_state import estimate_initial_state
     from .locate import locate_regime, regime_variables, significant_windows
     from .recording import bind
-    from .residuals import OutputSimulator, nrmse
+    from .residuals import OutputSimulator
+    from .segments import choose_judge
 
     if int(top) < 1:
         raise DiagnosisError(f"top must be a positive number of places; found {top!r}")
@@ -320,7 +347,6 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     rec = _as_recording(recording, time)
     exp = bind(rec, graph, inputs, outputs)
     train, held = exp.split(holdout)
-    mask = exp.t >= held.t[0]
 
     say("nominal simulation", f"{exp.t.size} samples, {exp.span[1] - exp.span[0]:.4g} s")
     sim = OutputSimulator(graph, exp)
@@ -338,13 +364,23 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
             x0 = est.values
             res, diverged = _nominal_residuals(sim, graph, exp, x0)
             res.noise.update(_noise_overrides(noise, exp))
+    floor = noise_floor(held, res.noise)
+    say("held-out judge")
+    judge, nominal_judged = choose_judge(sim, exp, held, res, diverged, floor, x0)
+    nominal = dict(nominal_judged.nrmse)
+    if judge.floor:                  # the segment error's own floor: noise plus the restarts' noise
+        floor = dict(judge.floor)
+    if judge.kind == "segments":
+        say("held-out judge", f"segment simulation error: {judge.reason}")
     if diverged:
+        from .graph_location_segments import locate_on_segments
         say("nominal diverges", diverged)
-        nominal = {o: float("inf") for o in exp.outputs}
-        windows, rv, scores = [], {}, []
-        place_list = _every_place(graph, exp)
+        windows, rv = [], {}
+        say("graph location", "restarted windows of the training part")
+        scores = locate_on_segments(graph, train, res.noise, progress=progress)
+        place_list = ([s.place for s in scores[:int(top)] if s.explained >= MIN_PLACE_SHARE]
+                      or _every_place(graph, exp))
     else:
-        nominal = {o: nrmse(exp.outputs[o][mask], res.simulated[o][mask]) for o in exp.outputs}
         windows = _merge([w for o in exp.outputs
                           for w in significant_windows(exp.t, res.residual[o], res.noise[o])])
         say("regime variables")
@@ -358,25 +394,32 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                                  f"{type(exc).__name__}: {exc}") from exc
         place_list = [s.place for s in located_places(scores, int(top))]
 
-    cands = [c for p in place_list for c in candidates(graph, p, regime_variables=rv, experiment=train, x0=x0)]
-    evidence, cands, pruned = _features(graph, scores, place_list, train, x0, rv, cands, say, "feature regression")
+    # a diverging nominal's candidates take their scales from where it still runs
+    cand_part = _before_divergence(train, diverged)
+    cands = [c for p in place_list for c in candidates(graph, p, regime_variables=rv, experiment=cand_part,
+                                                     x0=x0)]
+    # the feature regression runs along the nominal run: none where it diverges
+    evidence, cands, pruned = _features(graph, [] if diverged else scores, place_list, train, x0, rv, cands,
+                                        say, "feature regression")
     fit_part, fit_x0 = _fit_window(train, res.run, x0)
+    fit_part = _before_divergence(fit_part, diverged)
     fits = []
     for i, cand in enumerate(cands, 1):
         say("fitting", f"{cand} ({i}/{len(cands)})")
         fits.append(fit_candidate(graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0,
-                                  through=train))
-    fits += _twin_fits(graph, fits, train, rv, lambda cand: fit_candidate(
-        graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0, through=train), say, "fitting", x0)
+                                  through=train, judge=judge))
+    fits += _twin_fits(graph, fits, cand_part, rv, lambda cand: fit_candidate(
+        graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0, through=train, judge=judge),
+        say, "fitting", x0)
     if uncertain:
         say("fitting", f"nominal parameters {', '.join(uncertain)} alone")
         fits.append(fit_candidate(graph, None, fit_part, held, uncertain=uncertain, x0=fit_x0,
-                                  through=train))
+                                  through=train, judge=judge))
     say("choosing")
-    floor = noise_floor(held, res.noise)
-    chosen = _choose(nominal, fits, floor, evidence, res, exp, train, diverged)
+    chosen = _choose(nominal, fits, floor, evidence, res, exp, train, diverged or judge.kind != "open-loop")
 
     say("improved model")
+    improved_judged = nominal_judged
     if chosen is None:
         improved_graph, improved, y_imp = graph, dict(nominal), res.run.outputs
     else:
@@ -384,7 +427,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         base = (chosen.candidate.build(graph, {k: v for k, v in chosen.values.items() if k in cand_names})
                 if chosen.candidate is not None else graph)
         improved_graph = _with_values(base, {k: v for k, v in chosen.values.items() if k not in cand_names})
-        improved, y_imp = _holdout_nrmse(OutputSimulator(improved_graph, exp), None, x0, exp, mask)
+        improved, y_imp, improved_judged = _holdout_nrmse(OutputSimulator(improved_graph, exp), None, x0, judge)
     rounds = [Round(chosen, fits, dict(nominal), dict(improved), seconds=_time.perf_counter() - say.start,
                     diverged=diverged, window=[float(fit_part.t[0]), float(fit_part.t[-1])], floor=floor,
                     start=start, features=list(evidence.values()), pruned=pruned)]
@@ -392,27 +435,28 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     if chosen is not None and chosen.candidate is not None:
         while len(rounds) < int(max_effects):
             start = _time.perf_counter()
-            found = _further_round(improved_graph, exp, train, held, mask, x0, improved, floor,
+            found = _further_round(improved_graph, exp, train, held, judge, x0, improved, floor,
                                    rounds, top=int(top), say=say, label=f"round {len(rounds) + 1}")
             found.seconds = _time.perf_counter() - start
             rounds.append(found)
             if found.chosen is None:
                 break
-            improved_graph, improved, y_imp = found.graph, found.improved, found.y
+            improved_graph, improved, y_imp, improved_judged = found.graph, found.improved, found.y, found.judged
         effects = [r.chosen for r in rounds if r.chosen is not None]
         if len(effects) >= 2:
             say("joint refit", f"{len(effects)} effects")
-            joint = _joint_refit(improved_graph, effects, exp, train, held, mask, x0, improved, floor,
+            joint = _joint_refit(improved_graph, effects, exp, train, held, judge, x0, improved, floor,
                                  uncertain)
             rounds[-1].joint = joint
             if joint.kept:
-                improved_graph, improved, y_imp = joint.graph, joint.improved, joint.y
+                improved_graph, improved, y_imp, improved_judged = joint.graph, joint.improved, joint.y, joint.judged
 
     from .diagnose_text import assemble
     return assemble(graph=graph, rec=rec, exp=exp, held=held, res=res, nominal=nominal,
                     improved=improved, y_imp=y_imp, windows=windows, rv=rv, scores=scores,
                     fits=fits, chosen=chosen, improved_graph=improved_graph,
-                    locate_regime=locate_regime, timings=say.done, rounds=rounds)
+                    locate_regime=locate_regime, timings=say.done, rounds=rounds, judge=judge,
+                    judged=(nominal_judged, improved_judged))
 
 
 def _features(graph, scores, places, train, x0, rv, cands, say, label):
@@ -429,9 +473,10 @@ def _features(graph, scores, places, train, x0, rv, cands, say, label):
     return evidence, kept, [str(c) for c in pruned]
 
 
-def _choose(reference, fits, floor, evidence, res, exp, train, diverged):
-    """:func:`~diagnosis.fit.choose` on the held-out part; when it answers "none", the training
-    part's answer among the fits the held-out part cannot judge
+def _choose(reference, fits, floor, evidence, res, exp, train, not_open_loop):
+    """:func:`~diagnosis.fit.choose` on the held-out part; when it answers "none" and the
+    held-out part is judged open-loop (`not_open_loop` False: the nominal neither diverges nor
+    drifts), the training part's answer among the fits the held-out part cannot judge
     (:mod:`diagnosis.training_judge`: fits whose held-out prediction is the reference's)."""
     from .fit import choose, noise_floor
     from .residuals import nrmse
@@ -439,12 +484,12 @@ def _choose(reference, fits, floor, evidence, res, exp, train, diverged):
     if not fits:
         return None
     n = train.t.size
-    if not diverged:
+    if not not_open_loop:
         mark_silent(fits, res.simulated, exp.outputs, res.noise, n)
     for f in fits:
         f.y = None
     chosen = choose(reference, fits, noise=floor, evidence=_lookup(evidence))
-    if chosen is not None or diverged:
+    if chosen is not None or not_open_loop:
         return chosen
     nominal_train = {o: nrmse(train.outputs[o], res.simulated[o][:n]) for o in exp.outputs}
     return choose_on_training(nominal_train, fits, floor=noise_floor(train, res.noise), n_train=n)
@@ -472,7 +517,7 @@ def _twin_fits(graph, fits, train, rv, fit, say, label, x0=None) -> list:
     return out
 
 
-def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, *, top, say, label):
+def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds, *, top, say, label):
     """One more effect on `graph` (the improved graph so far) against its own residual.
 
     Location, candidates at the ``top`` places (minus the kinds already added at
@@ -488,8 +533,14 @@ def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, 
     from .locate import regime_variables
     from .residuals import OutputSimulator, residuals
 
+    from .errors import SimulationError
+
     say(f"{label}: residual of the improved model")
-    res = residuals(graph, exp, simulator=OutputSimulator(graph, exp), x0=x0)
+    try:
+        res = residuals(graph, exp, simulator=OutputSimulator(graph, exp), x0=x0)
+    except SimulationError as exc:      # judged by segments, the improved model may still diverge
+        return Round(None, [], dict(reference), dict(reference), scores=[],
+                     note=f"the improved model diverges open-loop ({exc}): no run to locate along")
     rv = {k: (v[:train.t.size], d) for k, (v, d) in regime_variables(graph, exp, res.run).items()}
     say(f"{label}: graph location", "training part")
     try:
@@ -508,48 +559,47 @@ def _further_round(graph, exp, train, held, mask, x0, reference, floor, rounds, 
     fits = []
     for i, cand in enumerate(cands, 1):
         say(f"{label}: fitting", f"{cand} ({i}/{len(cands)})")
-        fits.append(fit_candidate(graph, cand, fit_part, held, x0=fit_x0, through=train))
+        fits.append(fit_candidate(graph, cand, fit_part, held, x0=fit_x0, through=train, judge=judge))
     fits += _twin_fits(graph, fits, train, rv, lambda cand: fit_candidate(
-        graph, cand, fit_part, held, x0=fit_x0, through=train), say, f"{label}: fitting", x0)
+        graph, cand, fit_part, held, x0=fit_x0, through=train, judge=judge), say, f"{label}: fitting", x0)
     say(f"{label}: choosing")
-    chosen = _choose(reference, fits, floor, evidence, res, exp, train, "")
+    chosen = _choose(reference, fits, floor, evidence, res, exp, train, judge.kind != "open-loop")
     out = Round(chosen, fits, dict(reference), dict(reference), scores=scores,
                 features=list(evidence.values()), pruned=pruned)
     if chosen is not None:
         names = {p.name for p in chosen.candidate.params}
         better = chosen.candidate.build(graph, {k: v for k, v in chosen.values.items() if k in names})
-        out.improved, out.y = _holdout_nrmse(OutputSimulator(better, exp), None, x0, exp, mask)
+        out.improved, out.y, out.judged = _holdout_nrmse(OutputSimulator(better, exp), None, x0, judge)
         out.graph = better
     return out
 
 
 
-def _joint_refit(graph, effects, exp, train, held, mask, x0, reference, floor, uncertain):
+def _joint_refit(graph, effects, exp, train, held, judge, x0, reference, floor, uncertain):
     """All accepted effects' parameters (and the `uncertain` ones) refitted together on the
     training part of `graph` (the improved graph), started from their round-by-round values.
 
     Returns a :class:`~diagnosis.rounds.JointRefit`: ``fit`` (CandidateFit), ``reference`` and
-    ``improved`` held-out NRMSE (whole-recording simulations as for every round), ``kept`` (the
+    ``improved`` held-out NRMSE (by the diagnosis's held-out judge, as for every round), ``kept`` (the
     held-out excess error beyond the noise floor did not grow), ``graph`` and ``y`` of the
     refitted model.
     """
     from .fit import excess_error, fit_candidate
-    from .residuals import OutputSimulator, residuals
+    from .residuals import OutputSimulator
 
     from .catalogue_common import released
     values = graph.parameters()   # a released saturation limit stays released
     names = [p.name for e in effects for p in e.candidate.params
              if p.name not in values or not released(values[p.name].value)] + list(uncertain)
-    res = residuals(graph, exp, simulator=OutputSimulator(graph, exp), x0=x0)
-    part, part_x0 = _fit_window(train, res.run, x0)
-    fit = fit_candidate(graph, None, part, held, uncertain=names, x0=part_x0, through=train)
+    part, part_x0 = _fit_window(train, None, x0)
+    fit = fit_candidate(graph, None, part, held, uncertain=names, x0=part_x0, through=train, judge=judge)
     out = JointRefit(fit, dict(reference), dict(reference))
     if not all(np.isfinite(v) for v in fit.values.values()) or not np.all(np.isfinite(
             list(fit.holdout_nrmse.values()))):
         return out
     better = _with_values(graph, fit.values)
-    improved, y = _holdout_nrmse(OutputSimulator(better, exp), None, x0, exp, mask)
+    improved, y, judged = _holdout_nrmse(OutputSimulator(better, exp), None, x0, judge)
     outputs = list(reference)
     kept = excess_error(improved, floor, outputs) <= excess_error(reference, floor, outputs)
-    out.improved, out.kept, out.graph, out.y = improved, kept, better, y
+    out.improved, out.kept, out.graph, out.y, out.judged = improved, kept, better, y, judged
     return out

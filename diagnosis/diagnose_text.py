@@ -68,9 +68,11 @@ def _judged_on_training(fit) -> str:
 
 
 def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, rv, scores, fits,
-             chosen, improved_graph, locate_regime, timings, rounds=()) -> DiagnosisReport:
+             chosen, improved_graph, locate_regime, timings, rounds=(), judge=None,
+             judged=(None, None)) -> DiagnosisReport:
     """Build the report (see :func:`diagnosis.diagnose.diagnose` for the arguments' meaning;
-    `rounds`: one :class:`~diagnosis.rounds.Round` per round)."""
+    `rounds`: one :class:`~diagnosis.rounds.Round` per round; `judge`: the held-out
+    :class:`~diagnosis.segments.Judge`, `judged`: the nominal and the improved model judged by it)."""
     n_train = exp.t.size - held.t.size
     units = dict(exp.units)
     finding, regime_values, regime_signal, regime_label = (None, None, None, "")
@@ -96,11 +98,19 @@ def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, r
     fit = {"holdout": [float(held.t[0]), float(held.t[-1])], "nominal": nominal, "improved": improved}
     if rounds and rounds[0].window is not None:
         fit.update(window=rounds[0].window, start=rounds[0].start)
+    if judge is not None:
+        fit.update(judge.to_json())
+        if judged[0] is not None and judged[1] is not None:
+            fit["open_loop"] = {"nominal": dict(judged[0].open_loop), "improved": dict(judged[1].open_loop)}
     text = _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen, physics,
-                 finding, rounds)
+                 finding, rounds, judge, judged)
     plot = PlotData(exp.t, dict(exp.outputs), dict(res.run.outputs), dict(y_imp), units,
                     float(held.t[0]), finding.variable if finding else None, regime_values,
                     regime_signal, regime_label)
+    if judge is not None and judge.kind == "segments" and judged[0] is not None and judged[1] is not None:
+        plot.judge = "segments"
+        plot.segment_starts = [float(held.t[a]) for a in judge.plan.starts]
+        plot.nominal_segments, plot.improved_segments = dict(judged[0].segments), dict(judged[1].segments)
     report = DiagnosisReport(location, physics, fit, text, improved_graph, None, scores, fits, chosen,
                              rec.notes(), timings(), plot, rounds=list(rounds))
     for i, r in enumerate(report.rounds, 1):
@@ -124,8 +134,26 @@ def _why_none(nominal, fits, rounds) -> str:
             f"{100 * MIN_SHARE:.0f} % and {100 * MIN_GAIN:.0f} % are required)")
 
 
+def _judge_lines(judge, judged, outputs) -> list[str]:
+    """How the held-out part was judged, and why."""
+    if judge is None:
+        return []
+    if judge.kind != "segments":
+        return [f"Held-out judge: open-loop simulation ({judge.reason})."]
+    p = judge.plan
+    lines = [f"Held-out judge: segment simulation error, because {judge.reason}. The held-out part is cut "
+             f"into {len(p.starts)} segments of {p.seconds:.3g} s ({p.length} samples); each restarts from a "
+             f"state estimated on its first {p.estimation} samples and is scored on the rest. Every "
+             f"held-out NRMSE below is this segment error."]
+    nominal, improved = judged
+    if nominal is not None and improved is not None:
+        lines.append("Open-loop held-out NRMSE, for reference: " + ", ".join(
+            f"{o} {nominal.open_loop[o]:.3g} -> {improved.open_loop[o]:.3g}" for o in outputs) + ".")
+    return lines
+
+
 def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen, physics, finding,
-          rounds=()):
+          rounds=(), judge=None, judged=(None, None)):
     u = exp.units
     lines = [f"Recording {rec.source}: {exp.t.size} samples over {exp.span[0]:.4g}-{exp.span[1]:.4g} s; "
              f"held out {held.span[0]:.4g}-{held.span[1]:.4g} s."]
@@ -133,11 +161,16 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
     for o in exp.outputs:
         lines.append(f"Output {o}: nominal held-out NRMSE {nominal[o]:.3g} (noise about "
                      f"{res.noise[o]:.3g} {u.get(o, '')}).")
+    lines += _judge_lines(judge, judged, list(exp.outputs))
     diverged = rounds[0].diverged if rounds else ""
     if diverged:
+        where = ("the places were located on windows of the training part restarted from states "
+                 "estimated from the data" if scores else
+                 "with no run to locate along, the candidates of every place were fitted")
         lines.append(f"The nominal model diverges on this recording ({diverged}). That is evidence of missing "
-                     f"physics, not an error: with no run to locate along, the candidates of every place "
-                     f"were fitted, and the nominal held-out error counts as unbounded.")
+                     f"physics, not an error: {where}" + (", and each model is judged by its segment error."
+                                                          if judge is not None and judge.kind == "segments" else
+                                                          ", and the nominal held-out error counts as unbounded."))
     elif windows:
         shown = ", ".join(f"{a:.3g}-{b:.3g} s" for a, b in windows[:6])
         more = f" and {len(windows) - 6} more" if len(windows) > 6 else ""

@@ -242,7 +242,7 @@ def _best_start(objective, candidate, theta0):
 
 
 def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, max_nfev: int = 40,
-                  abandon_above: float | None = None, through=None) -> CandidateFit:
+                  abandon_above: float | None = None, through=None, judge=None) -> CandidateFit:
     """Fit a candidate's parameters (and uncertain nominal ones) by simulation-error least squares.
 
     Parameters
@@ -271,6 +271,11 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
         The whole training part when `train` is only its start (a long recording fitted on its
         first samples): the held-out part is simulated continuing through it, not across the
         gap between the end of `train` and the start of `holdout`.
+    judge : diagnosis.segments.Judge, optional
+        How the held-out error is measured (open-loop, or the segment simulation error where
+        the nominal drifts or diverges); default open-loop.  The open-loop held-out NRMSE is
+        kept in ``extra["open_loop"]`` (inf where that run diverges: under the segment judge
+        such a fit is still judged).
 
     Returns
     -------
@@ -328,21 +333,36 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     values = {**objective.params(theta), **released}
     if candidate is not None:
         values = candidate.settle(values, train)
-    try:   # one run of training + held-out part (the training outputs are its first samples)
-        lead = train if through is None else through
-        full = _joined(lead, holdout) if holdout is not None else lead
-        y = objective.sim.on(full)(values, x0)
-        n = train.t.size
-        train_nrmse = {o: nrmse(train.outputs[o], y[o][:n]) for o in outputs}
-        holdout_nrmse = ({o: nrmse(holdout.outputs[o], y[o][lead.t.size:]) for o in outputs}
-                         if holdout is not None else {})
-    except BondcosimError as exc:
-        return CandidateFit(candidate, message=f"{label}: the fitted model does not run: {exc}", graph=model,
-                            n_simulations=objective.n_runs, **failed)
+    lead = train if through is None else through
+    full = _joined(lead, holdout) if holdout is not None else lead
+    n = train.t.size
+    if judge is not None and holdout is not None:
+        judged = judge.evaluate(objective.sim.on(full), values, x0)
+        holdout_nrmse, open_loop = judged.nrmse, judged.open_loop
+        try:
+            y = judged.y if np.isfinite(judged.y[outputs[0]][:n]).all() else objective.sim(values, x0)
+            train_nrmse = {o: nrmse(train.outputs[o], y[o][:n]) for o in outputs}
+        except BondcosimError as exc:
+            return CandidateFit(candidate, message=f"{label}: the fitted model does not run: {exc}", graph=model,
+                                n_simulations=objective.n_runs, **failed)
+        if not all(np.isfinite(v) for v in holdout_nrmse.values()):
+            return CandidateFit(candidate, message=f"{label}: the fitted model does not run on the held-out part",
+                                graph=model, n_simulations=objective.n_runs, **failed)
+    else:
+        try:   # one run of training + held-out part (the training outputs are its first samples)
+            y = objective.sim.on(full)(values, x0)
+            train_nrmse = {o: nrmse(train.outputs[o], y[o][:n]) for o in outputs}
+            holdout_nrmse = ({o: nrmse(holdout.outputs[o], y[o][lead.t.size:]) for o in outputs}
+                             if holdout is not None else {})
+        except BondcosimError as exc:
+            return CandidateFit(candidate, message=f"{label}: the fitted model does not run: {exc}", graph=model,
+                                n_simulations=objective.n_runs, **failed)
+        open_loop = dict(holdout_nrmse)
     return CandidateFit(candidate, values, train_nrmse, holdout_nrmse, len(specs), converged,
                         message if converged else f"{label} did not converge: {message}", model,
                         objective.n_runs + 1,
-                        {"train_cost": 0.5 * float(sum(v ** 2 for v in train_nrmse.values()))}, y)
+                        {"train_cost": 0.5 * float(sum(v ** 2 for v in train_nrmse.values())),
+                         "open_loop": open_loop}, y)
 
 
 def noise_floor(holdout, noise_sigma: dict | None = None) -> dict:
@@ -389,9 +409,10 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
        extra parameter must buy a 10 % smaller excess error (the small
        :math:`10^{-4} E_0` term makes fits that are perfect to rounding tie,
        so the simpler one wins).  Fits whose score is within :data:`TIE` (2 %) of
-       the best, or whose held-out NRMSE (priced the same way) is within 2 % of
-       the best's (near the noise floor the excess magnifies differences the
-       held-out part cannot resolve), are tied: the held-out part cannot tell
+       the best, or whose held-out NRMSE on the outputs that need explaining
+       (priced the same way) is within 2 % of the best's (near the noise floor
+       the excess magnifies differences the held-out part cannot resolve; an
+       output at its floor would only add its noise to both), are tied: the held-out part cannot tell
        them apart (a constant load and a sensor offset look alike once a
        transient is over).  Among
        tied fits: fewer parameters, then the smaller training error (where the
@@ -460,8 +481,8 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
         value = sum(v ** 2 for v in f.train_nrmse.values()) if f.train_nrmse else np.inf
         return value if np.isfinite(value) else np.inf
 
-    def raw_score(f):
-        return sum(f.holdout_nrmse[o] ** 2 for o in names) * (1 + PARAMETER_PRICE) ** f.n_params
+    def raw_score(f):     # on the outputs that need explaining: the others only add their noise
+        return sum(f.holdout_nrmse[o] ** 2 for o in significant) * (1 + PARAMETER_PRICE) ** f.n_params
 
     leader = min(usable, key=score)
     tied = [f for f in usable if score(f) <= score(leader) * (1 + TIE)

@@ -31,7 +31,7 @@ from scipy.optimize import least_squares
 
 from .errors import BondcosimError
 
-__all__ = ["InitialState", "estimate_initial_state", "window_length", "PULL", "MIN_GAIN"]
+__all__ = ["InitialState", "estimate_initial_state", "fit_state", "window_length", "PULL", "MIN_GAIN"]
 
 #: weight of the pull towards the default state, relative to one sample of one output at its noise
 PULL = 1e-2
@@ -95,41 +95,107 @@ def estimate_initial_state(sim, experiment, noise: dict, *, scales=None) -> Init
     n = window_length(experiment.t.size)
     while n >= 20:
         part = experiment.window(float(experiment.t[0]), float(experiment.t[min(n, experiment.t.size) - 1]))
-        w_sim = sim.on(part)
         y = {o: np.asarray(part.outputs[o], float) for o in outputs}
-        sig = {o: max(float(noise.get(o, 0.0)), 1e-9 * (float(np.std(y[o])) or 1.0)) for o in outputs}
-        size = part.t.size
-
-        def residual(theta, _w=w_sim, _y=y, _sig=sig, _size=size):
-            x = x_def + theta * s
-            try:
-                out = _w.run(None, x).outputs
-            except BondcosimError:
-                return np.full(_size * len(outputs) + len(names), 1e6)
-            r = [(_y[o] - out[o]) / _sig[o] for o in outputs]
-            return np.concatenate(r + [PULL * np.sqrt(_size) * theta])
-
-        r0 = residual(np.zeros(len(names)))
+        problem = _StateProblem(sim.on(part), y, noise, x_def, s)
+        r0 = problem(np.zeros(len(names)))
         if np.all(r0[:-len(names)] < 1e6):
             break
         n //= 2                                   # the default start diverges in the window
     else:
         return InitialState(dict(zip(names, map(float, x_def))), 0, 0.0,
                         "the model's initial state (the model diverges from it at once)")
+    size = part.t.size
     cost0 = float(np.sum(r0 ** 2))
-    try:
-        fit = least_squares(residual, np.zeros(len(names)), method="trf", x_scale=1.0, max_nfev=20 * len(names) + 20,
-                            xtol=1e-6, ftol=1e-6)
-    except (ValueError, FloatingPointError, np.linalg.LinAlgError):
-        fit = None
-    if fit is None or not np.all(np.isfinite(fit.x)):
+    x, cost = problem.solve()
+    if x is None:
         return InitialState(dict(zip(names, map(float, x_def))), 0, 0.0, "the model's initial state")
-    gain = 1.0 - 2.0 * float(fit.cost) / cost0 if cost0 > 0 else 0.0
+    gain = 1.0 - cost / cost0 if cost0 > 0 else 0.0
     if gain < MIN_GAIN:
         return InitialState(dict(zip(names, map(float, x_def))), 0, gain,
                             f"the model's initial state (fitting it on the first {size} samples gained "
                             f"{100 * max(gain, 0):.0f} %)")
-    x = x_def + fit.x * s
     return InitialState(dict(zip(names, map(float, x))), size, gain,
                         f"a state estimated from the first {size} samples "
                         f"({100 * gain:.0f} % less error there than from the model's initial state)")
+
+
+class _StateProblem:
+    """The weighted least squares of the module docstring on one window: residual vector of
+    the scaled state offset ``theta`` (``x = prior + theta * scale``)."""
+
+    def __init__(self, w_sim, y, noise, prior, scale, params=None):
+        self.sim, self.y, self.prior, self.scale, self.params = w_sim, y, prior, scale, params
+        self.outputs = list(y)
+        self.sig = {o: max(float(noise.get(o, 0.0)), 1e-9 * (float(np.std(v)) or 1.0)) for o, v in y.items()}
+        self.size = len(next(iter(y.values()))) if y else 0
+
+    def __call__(self, theta):
+        x = self.prior + theta * self.scale
+        try:
+            out = self.sim.run(self.params, x).outputs
+        except BondcosimError:
+            return np.full(self.size * len(self.outputs) + len(theta), 1e6)
+        r = [(self.y[o] - out[o]) / self.sig[o] for o in self.outputs]
+        return np.concatenate(r + [PULL * np.sqrt(self.size) * theta])
+
+    def solve(self, with_jacobian=False):
+        """``(state, cost)``, cost the weighted sum of squares; ``(None, inf)`` when it fails;
+        with `with_jacobian` also the residual's Jacobian in the scaled offset (None on failure)."""
+        n = len(self.prior)
+        try:
+            fit = least_squares(self, np.zeros(n), method="trf", x_scale=1.0, max_nfev=20 * n + 20,
+                                xtol=1e-6, ftol=1e-6)
+        except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+            fit = None
+        if fit is None or not np.all(np.isfinite(fit.x)):
+            return (None, np.inf, None) if with_jacobian else (None, np.inf)
+        out = (self.prior + fit.x * self.scale, 2.0 * float(fit.cost))
+        return out + (np.asarray(fit.jac, dtype=float),) if with_jacobian else out
+
+
+def fit_state(w_sim, y: dict, noise: dict, prior, scale=None, *, params=None, covariance=False):
+    """The state at the first sample of a window, fitted to its measured outputs.
+
+    The same noise-weighted least squares with a weak pull towards `prior` as
+    :func:`estimate_initial_state`, without its acceptance rule: used to restart a
+    simulation from the data (:mod:`diagnosis.segments`).
+
+    Parameters
+    ----------
+    w_sim : OutputSimulator
+        The compiled model on the window's grid and inputs.
+    y : dict str -> ndarray
+        Measured outputs on the window (model units).
+    noise : dict str -> float
+        Noise standard deviation of each output (model units).
+    prior : array_like, shape (n_states,)
+        The state pulled towards (SI), e.g. a simulation's state there or the default.
+    scale : array_like, optional
+        Typical magnitude of each state (default: the prior's magnitude, else 1).
+    params : dict, optional
+        Parameter values of the model (SI).
+    covariance : bool
+        Also return the covariance of the estimate (SI), the Gauss-Newton
+        :math:`S (J^T J)^{-1} S` at the solution (:math:`J` the noise-weighted residual's Jacobian,
+        :math:`S` the diagonal of `scale`): what the measurement noise leaves uncertain.
+
+    Returns
+    -------
+    ndarray or None
+        The fitted state; None when the model cannot run from any tried state.  With
+        `covariance`, ``(state, covariance)`` (covariance None when the fit failed).
+    """
+    prior = np.asarray(prior, dtype=float)
+    if not prior.size:
+        return (prior, np.zeros((0, 0))) if covariance else prior
+    if scale is None:
+        scale = np.where(np.abs(prior) > 0, np.abs(prior), 1.0)
+    scale = np.asarray(scale, dtype=float)
+    problem = _StateProblem(w_sim, y, noise, prior, scale, params)
+    if not covariance:
+        return problem.solve()[0]
+    x, _, jac = problem.solve(with_jacobian=True)
+    if x is None:
+        return None, None
+    cov = np.linalg.pinv(jac.T @ jac)
+    return x, cov * np.outer(scale, scale)

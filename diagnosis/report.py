@@ -6,7 +6,10 @@ Schema of :meth:`DiagnosisReport.to_json` (issue 6, section 2e)::
      "missing_physics": [{"kind": str, "attached_to": str, "parameters": {name: value},
                           "explanation": str, "judged_on": "held-out" | "training"}],
      "fit": {"holdout": [t0, t1], "nominal": {output: nrmse}, "improved": {output: nrmse},
-             "window": [t0, t1], "start": str},
+             "window": [t0, t1], "start": str,
+             "judge": "open-loop" | "segments", "judge_reason": str,
+             "segments": {"count": int, "length": s, "samples": int, "estimation_samples": int},
+             "open_loop": {"nominal": {output: nrmse}, "improved": {output: nrmse}}},
      "improved_model": path}
 
 ``missing_physics`` is ``[{"kind": "none", ...}]`` when nothing is missing;
@@ -17,7 +20,12 @@ effects; ``""`` for none); ``bond`` is ``""`` when there is none;
 ``judged_on`` is ``"training"`` for an effect the held-out part cannot judge
 (:mod:`diagnosis.training_judge`), else ``"held-out"``;
 ``fit.window`` is the part of the training samples the candidates were fitted on
-and ``fit.start`` the state their simulations started from.
+and ``fit.start`` the state their simulations started from.  ``fit.judge`` says how the
+held-out errors ``nominal`` and ``improved`` were measured (:mod:`diagnosis.segments`):
+``"open-loop"`` (one simulation through training and held-out part) or ``"segments"`` (the
+segment simulation error; ``segments`` gives their count, length in s and samples, and the
+samples each one's state was estimated from); ``open_loop`` holds the open-loop held-out NRMSE
+either way (``null`` where the run diverges).
 ``features`` (present when round 1 located a junction) holds the feature regression
 at each located junction (:meth:`diagnosis.features.FeatureEvidence.to_json`):
 ``{"place", "unit", "selected": [kind], "selected_share", "kinds": [{"kind", "variant",
@@ -55,6 +63,12 @@ class PlotData:
     regime_signal : ndarray or None, shape (n_train,)
         What was placed against it (the located correction or the residual).
     regime_label : str
+    judge : str
+        ``"open-loop"`` or ``"segments"`` (:mod:`diagnosis.segments`).
+    segment_starts : list of float
+        First time of each held-out segment, s (segment judge).
+    nominal_segments, improved_segments : dict str -> ndarray, shape (n_held,), optional
+        The segment simulations on the held-out part (NaN where not scored).
     """
 
     t: np.ndarray
@@ -67,6 +81,10 @@ class PlotData:
     regime_values: np.ndarray | None = None
     regime_signal: np.ndarray | None = None
     regime_label: str = ""
+    judge: str = "open-loop"
+    segment_starts: list = field(default_factory=list)
+    nominal_segments: dict | None = None
+    improved_segments: dict | None = None
 
 
 def _finite(x):
@@ -147,7 +165,13 @@ class DiagnosisReport:
                     "nominal": {k: _finite(v) for k, v in self.fit["nominal"].items()},
                     "improved": {k: _finite(v) for k, v in self.fit["improved"].items()},
                     **({"window": [_finite(v) for v in self.fit["window"]], "start": str(self.fit["start"])}
-                       if "window" in self.fit else {})},
+                       if "window" in self.fit else {}),
+                    **({"judge": self.fit["judge"], "judge_reason": self.fit.get("judge_reason", "")}
+                       if "judge" in self.fit else {}),
+                    **({"segments": dict(self.fit["segments"])} if "segments" in self.fit else {}),
+                    **({"open_loop": {k: {o: _finite(v) for o, v in d.items()}
+                                      for k, d in self.fit["open_loop"].items()}}
+                       if "open_loop" in self.fit else {})},
             "improved_model": self.improved_model,
             **({"features": [ev.to_json() for ev in self.rounds[0].features]}
                if self.rounds and self.rounds[0].features else {}),

@@ -1,5 +1,7 @@
 """The report's figures: residual over time with the windows, residual against the
-regime variable, measured / nominal / improved on the held-out part."""
+regime variable, measured / nominal / improved on the held-out part (under the segment judge,
+:mod:`diagnosis.segments`, the segment simulations, so that a drifting nominal's accumulated
+drift does not dominate the plot)."""
 from __future__ import annotations
 
 import os
@@ -57,17 +59,25 @@ def save_plots(report, directory) -> dict:
 
     plt, fig, axes = _figure(len(outputs))
     held = data.t >= data.holdout_start
+    segments = data.judge == "segments" and data.nominal_segments is not None
+    nominal = data.nominal_segments if segments else {o: data.nominal[o][held] for o in outputs}
+    improved = data.improved_segments if segments else {o: data.improved[o][held] for o in outputs}
+    what = "segment" if segments else "held-out"
     for ax, o in zip(axes, outputs):
         t = data.t[held]
         ax.plot(t, data.measured[o][held], color="0.4", lw=0.8, label="measured")
-        ax.plot(t, data.nominal[o][held], lw=1.0,
-                label=f"nominal (NRMSE {report.fit['nominal'][o]:.3g})")
-        ax.plot(t, data.improved[o][held], lw=1.0, ls="--",
-                label=f"improved (NRMSE {report.fit['improved'][o]:.3g})")
+        ax.plot(t, nominal[o], lw=1.0, label=f"nominal ({what} NRMSE {report.fit['nominal'][o]:.3g})")
+        ax.plot(t, improved[o], lw=1.0, ls="--",
+                label=f"improved ({what} NRMSE {report.fit['improved'][o]:.3g})")
+        for i, start in enumerate(data.segment_starts if segments else []):
+            ax.axvline(start, color="0.7", lw=0.6, ls=":", label="segment starts" if i == 0 else None)
         ax.set_ylabel(_label(o, data.units))
         ax.legend(loc="upper right", fontsize=8)
     axes[-1].set_xlabel("t (s)")
-    fig.suptitle(f"Held-out part: before / after ({report.kind})")
+    title = f"Held-out part: before / after ({report.kind})"
+    if segments:
+        title += ": segment simulations, each restarted from a state estimated on its first samples"
+    fig.suptitle(title, fontsize=10 if segments else None)
     fig.tight_layout()
     paths["holdout_fit"] = os.path.join(directory, "holdout_fit.png")
     fig.savefig(paths["holdout_fit"], dpi=110)

@@ -53,7 +53,8 @@ class JointRefit(_ReadByKey):
     kept : bool
         Whether the held-out excess error beyond the noise floor did not grow (the joint values kept).
     graph : BondGraph or None
-        The refitted model; ``y``: its simulated outputs.
+        The refitted model; ``y``: its simulated outputs; ``judged``: its
+        :class:`~diagnosis.segments.Judged` held-out evaluation.
     """
 
     fit: object
@@ -62,6 +63,7 @@ class JointRefit(_ReadByKey):
     kept: bool = False
     graph: object = None
     y: object = None
+    judged: object = None
 
 
 @dataclass
@@ -82,8 +84,9 @@ class Round(_ReadByKey):
         Graph location of further rounds (what is left of the residual).
     note : str, optional
         Why a further round stopped early (a numerical failure of its graph location).
-    graph, y : optional
-        The improved graph of a further round that kept an effect, and its simulated outputs.
+    graph, y, judged : optional
+        The improved graph of a further round that kept an effect, its simulated outputs and its
+        held-out evaluation (:class:`~diagnosis.segments.Judged`).
     joint : JointRefit, optional
         The joint refit, on the last round when there were two effects or more.
     diverged, window, floor, start : optional
@@ -105,6 +108,7 @@ class Round(_ReadByKey):
     note: str | None = None
     graph: object = None
     y: object = None
+    judged: object = None
     joint: JointRefit | None = None
     diverged: str | None = None
     window: list | None = None

@@ -111,13 +111,14 @@ def test_summary_counts():
     results = [dict(base, label="a", kind="coulomb_friction", answer_kind="coulomb_friction", kind_ok=True,
                     improvement=0.9),
                dict(base, label="b", kind="leak", answer_kind="none", kind_ok=False, place_ok=False,
-                    improvement=0.0),
+                    improvement=0.0, judge="segments"),
                dict(base, label="c", kind="none", answer_kind="none", kind_ok=True, improvement=float("nan")),
                dict(base, label="d", kind="none", answer_kind="leak", kind_ok=False, improvement=float("nan"))]
     s = summarise(results)
     h = s["headline"]
     assert (h["kind_right"], h["place_right"], h["holdout_halved"], h["false_alarms"]) == (0.5, 0.5, 0.5, 0.5)
     assert s["confusion"]["leak"]["none"] == 1 and s["confusion"]["none"]["leak"] == 1
+    assert h["segment_judged"] == 1 and "1 judged by the segment simulation error" in markdown(s, seed=0)
     assert "| leak | 1 | 0 % |" in markdown(s, seed=0)
 
 

@@ -99,7 +99,10 @@ def test_report_saves_schema_plots_and_an_improved_graph(coulomb, tmp_path):
     assert set(data["location"]) == {"junction", "bond", "windows", "regime"}
     assert set(data["missing_physics"][0]) == {"kind", "attached_to", "parameters", "explanation", "judged_on"}
     assert data["missing_physics"][0]["judged_on"] == "held-out"
-    assert set(data["fit"]) == {"holdout", "nominal", "improved", "window", "start"}
+    assert set(data["fit"]) == {"holdout", "nominal", "improved", "window", "start", "judge", "judge_reason",
+                                "open_loop"}
+    assert data["fit"]["judge"] == "open-loop"        # a stable msd: open-loop stays the judge
+    assert data["fit"]["open_loop"]["improved"] == data["fit"]["improved"]
     assert data["fit"]["window"][0] == 0.0 and data["fit"]["start"] == "the model's initial state"
     assert data["improved_model"] == paths["model"]
     for key in ("residual_time", "residual_regime", "holdout_fit"):

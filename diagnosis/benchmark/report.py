@@ -29,6 +29,8 @@ def summarise(results: list[dict]) -> dict:
     headline = {
         "cases": len(results), "scored": len(scored), "generator_errors": len(results) - len(scored),
         "effect_cases": len(effects), "null_cases": len(nulls), "drifting_cases": len(drift),
+        # held-out errors measured by the segment simulation error (diagnosis.segments), not open-loop
+        "segment_judged": sum(1 for r in scored if r.get("judge") == "segments"),
         "kind_right": _share(r["kind_ok"] for r in effects),
         "place_right": _share(r["place_ok"] for r in effects),
         "holdout_halved": _share(halved),
@@ -69,6 +71,7 @@ def markdown(summary: dict, *, seed: int | None = None) -> str:
     h = summary["headline"]
     lines = [f"Benchmark: {h['cases']} cases (seed {seed}), {h['effect_cases']} with an effect "
              f"({h['drifting_cases']} on a drifting nominal), {h['null_cases']} nulls; "
+             f"{h.get('segment_judged', 0)} judged by the segment simulation error; "
              f"{h['generator_errors']} generator errors, {h['diagnosis_errors']} diagnosis errors.", "",
              "| measure | result | target |", "|---|---|---|",
              f"| kind right (effect cases) | {_pct(h['kind_right'])} | >= 90 % |",

@@ -35,6 +35,7 @@ class Score:
     ratio: float = 0.0                    # effect-to-noise aimed at
     nominal_drifts: bool = False
     drifting_plant: bool = False
+    judge: str = ""                       # how the held-out errors were measured (fit.judge)
     answers: list = field(default_factory=list)
     parameters: dict = field(default_factory=dict)
     seconds_generate: float = 0.0
@@ -73,6 +74,7 @@ def score_case(rec: Realised, report) -> Score:
     data = report if isinstance(report, dict) else report.to_json()
     found = [e for e in data.get("missing_physics", []) if e.get("kind", "none") != "none"]
     s.answers = [f"{e['kind']} @ {e['attached_to']}" for e in found]
+    s.judge = str(data.get("fit", {}).get("judge", ""))
     s.answer_kind = found[0]["kind"] if found else "none"
     s.answer_place = found[0]["attached_to"] if found else ""
     s.parameters = found[0].get("parameters", {}) if found else {}

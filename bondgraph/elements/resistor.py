@@ -69,10 +69,7 @@ class R(Element):
         self._laws = {given: law}
         solutions = []
         if not law.has(sp.Piecewise, sp.Heaviside, sp.Max, sp.Min, sp.floor, sp.ceiling):
-            try:  # switched laws are not inverted: their causality stays as given
-                solutions = sp.solve(sp.Eq(law, unknown), known)
-            except NotImplementedError:
-                solutions = []
+            solutions = _inverse(law, unknown, known)   # switched laws are not inverted
         if len(solutions) == 1 and not solutions[0].has(sp.Piecewise):
             self._laws[FLOW if given == EFFORT else EFFORT] = solutions[0]
 
@@ -111,3 +108,24 @@ class R(Element):
         if extra:
             spec["params"] = extra
         return spec
+
+
+#: sympy.solve's answers by (law, unknown, known): a law met again (each copy of a graph is
+#: derived anew: the diagnosis builds a candidate, its twins and the improved graph from the same
+#: element) is not solved again; solving a friction law c tanh(f/v) = e for f takes 0.4-1.2 s
+_INVERSES: dict = {}
+_INVERSES_KEPT = 256
+
+
+def _inverse(law, unknown, known) -> list:
+    """``sympy.solve(Eq(law, unknown), known)`` (``[]`` when sympy cannot), remembered."""
+    key = (law, unknown, known)
+    if key not in _INVERSES:
+        try:
+            solutions = sp.solve(sp.Eq(law, unknown), known)
+        except NotImplementedError:
+            solutions = []
+        if len(_INVERSES) >= _INVERSES_KEPT:
+            _INVERSES.clear()
+        _INVERSES[key] = tuple(solutions)
+    return list(_INVERSES[key])

@@ -4,6 +4,7 @@ from __future__ import annotations
 import sympy as sp
 
 from ..errors import DerivationError
+from ..law_inverses import unique_inverse
 from ..symbols import sym
 from .base import EFFORT, FLOW, Contribution, Element, RoleConflict, element_param, param_dict, unit_of
 
@@ -67,11 +68,9 @@ class R(Element):
                                  else (FLOW, self._e, self._f))
         law = self._expr(self.effort_law if given == EFFORT else self.flow_law, local, "law")
         self._laws = {given: law}
-        solutions = []
-        if not law.has(sp.Piecewise, sp.Heaviside, sp.Max, sp.Min, sp.floor, sp.ceiling):
-            solutions = _inverse(law, unknown, known)   # switched laws are not inverted
-        if len(solutions) == 1 and not solutions[0].has(sp.Piecewise):
-            self._laws[FLOW if given == EFFORT else EFFORT] = solutions[0]
+        inverse = unique_inverse(law, unknown, known)   # switched laws are not inverted
+        if inverse is not None:
+            self._laws[FLOW if given == EFFORT else EFFORT] = inverse
 
     def fixed_roles(self):
         if len(self._laws) == 1:
@@ -109,23 +108,3 @@ class R(Element):
             spec["params"] = extra
         return spec
 
-
-#: sympy.solve's answers by (law, unknown, known): a law met again (each copy of a graph is
-#: derived anew: the diagnosis builds a candidate, its twins and the improved graph from the same
-#: element) is not solved again; solving a friction law c tanh(f/v) = e for f takes 0.4-1.2 s
-_INVERSES: dict = {}
-_INVERSES_KEPT = 256
-
-
-def _inverse(law, unknown, known) -> list:
-    """``sympy.solve(Eq(law, unknown), known)`` (``[]`` when sympy cannot), remembered."""
-    key = (law, unknown, known)
-    if key not in _INVERSES:
-        try:
-            solutions = sp.solve(sp.Eq(law, unknown), known)
-        except NotImplementedError:
-            solutions = []
-        if len(_INVERSES) >= _INVERSES_KEPT:
-            _INVERSES.clear()
-        _INVERSES[key] = tuple(solutions)
-    return list(_INVERSES[key])

@@ -14,7 +14,7 @@ Its twins are then not fitted either (:mod:`diagnosis.twins` groups successful f
 Why a factor 10 and the stall: the choice (:func:`diagnosis.fit.choose`) is made on held-out
 error, not training error, so the margin must be wide.  Every fit's best training cost after
 each evaluation was recorded on 62 benchmark cases (seed 2026, the choice recomputed without the
-fits a rule would stop): the factor alone, at 3 or 10, lost one winner (a modulated friction
+fits a rule would stop, twin groups as they were): the factor alone, at 3 or 10, lost one winner (a modulated friction
 that started at 100 times the best cost and was still descending by a factor of three per
 evaluation when it was checked); with the stall condition no round's answer changed.
 """

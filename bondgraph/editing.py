@@ -49,7 +49,9 @@ class GraphEditing:
     def copy(self, name: str | None = None, *, description: str | None = None):
         """An independent copy (elements, bonds, declarations), optionally renamed to `name` and
         described by `description`."""
-        new = _copy.deepcopy(self, {id(self._cache): None})   # derived equations are not copied
+        # derived equations are not copied; sympy expressions are immutable, so the copy shares
+        # them (rebuilding them made a copy of pam take 0.12 s instead of 0.01 s)
+        new = _copy.deepcopy(self, _sympy_shared(self, {id(self._cache): None}))
         if name is not None:
             if not isinstance(name, str) or not name.isidentifier():
                 raise GraphError(f"graph name {name!r} is not a valid identifier")
@@ -281,6 +283,28 @@ class GraphEditing:
         if name not in self.bonds:
             raise UnknownNameError("bond", name, self.bonds, model=self.name)
         return self.bonds[name]
+
+
+def _sympy_shared(root, memo: dict) -> dict:
+    """`memo` for :func:`copy.deepcopy` of `root` with every sympy object reachable from it
+    mapped to itself (shared, not copied): through dicts, lists, tuples, sets and instance
+    dicts, never into the sympy objects themselves."""
+    stack, seen = [root], set()
+    while stack:
+        x = stack.pop()
+        if id(x) in seen or id(x) in memo:
+            continue
+        seen.add(id(x))
+        if isinstance(x, sp.Basic):
+            memo[id(x)] = x
+        elif isinstance(x, dict):
+            stack.extend(x.keys())
+            stack.extend(x.values())
+        elif isinstance(x, (list, tuple, set, frozenset)):
+            stack.extend(x)
+        elif hasattr(x, "__dict__") and not isinstance(x, type):
+            stack.extend(vars(x).values())
+    return memo
 
 
 def _swap_params(container, replaced: dict[str, Param]) -> None:

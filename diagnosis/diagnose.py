@@ -330,6 +330,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     """
     from .catalogue import candidates
     from .fit import fit_candidate, noise_floor
+    from .fit_in_turn import fit_in_turn
     from .graph_location import locate_on_graph
     from .initial_state import estimate_initial_state
     from .locate import locate_regime, regime_variables, significant_windows
@@ -403,14 +404,13 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                                         say, "feature regression")
     fit_part, fit_x0 = _fit_window(train, res.run, x0)
     fit_part = _before_divergence(fit_part, diverged)
-    fits = []
-    for i, cand in enumerate(cands, 1):
-        say("fitting", f"{cand} ({i}/{len(cands)})")
-        fits.append(fit_candidate(graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0,
-                                  through=train, judge=judge))
-    fits += _twin_fits(graph, fits, cand_part, rv, lambda cand: fit_candidate(
-        graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0, through=train, judge=judge),
-        say, "fitting", x0)
+
+    def fit_one(cand, abandon_above):
+        return fit_candidate(graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0, through=train,
+                             abandon_above=abandon_above, judge=judge)
+
+    fits, best = fit_in_turn(cands, fit_one, say, "fitting")
+    fits += _twin_fits(graph, fits, cand_part, rv, fit_one, say, "fitting", best, x0)
     if uncertain:
         say("fitting", f"nominal parameters {', '.join(uncertain)} alone")
         fits.append(fit_candidate(graph, None, fit_part, held, uncertain=uncertain, x0=fit_x0,
@@ -500,21 +500,20 @@ def _lookup(evidence):
     return evidence_lookup(evidence) if evidence else None
 
 
-def _twin_fits(graph, fits, train, rv, fit, say, label, x0=None) -> list:
+def _twin_fits(graph, fits, train, rv, fit, say, label, best, x0=None) -> list:
     """Fits of the same kind at all twins of the best single-place fits' places
-    (:mod:`diagnosis.twins`): an effect on every copy of a repeated component."""
+    (:mod:`diagnosis.twins`): an effect on every copy of a repeated component.  `fit` is
+    ``fit(candidate, abandon_above)``; `best` the single-place fits' best training cost
+    (:func:`diagnosis.fit_in_turn.fit_in_turn`); `x0` the recording's initial state."""
     from .catalogue import candidates
+    from .fit_in_turn import fit_in_turn
     from .graph_location import candidate_places
     from .twins import twin_groups
 
     groups = twin_groups(graph, fits, candidate_places(graph, experiment=train),
                          lambda place: candidates(graph, place, regime_variables=rv, experiment=train, x0=x0),
                          experiment=train)
-    out = []
-    for i, group in enumerate(groups, 1):
-        say(label, f"{group} ({i}/{len(groups)}, twins)")
-        out.append(fit(group))
-    return out
+    return fit_in_turn(groups, fit, say, label, best=best, suffix=", twins")[0]
 
 
 def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds, *, top, say, label):
@@ -529,6 +528,7 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     """
     from .catalogue import candidates
     from .fit import fit_candidate
+    from .fit_in_turn import fit_in_turn
     from .graph_location import locate_on_graph
     from .locate import regime_variables
     from .residuals import OutputSimulator, residuals
@@ -556,12 +556,13 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     evidence, cands, pruned = _features(graph, scores, [s.place for s in places], train, x0, rv, cands, say,
                                         f"{label}: feature regression")
     fit_part, fit_x0 = _fit_window(train, res.run, x0)
-    fits = []
-    for i, cand in enumerate(cands, 1):
-        say(f"{label}: fitting", f"{cand} ({i}/{len(cands)})")
-        fits.append(fit_candidate(graph, cand, fit_part, held, x0=fit_x0, through=train, judge=judge))
-    fits += _twin_fits(graph, fits, train, rv, lambda cand: fit_candidate(
-        graph, cand, fit_part, held, x0=fit_x0, through=train, judge=judge), say, f"{label}: fitting", x0)
+
+    def fit_one(cand, abandon_above):
+        return fit_candidate(graph, cand, fit_part, held, x0=fit_x0, through=train, abandon_above=abandon_above,
+                             judge=judge)
+
+    fits, best = fit_in_turn(cands, fit_one, say, f"{label}: fitting")
+    fits += _twin_fits(graph, fits, train, rv, fit_one, say, f"{label}: fitting", best, x0)
     say(f"{label}: choosing")
     chosen = _choose(reference, fits, floor, evidence, res, exp, train, judge.kind != "open-loop")
     out = Round(chosen, fits, dict(reference), dict(reference), scores=scores,

@@ -213,6 +213,10 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
             lines.append("Runners-up (held-out NRMSE): " + "; ".join(
                 f"{f.candidate or 'nominal refit'} "
                 + ", ".join(f"{o} {v:.3g}" for o, v in f.holdout_nrmse.items()) for f in others) + ".")
+    given_up = sum(1 for f in fits if f.extra.get("abandoned"))
+    if given_up:
+        lines.append(f"{given_up} of {len(fits)} fits were given up early: their training error stayed "
+                     f"far above the best fit's (diagnosis.fit_in_turn).")
     lines += _further_text(list(rounds)[1:], exp.outputs)
     for o in exp.outputs:
         lines.append(f"Held-out NRMSE of {o}: nominal {nominal[o]:.3g} -> improved {improved[o]:.3g} "

@@ -231,11 +231,12 @@ def locate_on_graph(model, experiment, *, places=None, progress=False, x0=None,
         lin = LinearisedResponse(sim.model, run, sim.model.param_vector(None), channels, outputs)
     # the perturbation sequences of every input and junction place, propagated in one pass
     sequences = {}
+    # every junction has the same knots: one basis (n x 500, 0.4 s to build on 91 000 samples)
+    hats = _hat_basis(ctx.t, _knots(ctx, len(junctions), _spacing)) if junctions else None
     for i, place in enumerate(places):
         if place.kind == "input":
             sequences[i] = (channels.index(place.name), *_input_sequences(ctx, place))
         elif place.kind == "junction":
-            hats = _hat_basis(ctx.t, _knots(ctx, len(junctions), _spacing))
             sequences[i] = (channels.index(d_inputs[place.name]), hats, None)
     responses = _responses(lin, ctx.rows, {i: (ch, seq) for i, (ch, seq, _) in sequences.items()})
     scores = []

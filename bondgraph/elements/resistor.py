@@ -4,6 +4,7 @@ from __future__ import annotations
 import sympy as sp
 
 from ..errors import DerivationError
+from ..law_inverses import unique_inverse
 from ..symbols import sym
 from .base import EFFORT, FLOW, Contribution, Element, RoleConflict, element_param, param_dict, unit_of
 
@@ -67,14 +68,9 @@ class R(Element):
                                  else (FLOW, self._e, self._f))
         law = self._expr(self.effort_law if given == EFFORT else self.flow_law, local, "law")
         self._laws = {given: law}
-        solutions = []
-        if not law.has(sp.Piecewise, sp.Heaviside, sp.Max, sp.Min, sp.floor, sp.ceiling):
-            try:  # switched laws are not inverted: their causality stays as given
-                solutions = sp.solve(sp.Eq(law, unknown), known)
-            except NotImplementedError:
-                solutions = []
-        if len(solutions) == 1 and not solutions[0].has(sp.Piecewise):
-            self._laws[FLOW if given == EFFORT else EFFORT] = solutions[0]
+        inverse = unique_inverse(law, unknown, known)   # switched laws are not inverted
+        if inverse is not None:
+            self._laws[FLOW if given == EFFORT else EFFORT] = inverse
 
     def fixed_roles(self):
         if len(self._laws) == 1:
@@ -111,3 +107,4 @@ class R(Element):
         if extra:
             spec["params"] = extra
         return spec
+

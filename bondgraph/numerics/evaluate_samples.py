@@ -4,14 +4,17 @@ One compiled RK4 call per sample interval, inputs held over it.  On the C
 backend the loop calls ``bc_rk4`` (its C contract is documented in
 :mod:`bondgraph.numerics.codegen_c`) with the argument pointers computed once, which
 takes the per-sample cost from about 13 us (``CompiledModel.rk4_step``
-argument normalisation) to about 5 us on pam; other backends go through
-``CompiledModel._rk4``.  Both give identical numbers (tested in
-``tests/test_diagnosis_residuals.py``).  A batch of rows (parameter sets) is
-integrated in the same calls.
+argument normalisation) to about 5 us on pam, and the C loop of
+:mod:`bondgraph.numerics.evaluate_samples_c` (the same calls, when a compiler is found)
+to about 2 us; other backends go through ``CompiledModel._rk4``.  All give identical
+numbers (tested in ``tests/test_diagnosis_residuals.py``).  A batch of rows (parameter
+sets) is integrated in the same calls.
 """
 from __future__ import annotations
 
 import numpy as np
+
+from .evaluate_samples_c import run_samples, sample_driver
 
 __all__ = ["rk4_samples"]
 
@@ -22,7 +25,7 @@ def _c_function(model):
     return getattr(main, "rk4", None) if model.backend == "c" else None
 
 
-def rk4_samples(model, t, U, subs, x, d, p):
+def rk4_samples(model, t, U, subs, x, d, p, *, use_driver: bool = True):
     """Integrate a batch over the sample intervals of `t`.
 
     Parameters
@@ -40,6 +43,10 @@ def rk4_samples(model, t, U, subs, x, d, p):
         Initial held values (overwritten).
     p : ndarray, shape (1 or n_batch, n_params)
         Parameters.
+    use_driver : bool
+        On the C backend, loop over the samples in C
+        (:mod:`bondgraph.numerics.evaluate_samples_c`) when a compiler is found; False: the
+        Python loop (the same calls; kept as the reference and the fallback).
 
     Returns
     -------
@@ -56,7 +63,8 @@ def rk4_samples(model, t, U, subs, x, d, p):
     X = np.empty((t.size, *x.shape))
     D = np.empty((t.size, *d.shape))
     X[0], D[0] = x, d
-    hs = (np.diff(t) / subs).tolist()
+    hs_arr = np.diff(t) / subs
+    hs = hs_arr.tolist()
     ms = np.asarray(subs, dtype=int).tolist()
     ts = t.tolist()
     rk4 = _c_function(model)
@@ -74,6 +82,17 @@ def rk4_samples(model, t, U, subs, x, d, p):
     ua, row = U.ctypes.data, U.shape[1] * U.itemsize
     sp = 0 if p.shape[0] == 1 and n != 1 else p.shape[1]
     check = bool(model.algebraic_names)
+    driver = sample_driver() if use_driver else None
+    if driver is not None:
+        # the same bc_rk4 calls from a C loop (bit for bit the loop below, without ~3 us of
+        # Python per sample)
+        k = run_samples(driver, rk4, np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(hs_arr),
+                        np.ascontiguousarray(subs, dtype=np.intc), U, x, z, zinit, d, p, sp, status, check, X, D)
+        if k < 0:
+            raise MemoryError("bc_rk4: out of memory")
+        if k < t.size - 1:
+            model._raise_newton(status, np.array([ts[k]]), x)
+        return X, D
     for k in range(t.size - 1):
         # u stride 0: every batch row sees the recorded input row k
         if rk4(n, ts[k], hs[k], ms[k], xa, ua + k * row, 0, za, zia, da, pa, sp, sa) < 0:

@@ -1,0 +1,51 @@
+"""diagnosis.fit_in_turn: a fit whose training cost stays far above the best so far is given up;
+the answers are those of fitting every candidate fully (an invariance, on recordings of the
+hand-written truth of test_diagnosis_pipeline)."""
+import numpy as np
+import pytest
+
+import diagnosis.fit_in_turn as fit_in_turn
+from diagnosis.diagnose import diagnose
+from test_diagnosis_pipeline import BINDINGS, FC, _recording
+
+
+def _answers(report):
+    return [(m["kind"], m["attached_to"], m["parameters"]) for m in report.to_json()["missing_physics"]]
+
+
+@pytest.mark.parametrize("fc, offset, seed", [(0.0, 0.2, 13), (FC, 0.02, 14)])
+def test_giving_up_hopeless_fits_changes_no_answer(tmp_path, monkeypatch, fc, offset, seed):
+    """A sensor offset alone (0.2 m), and Coulomb friction with a 20 mm offset (two rounds):
+    the same effects, values and held-out NRMSE with and without giving up; with it, some fits
+    are given up and fewer simulations run."""
+    path = str(_recording(tmp_path / "rec.csv", fc, seed, offset))
+    quick = diagnose("mass-spring-damper", path, **BINDINGS)
+    monkeypatch.setattr(fit_in_turn, "HOPELESS", np.inf)
+    full = diagnose("mass-spring-damper", path, **BINDINGS)
+    assert [a[:2] for a in _answers(quick)] == [a[:2] for a in _answers(full)]
+    for (_, _, fast), (_, _, slow) in zip(_answers(quick), _answers(full)):
+        assert fast == pytest.approx(slow, rel=1e-9)
+    assert quick.fit["improved"] == pytest.approx(full.fit["improved"], rel=1e-9)
+    fits = [f for r in quick.rounds for f in r.fits]
+    given_up = [f for f in fits if f.extra.get("abandoned")]
+    assert given_up and all(not f.success for f in given_up)
+    assert not any(f.extra.get("abandoned") for r in full.rounds for f in r.fits)
+    sims = lambda report: sum(f.n_simulations for r in report.rounds for f in r.fits)   # noqa: E731
+    assert sims(quick) < sims(full)
+    assert "given up early" in quick.text
+
+
+def test_each_fit_gets_ten_times_the_best_training_cost_so_far():
+    """The threshold passed to each fit: none before a successful fit, then HOPELESS x the best."""
+    from types import SimpleNamespace
+    seen = []
+    costs = {"a": 0.5, "b": 0.1, "c": 2.0, "d": 0.05}
+
+    def fit(cand, abandon_above):
+        seen.append(abandon_above)
+        return SimpleNamespace(success=cand != "c", extra={"train_cost": costs[cand]}, n_simulations=1,
+                               holdout_nrmse={"x": 0.1}, message="")
+
+    fits, best = fit_in_turn.fit_in_turn(["a", "b", "c", "d"], fit, lambda *a: None, "fitting")
+    assert seen == [None, pytest.approx(5.0), pytest.approx(1.0), pytest.approx(1.0)]
+    assert best == 0.05 and len(fits) == 4

@@ -178,8 +178,11 @@ class TruthEffect(NoEffect):
             q = sig[self.storage.name]
             s = self.storage.sign
             if k == "nonlinear_stiffness":     # hardening: e = k q + k3 q^3, k3 = m, where the
-                # nominal's k holds a share alpha of the cubic's average stiffness k3 <q^4>/<q^2>
-                return {j: -s * m * (q ** 3 - sh["alpha"] * sh["q2"] * q)}, np.zeros(0)
+                # nominal's k holds a share alpha of the cubic's average stiffness k3 <q^4>/<q^2>,
+                # at most 90 % of k itself: the truth's own linear stiffness stays positive (a
+                # strong cubic on a weak spring would otherwise make it negative: bistable)
+                share = min(sh["alpha"] * sh["q2"], 0.9 * self.storage.stiffness / m) if m > 0 else 0.0
+                return {j: -s * m * (q ** 3 - share * q)}, np.zeros(0)
             if k == "backlash":                 # the spring carries nothing inside +-m
                 kk = self.storage.stiffness
                 dead = q - np.clip(q, -m, m)

@@ -62,8 +62,10 @@ class NonlinearStiffness(Kind):
 
 
 def _linear_value(element, taken, k_lin: float) -> ParamSpec:
-    """The C's own linear value, refitted with its cubic term (within a factor 3): its
-    stiffness or compliance parameter (named as the element) for a linear C, else a linear term
+    """The C's own linear value, refitted with its cubic term: its stiffness (from a hundredth
+    of its value to three times it) or compliance (from a third to a hundred times) parameter
+    (named as the element) for a linear C, since a linear value identified from data may carry
+    most of a strong cubic term's average stiffness; else a linear term
     ``dk_<C> q`` added to its law (within 3 `k_lin` either way).  A zero stiffness (a free mass)
     may become up to 10 `k_lin`, the junction's effort over the C's displacement scale."""
     c = element.name
@@ -72,6 +74,7 @@ def _linear_value(element, taken, k_lin: float) -> ParamSpec:
     if element.value is not None and float(element.value.value) > 0:
         v = float(element.value.value)
         quantity = "stiffness" if element.stiffness_form else "compliance"
-        return ParamSpec(c, v, v / 3, 3 * v, element.value.unit, f"linear {quantity} of {c} (refitted)")
+        low, high = (v / 100, 3 * v) if element.stiffness_form else (v / 3, 100 * v)
+        return ParamSpec(c, v, low, high, element.value.unit, f"linear {quantity} of {c} (refitted)")
     return ParamSpec(fresh_name(taken, f"dk_{c}"), 0.0, -3 * k_lin, 3 * k_lin, units_of(element)[0],
                      f"change of the linear stiffness of {c} (refitted)")

@@ -44,7 +44,7 @@ from plants import load as load_model
 from .errors import DiagnosisError
 from .rounds import JointRefit, Round
 
-__all__ = ["diagnose", "located_places", "MIN_PLACE_SHARE", "MAX_FIT_SAMPLES"]
+__all__ = ["diagnose", "located_places", "actuator_places", "MIN_PLACE_SHARE", "MAX_FIT_SAMPLES"]
 
 #: places whose correction explains less than this share of the residual get no candidates
 MIN_PLACE_SHARE = 0.02
@@ -120,6 +120,31 @@ def _fit_window(train, run, x0):
         return train, x0
     part = train.window(float(train.t[0]), float(train.t[MAX_FIT_SAMPLES - 1]))
     return part, x0
+
+
+def actuator_places(graph, places, experiment) -> list:
+    """The recorded inputs that drive a located junction directly, as input places not yet in
+    `places`: a source named after the input, or an element bonded to the junction whose law
+    reads it (a valve's command).  An actuator's lag, delay or limit there changes the junction's
+    flow or effort exactly as a correction at the junction does, so graph location cannot rank
+    the input above the junction: its candidates are fitted with the junction's."""
+    from bondgraph.editing_inputs import expression_fields, mentions
+    from .catalogue_common import junction_elements
+    from .place import Place
+    recorded = [d.name for d in graph.inputs() if d.name in experiment.inputs]
+    have = {(p.kind, p.name) for p in places}
+    out = []
+    for p in places:
+        if p.kind != "junction":
+            continue
+        for element, _ in junction_elements(graph, p.name):
+            entry = element.to_dict()
+            for u in recorded:
+                reads = element.name == u or any(mentions(c[k], u) for c, k in expression_fields(entry))
+                if reads and ("input", u) not in have:
+                    have.add(("input", u))
+                    out.append(Place("input", u))
+    return out
 
 
 #: Places the location cannot tell from the ``top``-th: what they leave unexplained is within
@@ -394,6 +419,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
             raise DiagnosisError(f"graph location of {graph.name!r} failed on {rec.source}: "
                                  f"{type(exc).__name__}: {exc}") from exc
         place_list = [s.place for s in located_places(scores, int(top))]
+        place_list += actuator_places(graph, place_list, train)
 
     # a diverging nominal's candidates take their scales from where it still runs
     cand_part = _before_divergence(train, diverged)
@@ -549,6 +575,8 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
         return Round(None, [], dict(reference), dict(reference), scores=[],
                      note=f"graph location failed: {type(exc).__name__}: {exc}")
     places = located_places(scores, top)
+    places += [next(s for s in scores if s.place == p) for p in actuator_places(graph, [s.place for s in places], train)
+               if any(s.place == p for s in scores)]
     done = {(c.kind, c.place) for r in rounds if r.chosen is not None and r.chosen.candidate is not None
             for c in getattr(r.chosen.candidate, "members", (r.chosen.candidate,))}
     cands = [c for s in places for c in candidates(graph, s.place, regime_variables=rv, experiment=train, x0=x0)

@@ -86,3 +86,18 @@ def test_a_leak_is_started_over_five_decades():
     (leak,) = [c for c in candidates(graph, Place("junction", "chamber1")) if c.kind == "leak"]
     starts = sorted(s[leak.params[0].name] for s in leak.starts)
     assert len(starts) == 4 and starts[-1] / starts[0] == pytest.approx(1e3)
+
+
+def test_the_inputs_that_drive_a_located_junction_join_it():
+    """A valve's command (pam: valve1's law reads u1 at chamber1) and a source named after its
+    input (hydraulic: the pump Q_p at p1): an actuator effect there looks like the junction's."""
+    from diagnosis.diagnose import actuator_places
+    pam = library.build("pam")
+    recorded = SimpleNamespace(inputs={"u1": None, "u2": None})
+    assert actuator_places(pam, [Place("junction", "chamber1")], recorded) == [Place("input", "u1")]
+    assert actuator_places(pam, [Place("junction", "chamber1"), Place("input", "u1")], recorded) == []
+    assert actuator_places(pam, [Place("junction", "chamber2")], SimpleNamespace(inputs={"u1": None})) == []
+    hydraulic = library.build("hydraulic")
+    assert actuator_places(hydraulic, [Place("junction", "p1")], SimpleNamespace(inputs={"Q_p": None})) == \
+        [Place("input", "Q_p")]
+    assert actuator_places(hydraulic, [Place("junction", "p2")], SimpleNamespace(inputs={"Q_p": None})) == []

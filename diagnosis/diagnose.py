@@ -42,12 +42,12 @@ import numpy as np
 from plants import load as load_model
 
 from .errors import DiagnosisError
+from .initial_state import start_inconsistent
+from .place_choice import MIN_PLACE_SHARE, actuator_places, located_places
 from .rounds import JointRefit, Round
 
-__all__ = ["diagnose", "located_places", "actuator_places", "MIN_PLACE_SHARE", "MAX_FIT_SAMPLES"]
+__all__ = ["diagnose", "MIN_PLACE_SHARE", "MAX_FIT_SAMPLES"]
 
-#: places whose correction explains less than this share of the residual get no candidates
-MIN_PLACE_SHARE = 0.02
 #: candidates are fitted on at most this many training samples (the start of the training
 #: part, from the recording's initial state): a fit runs ~100 simulations
 MAX_FIT_SAMPLES = 15000
@@ -120,100 +120,6 @@ def _fit_window(train, run, x0):
         return train, x0
     part = train.window(float(train.t[0]), float(train.t[MAX_FIT_SAMPLES - 1]))
     return part, x0
-
-
-def actuator_places(graph, places, experiment) -> list:
-    """The recorded inputs that drive a located junction directly, as input places not yet in
-    `places`: a source named after the input, or an element bonded to the junction whose law
-    reads it (a valve's command).  An actuator's lag, delay or limit there changes the junction's
-    flow or effort exactly as a correction at the junction does, so graph location cannot rank
-    the input above the junction: its candidates are fitted with the junction's."""
-    from bondgraph.editing_inputs import expression_fields, mentions
-    from .catalogue_common import junction_elements
-    from .place import Place
-    recorded = [d.name for d in graph.inputs() if d.name in experiment.inputs]
-    have = {(p.kind, p.name) for p in places}
-    out = []
-    for p in places:
-        if p.kind != "junction":
-            continue
-        for element, _ in junction_elements(graph, p.name):
-            entry = element.to_dict()
-            for u in recorded:
-                reads = element.name == u or any(mentions(c[k], u) for c, k in expression_fields(entry))
-                if reads and ("input", u) not in have:
-                    have.add(("input", u))
-                    out.append(Place("input", u))
-    return out
-
-
-#: Places the location cannot tell from the ``top``-th: what they leave unexplained is within
-#: this factor of what it leaves.
-PLACE_TIE = 1.10
-
-
-def located_places(scores, top: int) -> list:
-    """The place scores whose candidates are fitted: the ``top`` best, and, when the ``top``-th
-    explains most of the residual (half or more), every further place the location cannot tell
-    from it (the share of the residual it leaves is within :data:`PLACE_TIE` of that place's:
-    a series spring's 1-junction and the 0-junctions of the torque it carries explain the
-    same), at most ``2 top``; none explaining under :data:`MIN_PLACE_SHARE`.  (Where the
-    location explains little, it separates little: more places would only crowd the fits.)"""
-    kept = [s for s in scores if s.explained >= MIN_PLACE_SHARE]
-    if len(kept) <= top or top < 1 or kept[top - 1].explained < 0.5:
-        return kept[:max(top, 0)]
-    last = 1.0 - kept[top - 1].explained
-    tied = [s for s in kept[top:2 * top] if 1.0 - s.explained <= PLACE_TIE * last]
-    return kept[:top] + tied
-
-
-def _start_inconsistent(res, diverged, n_train) -> bool:
-    """Whether the model's default initial state contradicts the recording's start.
-
-    So it is when the nominal simulation diverges, or when both
-
-    * its error over the first samples (the window :mod:`diagnosis.initial_state` fits on)
-      is more than twice the error over the rest of the training part on some output: a
-      transient of the model's own, which decays; and
-    * the outputs disagree at the first sample itself: on some output, the residual's value
-      at the start, from a quadratic fitted to its first :data:`START_SAMPLES` samples, is
-      more than 4 standard errors (of that noise) from zero.  A missing effort or flow
-      acting from the start (a load on a rig at rest) moves the outputs away from the
-      model's gradually, from zero; a wrong initial state shows at once.  (A start that
-      differs only in unmeasured states shows no jump: it is left to the candidates.)
-
-    An error that persists or grows (an offset, a missing friction) is left to the
-    candidates: fitting the start to it would absorb the effect into the state.
-    """
-    from .initial_state import window_length
-    if diverged:
-        return True
-    w = window_length(n_train)
-    if n_train < 2 * w:
-        return False
-    for o, r in res.residual.items():
-        head = float(np.sqrt(np.mean(r[:w] ** 2)))
-        rest = float(np.sqrt(np.mean(r[w:n_train] ** 2)))
-        if head > 2.0 * rest and _jumps_at_start(r, res.noise.get(o, 0.0)):
-            return True
-    return False
-
-
-#: Samples at the start of the recording on which the residual's initial value is estimated.
-START_SAMPLES = 20
-
-
-def _jumps_at_start(residual, sigma: float) -> bool:
-    """Whether `residual` starts away from zero: the intercept of a quadratic least-squares fit
-    to its first :data:`START_SAMPLES` samples (in sample units) is more than 4 of its standard
-    errors from zero, for white noise of standard deviation `sigma`."""
-    k = min(START_SAMPLES, residual.size)
-    if k < 4 or sigma <= 0:
-        return True
-    basis = np.vander(np.arange(k, dtype=float), 3, increasing=True)
-    coef, *_ = np.linalg.lstsq(basis, residual[:k], rcond=None)
-    se = sigma * float(np.sqrt(np.linalg.inv(basis.T @ basis)[0, 0]))
-    return abs(float(coef[0])) > 4.0 * se
 
 
 class _Diverged(str):
@@ -380,7 +286,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     res.noise.update(_noise_overrides(noise, exp))
     n_train = train.t.size
     start = "the given initial state" if x0 is not None else "the model's initial state"
-    if x0 is None and _start_inconsistent(res, diverged, n_train):
+    if x0 is None and start_inconsistent(res, diverged, n_train):
         say("initial state", "fitted to the first samples")
         scales = ({nm: float(np.std(res.run.states[:, i])) for i, nm in enumerate(res.run.state_names)}
                   if not diverged else None)
@@ -575,8 +481,8 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
         return Round(None, [], dict(reference), dict(reference), scores=[],
                      note=f"graph location failed: {type(exc).__name__}: {exc}")
     places = located_places(scores, top)
-    places += [next(s for s in scores if s.place == p) for p in actuator_places(graph, [s.place for s in places], train)
-               if any(s.place == p for s in scores)]
+    by_place = {s.place: s for s in scores}
+    places += [by_place[p] for p in actuator_places(graph, [s.place for s in places], train) if p in by_place]
     done = {(c.kind, c.place) for r in rounds if r.chosen is not None and r.chosen.candidate is not None
             for c in getattr(r.chosen.candidate, "members", (r.chosen.candidate,))}
     cands = [c for s in places for c in candidates(graph, s.place, regime_variables=rv, experiment=train, x0=x0)

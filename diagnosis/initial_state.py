@@ -31,7 +31,8 @@ from scipy.optimize import least_squares
 
 from .errors import BondcosimError
 
-__all__ = ["InitialState", "estimate_initial_state", "fit_state", "window_length", "PULL", "MIN_GAIN"]
+__all__ = ["InitialState", "estimate_initial_state", "fit_state", "start_inconsistent", "window_length", "PULL",
+           "MIN_GAIN", "START_SAMPLES"]
 
 #: weight of the pull towards the default state, relative to one sample of one output at its noise
 PULL = 1e-2
@@ -199,3 +200,51 @@ def fit_state(w_sim, y: dict, noise: dict, prior, scale=None, *, params=None, co
         return None, None
     cov = np.linalg.pinv(jac.T @ jac)
     return x, cov * np.outer(scale, scale)
+
+
+def start_inconsistent(res, diverged, n_train) -> bool:
+    """Whether the model's default initial state contradicts the recording's start.
+
+    So it is when the nominal simulation diverges, or when both
+
+    * its error over the first samples (the window :mod:`diagnosis.initial_state` fits on)
+      is more than twice the error over the rest of the training part on some output: a
+      transient of the model's own, which decays; and
+    * the outputs disagree at the first sample itself: on some output, the residual's value
+      at the start, from a quadratic fitted to its first :data:`START_SAMPLES` samples, is
+      more than 4 standard errors (of that noise) from zero.  A missing effort or flow
+      acting from the start (a load on a rig at rest) moves the outputs away from the
+      model's gradually, from zero; a wrong initial state shows at once.  (A start that
+      differs only in unmeasured states shows no jump: it is left to the candidates.)
+
+    An error that persists or grows (an offset, a missing friction) is left to the
+    candidates: fitting the start to it would absorb the effect into the state.
+    """
+    if diverged:
+        return True
+    w = window_length(n_train)
+    if n_train < 2 * w:
+        return False
+    for o, r in res.residual.items():
+        head = float(np.sqrt(np.mean(r[:w] ** 2)))
+        rest = float(np.sqrt(np.mean(r[w:n_train] ** 2)))
+        if head > 2.0 * rest and _jumps_at_start(r, res.noise.get(o, 0.0)):
+            return True
+    return False
+
+
+#: Samples at the start of the recording on which the residual's initial value is estimated.
+START_SAMPLES = 20
+
+
+def _jumps_at_start(residual, sigma: float) -> bool:
+    """Whether `residual` starts away from zero: the intercept of a quadratic least-squares fit
+    to its first :data:`START_SAMPLES` samples (in sample units) is more than 4 of its standard
+    errors from zero, for white noise of standard deviation `sigma`."""
+    k = min(START_SAMPLES, residual.size)
+    if k < 4 or sigma <= 0:
+        return True
+    basis = np.vander(np.arange(k, dtype=float), 3, increasing=True)
+    coef, *_ = np.linalg.lstsq(basis, residual[:k], rcond=None)
+    se = sigma * float(np.sqrt(np.linalg.inv(basis.T @ basis)[0, 0]))
+    return abs(float(coef[0])) > 4.0 * se

@@ -11,7 +11,9 @@ from diagnosis.benchmark.plants import PLANTS
 from diagnosis.benchmark.effects import make_effect
 from diagnosis.benchmark.simulate import simulate_truth
 from diagnosis.catalogue import candidates
-from diagnosis.diagnose import _jumps_at_start, diagnose, located_places
+from diagnosis.diagnose import diagnose
+from diagnosis.initial_state import _jumps_at_start
+from diagnosis.place_choice import actuator_places, located_places
 from diagnosis.place import Place
 from diagnosis.recording import Experiment
 
@@ -91,7 +93,6 @@ def test_a_leak_is_started_over_five_decades():
 def test_the_inputs_that_drive_a_located_junction_join_it():
     """A valve's command (pam: valve1's law reads u1 at chamber1) and a source named after its
     input (hydraulic: the pump Q_p at p1): an actuator effect there looks like the junction's."""
-    from diagnosis.diagnose import actuator_places
     pam = library.build("pam")
     recorded = SimpleNamespace(inputs={"u1": None, "u2": None})
     assert actuator_places(pam, [Place("junction", "chamber1")], recorded) == [Place("input", "u1")]

@@ -342,7 +342,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                              abandon_above=abandon_above, judge=judge)
 
     fits, best = fit_in_turn(cands, fit_one, say, "fitting")
-    fits += _twin_fits(graph, fits, cand_part, rv, fit_one, say, "fitting", best, x0)
+    fits += _twin_fits(graph, fits, cand_part, rv, fit_one, say, "fitting", best, x0, len(place_list))
     if uncertain:
         say("fitting", f"nominal parameters {', '.join(uncertain)} alone")
         fits.append(fit_candidate(graph, None, fit_part, held, uncertain=uncertain, x0=fit_x0,
@@ -432,11 +432,13 @@ def _lookup(evidence):
     return evidence_lookup(evidence) if evidence else None
 
 
-def _twin_fits(graph, fits, train, rv, fit, say, label, best, x0=None) -> list:
+def _twin_fits(graph, fits, train, rv, fit, say, label, best, x0=None, n_places: int = 3) -> list:
     """Fits of the same kind at all twins of the best single-place fits' places
     (:mod:`diagnosis.twins`): an effect on every copy of a repeated component.  `fit` is
     ``fit(candidate, abandon_above)``; `best` the single-place fits' best training cost
-    (:func:`diagnosis.fit_in_turn.fit_in_turn`); `x0` the recording's initial state."""
+    (:func:`diagnosis.fit_in_turn.fit_in_turn`); `x0` the recording's initial state.  As many
+    groups as places were fitted (`n_places`, 3 to 6): the tied and actuator places that join the
+    located ones must not crowd out the twins of another place's best kind."""
     from .catalogue import candidates
     from .fit_in_turn import fit_in_turn
     from .graph_location import candidate_places
@@ -444,7 +446,7 @@ def _twin_fits(graph, fits, train, rv, fit, say, label, best, x0=None) -> list:
 
     groups = twin_groups(graph, fits, candidate_places(graph, experiment=train),
                          lambda place: candidates(graph, place, regime_variables=rv, experiment=train, x0=x0),
-                         experiment=train)
+                         experiment=train, best=min(max(int(n_places), 3), 6))
     return fit_in_turn(groups, fit, say, label, best=best, suffix=", twins")[0]
 
 
@@ -496,7 +498,7 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
                              judge=judge)
 
     fits, best = fit_in_turn(cands, fit_one, say, f"{label}: fitting")
-    fits += _twin_fits(graph, fits, train, rv, fit_one, say, f"{label}: fitting", best, x0)
+    fits += _twin_fits(graph, fits, train, rv, fit_one, say, f"{label}: fitting", best, x0, len(places))
     say(f"{label}: choosing")
     chosen = _choose(reference, fits, floor, evidence, res, exp, train, judge.kind != "open-loop")
     out = Round(chosen, fits, dict(reference), dict(reference), scores=scores,

@@ -15,7 +15,8 @@ from bondgraph.params import DOMAINS
 
 from .errors import DiagnosisError
 
-__all__ = ["RELEASED", "released", "ParamSpec", "fresh_name", "junction_elements", "junction_domain", "junction_units", "domain_units"]
+__all__ = ["RELEASED", "released", "ParamSpec", "fresh_name", "junction_elements", "junction_domain", "junction_units",
+           "domain_units"]
 
 
 #: The value of a limit with no evidence behind it (a saturation side no training sample

@@ -214,10 +214,10 @@ def _started_mid_run(candidate, train, x0):
 def _release_unsupported_limits(objective, specs, theta, lower, upper):
     """A saturation limit that the training part gives no evidence for, i.e. whose move
     to its outer bound raises the training cost by less than 1 %, is released: it becomes
-    :data:`~diagnosis.catalogue_common.RELEASED` (no limit on that side).  A limit left where the training data happen to
-    end, or at the fit's bound just beyond them, would clip the held-out part, which may
-    go further.  Returns ``(theta, released)``, `released` the names of those limits with
-    their released value."""
+    :data:`~diagnosis.catalogue_common.RELEASED` (no limit on that side).  A limit left where
+    the training data happen to end, or at the fit's bound just beyond them, would clip the
+    held-out part, which may go further.  Returns ``(theta, released)``, `released` the names
+    of those limits with their released value."""
     theta = np.array(theta, dtype=float)
     r = objective(theta)
     base = 0.5 * float(r @ r)

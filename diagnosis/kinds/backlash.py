@@ -24,7 +24,8 @@ class Backlash(Kind):
 
     def features(self, s):
         """Per moving C content q: the part inside a play of half-width b on a grid of its RMS."""
-        return [FeatureGroup(c, f"b = {f * rms(q):.3g}", ["clip(q, -b, b)"], np.clip(q, -f * rms(q), f * rms(q))[:, None])
+        return [FeatureGroup(c, f"b = {f * rms(q):.3g}", ["clip(q, -b, b)"],
+                             np.clip(q, -f * rms(q), f * rms(q))[:, None])
                 for c, q in s.labelled("content").items() for f in FEATURE_GRID]
 
     def propose(self, site):

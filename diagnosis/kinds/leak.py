@@ -38,7 +38,8 @@ class Leak(Kind):
         return [Proposal(
             (ParamSpec(c, 0.1 * F / dev, 0.0, 100 * F / dev,
                        f"({f_unit})/({e_unit})" if e_unit else "", f"leak conductance at {j}"),),
-            constants=((fresh_name(site.taken, f"P_amb_{j}"), p_amb, e_unit, f"ambient pressure the leak at {j} vents to"),),
+            constants=((fresh_name(site.taken, f"P_amb_{j}"), p_amb, e_unit,
+                        f"ambient pressure the leak at {j} vents to"),),
             starts=tuple({c: k * F / dev} for k in (1e-5, 1e-4, 1e-3, 1e-2)))]
 
     def build(self, graph, cand, values):

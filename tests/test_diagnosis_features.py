@@ -10,6 +10,7 @@ import pytest
 from diagnosis.features import FeatureEvidence, dahl_state, feature_evidence, regress_kinds
 from diagnosis.place import Place
 from diagnosis.recording import Experiment
+from msd_truth import msd_positions
 
 FS, SPAN, SIGMA = 100.0, 30.0, 1e-3     # Hz, s, m (position noise)
 PLACE = Place("junction", "v_mass")
@@ -19,20 +20,7 @@ def _truth(extra, seed, m=1.0, b=0.4, k=4.0, substeps=10):
     """x, v of m v' = F - b v - k x - extra(x, v), x' = v; F held per sample; x with noise."""
     t = np.arange(0.0, SPAN, 1.0 / FS)
     force = 2.0 * np.sin(2 * np.pi * 0.3 * t) + np.sin(2 * np.pi * 0.7 * t + 1.0) + 0.5 * np.sin(2 * np.pi * 1.3 * t)
-
-    def rate(s, f):
-        return np.array([s[1], (f - b * s[1] - k * s[0] - extra(s[0], s[1])) / m])
-
-    s, x = np.zeros(2), np.zeros(t.size)
-    for i in range(t.size - 1):
-        h = (t[i + 1] - t[i]) / substeps
-        for _ in range(substeps):
-            k1 = rate(s, force[i])
-            k2 = rate(s + h / 2 * k1, force[i])
-            k3 = rate(s + h / 2 * k2, force[i])
-            k4 = rate(s + h * k3, force[i])
-            s = s + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        x[i + 1] = s[0]
+    x = msd_positions(t, force, extra, m=m, b=b, k=k, substeps=substeps)
     x = x + np.random.default_rng(seed).normal(0.0, SIGMA, t.size)
     return Experiment(t, {"F": force}, {"x": x}, {"F": "N", "x": "m"}, "truth")
 

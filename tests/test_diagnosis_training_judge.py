@@ -13,27 +13,10 @@ import pytest
 from diagnosis.diagnose import diagnose
 from diagnosis.fit import CandidateFit
 from diagnosis.training_judge import choose_on_training, holdout_change
+from msd_truth import msd_positions
 
 FS, SPAN, SIGMA = 50.0, 20.0, 5e-3       # Hz, s, m
 Y_MAX = 0.6                             # m, the sensor's upper limit
-
-
-def _truth(t, force, m=1.0, b=0.4, k=4.0, substeps=20):
-    """m v' = F - b v - k x, x' = v; F held per sample; classic RK4 written out here."""
-    def rate(s, f):
-        return np.array([s[1], (f - b * s[1] - k * s[0]) / m])
-
-    s, out = np.zeros(2), np.zeros(t.size)
-    for i in range(t.size - 1):
-        h = (t[i + 1] - t[i]) / substeps
-        for _ in range(substeps):
-            k1 = rate(s, force[i])
-            k2 = rate(s + h / 2 * k1, force[i])
-            k3 = rate(s + h / 2 * k2, force[i])
-            k4 = rate(s + h * k3, force[i])
-            s = s + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        out[i + 1] = s[0]
-    return out
 
 
 def _recording(path, clip, seed=5):
@@ -41,7 +24,7 @@ def _recording(path, clip, seed=5):
     t = np.arange(0.0, SPAN, 1.0 / FS)
     amplitude = np.where(t < 4.0, 4.0, 0.1)
     force = amplitude * (np.sin(2 * np.pi * 0.3 * t) + 0.5 * np.sin(2 * np.pi * 0.7 * t + 1.0))
-    x = _truth(t, force)
+    x = msd_positions(t, force)
     if clip:
         x = np.minimum(x, Y_MAX)
     x = x + rng.normal(0.0, SIGMA, t.size)

@@ -10,6 +10,7 @@ from bondgraph.errors import BondcosimError, GraphError, UnknownNameError
 from bondgraph.io_json import load
 from diagnosis.diagnose import diagnose
 from diagnosis.errors import RecordingError, UnitError
+from msd_truth import msd_positions
 
 FS = 50.0          # Hz
 SPAN = 20.0        # s
@@ -19,27 +20,10 @@ FC = 0.3           # N, the concealed Coulomb level
 V_SMOOTH = 0.1     # m/s, width of the smoothed sign of the truth's friction
 
 
-def _truth_positions(t, force, *, fc, m=1.0, b=0.4, k=4.0, substeps=20):
-    """m v' = F - b v - k x - fc tanh(v / V_SMOOTH), x' = v; F held over each sample.
-
-    Classic RK4 written out here (not bondgraph's), 20 sub-steps per sample; the
-    nominal library model is this with fc = 0 (m = 1 kg, b = 0.4 N s/m, k = 4 N/m).
-    """
-    def rate(state, f):
-        x, v = state
-        return np.array([v, (f - b * v - k * x - fc * np.tanh(v / V_SMOOTH)) / m])
-
-    state, out = np.zeros(2), np.zeros(t.size)
-    for i in range(t.size - 1):
-        h = (t[i + 1] - t[i]) / substeps
-        for _ in range(substeps):
-            k1 = rate(state, force[i])
-            k2 = rate(state + h / 2 * k1, force[i])
-            k3 = rate(state + h / 2 * k2, force[i])
-            k4 = rate(state + h * k3, force[i])
-            state = state + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        out[i + 1] = state[0]
-    return out
+def _truth_positions(t, force, *, fc):
+    """The library mass-spring-damper plus a friction ``fc tanh(v / V_SMOOTH)``
+    (:func:`msd_truth.msd_positions`, its own RK4, 20 sub-steps per sample)."""
+    return msd_positions(t, force, lambda x, v: fc * np.tanh(v / V_SMOOTH))
 
 
 def _recording(path, fc, seed, offset=0.0):

@@ -26,11 +26,15 @@ candidates.  Which kinds at which place (:func:`candidates`):
   ``nonlinear_stiffness`` and ``saturation`` (an overflow) for each C on it;
 * 0- and 1-junction: ``constant_load``;
 * input: ``valve_lag``, ``transport_delay``, ``saturation``;
-* output: ``saturation`` (the sensor's range), ``sensor_offset``, ``sensor_gain``.
+* output: ``saturation`` (the sensor's range), ``sensor_offset``, ``sensor_gain``;
+* law (a constitutive law whose bond ends at no junction, :mod:`diagnosis.law_places`: a
+  muscle's force law): the kinds of the junction that splits its bond, a 1-junction for a law
+  that sets the effort (friction, hysteresis, a constant load in series with the law), a
+  0-junction for one that sets the flow.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -147,7 +151,12 @@ class Candidate:
         values = self.values_with_guesses(values)
         graph = model_graph.copy(name=f"{model_graph.name}_{self.kind}",
                                  description=f"{model_graph.description} + {self.kind} at {self.place}".strip(" +"))
-        graph = self.definition.build(graph, self, values)
+        if self.place.kind == "law":    # the law's bond split by a junction (diagnosis.law_places)
+            from .law_places import split_law
+            graph, junction = split_law(graph, self.place)
+            graph = self.definition.build(graph, replace(self, place=Place("junction", junction)), values)
+        else:
+            graph = self.definition.build(graph, self, values)
         known = graph.parameters()      # a parameter the model has already (a C's own value) is refitted
         declared = [Param(spec.name, values[spec.name], spec.unit, spec.description)
                     for spec in self.params if spec.name not in known]
@@ -178,7 +187,8 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None, x
     graph : BondGraph
         The nominal model.
     place : Place
-        A junction (kind ``"1"`` or ``"0"``), an input or an output of `graph`.
+        A junction (kind ``"1"`` or ``"0"``), an input, an output or a law place of `graph`
+        (:mod:`diagnosis.law_places`: the junction kinds at the junction that splits its bond).
     regime_variables : dict, optional
         From :func:`diagnosis.locate.regime_variables` (name -> (values, description)); a
         pressure-dependent friction is offered for each pressure variable of the model,
@@ -207,6 +217,13 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None, x
     >>> offset.explain({"offset_x": 0.01})
     'the x sensor reads 0.01 m off: a sensor offset on output x'
     """
+    if place.kind == "law":
+        # the junction kinds at the junction that splits the law's bond (diagnosis.law_places)
+        from .law_places import split_law
+        split, junction = split_law(graph, place)
+        return [replace(c, place=place) for c in candidates(split, Place("junction", junction),
+                                                            regime_variables=regime_variables,
+                                                            experiment=experiment, x0=x0)]
     site = site_of(graph, place, regime_variables=regime_variables, experiment=experiment, x0=x0)
     out = [Candidate(kind.name, place, list(prop.params), regime=prop.regime, constants=tuple(prop.constants),
                      target=prop.target, initial=dict(prop.initial), starts=tuple(prop.starts))

@@ -169,12 +169,13 @@ def _diverged_residuals(sim, experiment):
 
 
 def _every_place(graph, experiment):
-    """Every junction, recorded input and measured output of `graph`: the places tried when no
+    """Every junction, recorded input, measured output and law place of `graph`: the places tried when no
     graph location is possible (a diverging nominal has no run to linearise along)."""
     from .place import Place
+    from .law_places import law_places
     junctions = [Place("junction", n) for n, e in graph.elements.items() if e.kind in ("0", "1")]
     return (junctions + [Place("input", n) for n in experiment.inputs]
-            + [Place("output", n) for n in experiment.outputs])
+            + [Place("output", n) for n in experiment.outputs] + law_places(graph))
 
 
 def _holdout_nrmse(sim, params, x0, judge):
@@ -395,7 +396,7 @@ def _features(graph, scores, places, train, x0, rv, cands, say, label):
     """The feature regression at the junction places (:mod:`diagnosis.features`) and the
     candidates it leaves to fit: ``(evidence by place, candidates kept, candidates pruned)``."""
     from .features import feature_evidence, prune_candidates
-    junctions = [p for p in places if p.kind == "junction"]
+    junctions = [p for p in places if p.kind in ("junction", "law")]
     if not junctions or not scores:       # no location (a diverging nominal): nothing to regress
         return {}, cands, []
     say(label, ", ".join(map(str, junctions)))

@@ -23,7 +23,7 @@ def _regime(chosen, scores, res, n_train, rv, locate_regime, units):
     effort/flow), else of the residual of the worst output; training part."""
     place = chosen.candidate.place if chosen is not None and chosen.candidate is not None else None
     score = next((s for s in scores if place is not None and s.place == place), None)
-    if score is not None and place.kind == "junction":
+    if score is not None and place.kind in ("junction", "law"):
         signal, unit = np.asarray(score.estimate, dtype=float)[:n_train], score.unit
         label = f"located extra {'effort' if unit else 'correction'} at {place.name} ({unit})"
     else:

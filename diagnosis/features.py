@@ -76,6 +76,7 @@ from .kinds.feature_signals import SIGN_FRACTION, FeatureSignals, dahl_state
 from .kinds.modulated_friction import modulating_signals
 from .catalogue_scales import pressure_variables
 from .errors import BondcosimError
+from .place import Place
 
 __all__ = ["KIND_FEATURES", "SIGN_FRACTION", "FEATURE_PRICE", "MAX_SELECTED", "KindEvidence", "FeatureEvidence",
            "evidence_lookup", "prune_candidates", "prefer_by_evidence",
@@ -337,7 +338,8 @@ def feature_evidence(graph, places, experiment, *, x0=None, regime_variables=Non
     graph : BondGraph
         The nominal model.
     places : iterable of Place
-        Places; inputs and outputs are skipped (they keep their own structured corrections).
+        Places; inputs and outputs are skipped (they keep their own structured corrections); a
+        law place is regressed at the junction that splits its bond (:mod:`diagnosis.law_places`).
     experiment : Experiment
         The part of the recording the location ran on (model units).
     x0 : dict str -> float, optional
@@ -355,14 +357,20 @@ def feature_evidence(graph, places, experiment, *, x0=None, regime_variables=Non
     """
     out = {}
     for p in places:
-        if p.kind != "junction" or not experiment.outputs:
+        if p.kind not in ("junction", "law") or not experiment.outputs:
             continue
         d_hat = next((e for q, e in (estimates or {}).items() if (q.kind, q.name) == (p.kind, p.name)), None)
         try:
-            ev = _evidence_at(graph, p, experiment, x0, regime_variables, d_hat)
+            at_graph, at = graph, p
+            if p.kind == "law":         # the junction that splits the law's bond (diagnosis.law_places)
+                from .law_places import split_law
+                at_graph, junction = split_law(graph, p)
+                at = Place("junction", junction)
+            ev = _evidence_at(at_graph, at, experiment, x0, regime_variables, d_hat)
         except (BondcosimError, FloatingPointError, np.linalg.LinAlgError, ValueError):
             ev = None
         if ev is not None:
+            ev.place = p
             out[p] = ev
     return out
 

@@ -430,7 +430,8 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
        output at its floor would only add its noise to both), are tied: the held-out part cannot tell
        them apart (a constant load and a sensor offset look alike once a
        transient is over).  Among
-       tied fits: fewer parameters, then the smaller training error (where the
+       tied fits: fewer parameters, then a junction before a law place acting on it through a
+       transformer (:mod:`diagnosis.law_places`), then the smaller training error (where the
        start of the record may tell them apart; within 2 % again a tie), then
        catalogue order (effects exactly equivalent on the data, such as a
        sensor offset and a constant load on a linear spring, go to the simpler
@@ -504,6 +505,9 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
             or raw_score(f) <= raw_score(leader) * (1 + TIE) ** 2]
     fewest = min(f.n_params for f in tied)
     tied = [f for f in tied if f.n_params == fewest]
+    # a junction before a law that acts on it through a transformer (diagnosis.law_places): the
+    # two differ by the transformer's modulus only, and the simpler place is the plainer answer
+    tied = [f for f in tied if not _at_law(f.candidate)] or tied
     lowest = min(train(f) for f in tied)
     tied = [f for f in tied if train(f) <= lowest * (1 + TIE) ** 2] or tied
     best = min(tied, key=order)
@@ -521,6 +525,12 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
             return preferred
     share, gain = acceptance(nominal_holdout, best, floor)
     return best if share >= MIN_SHARE and gain >= MIN_GAIN else None
+
+
+def _at_law(candidate) -> bool:
+    """Whether `candidate` (or a member of its group) sits at a law place."""
+    return any(getattr(getattr(m, "place", None), "kind", "") == "law"
+               for m in getattr(candidate, "members", (candidate,)))
 
 
 def needs_explaining(nominal_holdout: dict, floor: dict) -> list:

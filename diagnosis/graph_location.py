@@ -75,7 +75,7 @@ from .errors import DiagnosisError
 
 __all__ = ["PlaceScore", "candidate_places", "locate_on_graph"]
 
-_SIMPLICITY = {"output": 0.0, "input": 0.5, "junction": 1.0}   # x 0.01 preference
+_SIMPLICITY = {"output": 0.0, "input": 0.5, "junction": 1.0, "law": 1.5}   # x 0.01 preference
 _TIE_PREFERENCE = 0.01
 _RESPONSE_BUDGET = 2e7     # stored response entries (rows x outputs x sequences)
 _MAX_ROWS = 10000          # rows kept for the least squares (longer runs are strided)
@@ -122,7 +122,8 @@ class PlaceScore:
 
 
 def candidate_places(model, *, experiment=None) -> list[Place]:
-    """Every junction, every input and every output of a model.
+    """Every junction, every input and every output of a model, and every law place
+    (:mod:`diagnosis.law_places`: a constitutive law whose bond ends at no junction).
 
     Parameters
     ----------
@@ -134,7 +135,7 @@ def candidate_places(model, *, experiment=None) -> list[Place]:
     Returns
     -------
     list of Place
-        Junctions (in the graph's order), then inputs, then outputs.
+        Junctions (in the graph's order), then inputs, then outputs, then laws.
 
     Examples
     --------
@@ -153,6 +154,9 @@ def candidate_places(model, *, experiment=None) -> list[Place]:
     outputs = tuple(eqs.outputs) if experiment is None else [n for n in eqs.outputs if n in experiment.outputs]
     places += [Place("input", n) for n in inputs]
     places += [Place("output", n) for n in outputs]
+    if isinstance(model, BondGraph):
+        from .law_places import law_places
+        places += law_places(model)
     return places
 
 
@@ -201,6 +205,18 @@ def locate_on_graph(model, experiment, *, places=None, progress=False, x0=None,
                                  f"{getattr(model, 'name', 'the model')!r}; known: "
                                  f"{', '.join(map(str, known))}")
     places = [by_key[(p.kind, p.name)] for p in places]      # junctions with their report bond
+    if any(p.kind == "law" for p in places):
+        # a law place is a junction put into its bond (diagnosis.law_places): locate on that graph
+        from .law_places import split_laws
+        split, junction_of = split_laws(model, places)
+        law_of = {j: p for p, j in junction_of.items()}
+        scores = locate_on_graph(split, experiment, places=[Place("junction", junction_of[p]) if p.kind == "law"
+                                                            else p for p in places],
+                                 progress=progress, x0=x0, _spacing=_spacing)
+        for s in scores:
+            if s.place.kind == "junction" and s.place.name in law_of:
+                s.place, s.bond = law_of[s.place.name], law_of[s.place.name].bond
+        return sorted(scores, key=lambda s: -(s.explained - _TIE_PREFERENCE * _SIMPLICITY[s.place.kind]))
     junctions = [p.name for p in places if p.kind == "junction"]
     say = _Say(progress)
     graph, d_inputs = augment(model, junctions) if junctions else (model, {})

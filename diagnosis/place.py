@@ -1,4 +1,4 @@
-"""Where on a model a correction is attached: a junction, an input or an output."""
+"""Where on a model a correction is attached: a junction, an input, an output or a law."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -8,8 +8,10 @@ __all__ = ["Place", "PLACE_KINDS"]
 
 #: ``junction``: an extra effort at a 1-junction or an extra flow at a 0-junction;
 #: ``input``: the recorded input is transformed before it reaches the model (actuator effects);
-#: ``output``: the model output is transformed before it is compared (sensor effects).
-PLACE_KINDS = ("junction", "input", "output")
+#: ``output``: the model output is transformed before it is compared (sensor effects);
+#: ``law``: an element's constitutive law whose bond ends at no junction, corrected in series
+#: (effort) or beside it (flow) (:mod:`diagnosis.law_places`).
+PLACE_KINDS = ("junction", "input", "output", "law")
 
 
 @dataclass(frozen=True)
@@ -18,11 +20,12 @@ class Place:
 
     Parameters
     ----------
-    kind : {"junction", "input", "output"}
+    kind : {"junction", "input", "output", "law"}
     name : str
-        The junction's element name, or the input's / output's name.
+        The junction's element name, the input's / output's name, or the element owning the law.
     bond : str, optional
-        For a junction, the bond the correction is thought to act on (reporting only).
+        For a junction, the bond the correction is thought to act on (reporting only); for a
+        law, the law's bond.
 
     Examples
     --------

@@ -13,6 +13,8 @@ Twins (:func:`twin_places`) are places of the same kind that look the same on th
 * junctions of the same type (0 or 1) and energy domain whose bonded elements are of the same
   kinds (``chamber1`` and ``chamber2`` of the PAM joint: each a 0-junction between a valve MSf
   and a pneumatic chamber);
+* law places (:mod:`diagnosis.law_places`) of elements of the same kind, at the same port,
+  setting the same variable (the force laws of the two muscles);
 * recorded inputs with the same unit (the valve voltages);
 * measured outputs with the same unit (the two pressure sensors).
 """
@@ -110,6 +112,10 @@ def _signature(graph, place: Place, experiment):
         from .catalogue_common import junction_domain, junction_elements
         neighbours = tuple(sorted(el.kind for el, _ in junction_elements(graph, place.name)))
         return graph.elements[place.name].kind, junction_domain(graph, place.name), neighbours
+    if place.kind == "law":
+        from .law_places import law_port
+        port = law_port(graph, place)
+        return "law", graph.elements[port.element].kind, port.port, port.sets
     if place.kind == "input":
         units = {d.name: d.unit for d in graph.inputs()}
     else:

@@ -159,3 +159,34 @@ def test_a_clipping_sensor_is_located_and_named(tmp_path):
     r = run_case(spec, PLANTS, tmp_path, max_effects=1)
     assert (r["answer_kind"], r["answer_place"]) == ("saturation", "output x"), r["answers"]
     assert r["improvement"] >= 0.5
+
+
+def test_a_muscles_force_law_is_a_door_of_the_pam_truth():
+    """Hysteresis may sit at a muscle's force law (the diagnosis's ``law muscle<i>``): only
+    hysteresis draws there, so other kinds' draws are unchanged; its place is accepted at the
+    seesaw and the other muscle, which differ from it by the lever arm r cos(psi) alone."""
+    from diagnosis.benchmark.plants_pam import PAM_PARAMS, pam_frictionless
+
+    plant = pam_frictionless()
+    assert places_for(plant, "hysteresis") == [("junction", "seesaw"), ("junction", "muscle1"),
+                                               ("junction", "muscle2")]
+    assert places_for(plant, "coulomb_friction") == [("junction", "seesaw")]
+    t = np.arange(0.0, 1.0, 1e-3)
+    a = 1.5 * np.sin(2 * np.pi * 1.3 * t)
+    u = {"u1": 5.0 + a, "u2": 5.0 - a}
+    scales = {"rms": {"muscle1": 0.01, "seesaw": 0.3}}
+    law = make_effect("hysteresis", plant, "junction", "muscle1", 2.0, scales, {"sigma": 1000.0, "eps": 1e-4})
+    assert law.place == "law muscle1"
+    assert law.accepted_places() == {"law muscle1", "law muscle2", "junction seesaw"}
+    # a muscle's contraction rate is r cos(psi) times the joint's: at psi = 0 a friction force F
+    # on muscle 1's law is a torque r F on the seesaw, and the two truths agree to cos(psi)
+    r = PAM_PARAMS["r"]
+    x = np.array([0.0, 0.2, 4e5, 4e5])
+    sig = plant.signals(x, {})
+    assert sig["muscle1"] == pytest.approx(r * 0.2) and sig["muscle2"] == pytest.approx(-r * 0.2)
+    force = {"muscle1": 1.5}
+    torque = plant.rhs(x, {"u1": 5.0, "u2": 5.0}, {"seesaw": r * 1.5})[1]
+    assert plant.rhs(x, {"u1": 5.0, "u2": 5.0}, force)[1] == pytest.approx(torque, rel=1e-12)
+    law_run = simulate_truth(plant, t, u, law)["psi"]
+    nominal = simulate_truth(plant, t, u)["psi"]
+    assert np.max(np.abs(law_run - nominal)) > 0.05          # deg: the braid friction shows

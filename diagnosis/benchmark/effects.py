@@ -20,6 +20,8 @@ junction (1: common flow)     viscous_friction, constant_load (any domain);
                               (where the plant has pressures there);
                               modulated_friction (where an input sets the
                               level, through a first-order lag: an MR damper)
+law (an effort in series     hysteresis (Dahl: a muscle's braid friction)
+with a constitutive law)
 junction (0: common effort)   leak (laminar, towards the ambient effort),
                               constant_load (a constant flow)
 storage (a C element)         nonlinear_stiffness (cubic hardening, the
@@ -54,7 +56,7 @@ MECHANICAL = ("translation", "rotation")
 #: a sign-law drop is a Coulomb friction or an electrical brush drop; a resistance anywhere.
 KIND_PLACES = {
     "coulomb_friction": ("junction1_dry",), "viscous_friction": ("junction1",),
-    "stribeck_friction": ("junction1_mech",), "hysteresis": ("junction1_mech",),
+    "stribeck_friction": ("junction1_mech",), "hysteresis": ("junction1_mech", "law1_mech"),
     "pressure_dependent_friction": ("junction1p",), "constant_load": ("junction1", "junction0"),
     "leak": ("junction0",), "nonlinear_stiffness": ("storage_linear",), "backlash": ("storage_linear1",),
     "saturation": ("input", "output", "storage_range"), "transport_delay": ("input",),
@@ -63,11 +65,21 @@ KIND_PLACES = {
 }
 
 
+def _without_laws(plant: TruthPlant):
+    """`plant` seen through its junctions only (its law doors left out)."""
+    from dataclasses import replace
+    return replace(plant, junctions=tuple(j for j in plant.junctions if not j.law))
+
+
 def places_for(plant: TruthPlant, kind: str) -> list[tuple[str, str]]:
     """The (door, name) pairs where `kind` may sit on `plant`."""
     out = []
+    laws = [j for j in plant.junctions if j.law]
+    plant = _without_laws(plant)
     for door in KIND_PLACES[kind]:
-        if door == "junction1":
+        if door == "law1_mech":
+            out += [("junction", j.name) for j in laws if j.kind == "1" and j.domain in MECHANICAL]
+        elif door == "junction1":
             out += [("junction", j.name) for j in plant.junctions if j.kind == "1"]
         elif door == "junction1_mech":
             out += [("junction", j.name) for j in plant.junctions if j.kind == "1" and j.domain in MECHANICAL]
@@ -118,13 +130,15 @@ class TruthEffect(NoEffect):
     @property
     def place(self) -> str:
         """The place as the report's ``attached_to`` says it (storage effects act at a junction)."""
-        return f"junction {self.junction}" if self.door == "storage" else f"{self.door} {self.name}"
+        if self.door in ("junction", "storage"):
+            return self.plant.junction(self.junction).place
+        return f"{self.door} {self.name}"
 
     def accepted_places(self) -> set[str]:
         """The place, its indistinguishable equivalents, and the storage element's own name."""
         out = {self.place}
         if self.door in ("junction", "storage"):
-            out |= {f"junction {e}" for e in self.plant.junction(self.junction).equivalent}
+            out |= {self.plant.junction(e).place for e in self.plant.junction(self.junction).equivalent}
         if self.door == "storage":
             out |= {f"storage {self.name}", f"element {self.name}"}
         return out

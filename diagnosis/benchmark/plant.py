@@ -86,7 +86,10 @@ class JunctionSpec:
     ``modulators`` the inputs whose level may set a friction there through a
     lag (a damper's coil voltage, a seal's switched pressure).
     ``equivalent`` lists junctions no recording can tell apart from this one
-    (rigidly geared through a TF: one degree of freedom).
+    (rigidly geared through a TF: one degree of freedom).  ``law``: not a junction of the
+    nominal graph but a constitutive law whose bond ends at no junction (the diagnosis's
+    ``law <name>`` place, :mod:`diagnosis.law_places`): ``name`` is the element owning the law,
+    ``signals[name]`` the flow of its bond and ``extra[name]`` an effort added to its law.
     """
 
     name: str
@@ -96,6 +99,12 @@ class JunctionSpec:
     pressures: tuple[str, ...] = ()
     equivalent: tuple[str, ...] = ()
     modulators: tuple[str, ...] = ()
+    law: bool = False
+
+    @property
+    def place(self) -> str:
+        """The place as the diagnosis's report names it."""
+        return f"{'law' if self.law else 'junction'} {self.name}"
 
 
 @dataclass(frozen=True)

@@ -18,6 +18,11 @@ Effect doors (names are the nominal graph's element names):
   and the muscle (common effort: the pressure, ambient ``P_out``): a leak
   (``-Q(P - P_out)``) or a constant flow.  ``laws["chamber"](x)`` gives, per
   chamber, its pressure, volume and the ambient pressure.
+* ``extra["muscle1"]``, ``extra["muscle2"]`` (N): a force added to muscle i's force law
+  eqs. (6)-(7), in the sense of its contraction force (the nominal graph's law place
+  ``law muscle<i>``: the bond from the lever arm to the muscle); ``signals`` gives its
+  contraction rate (m/s), so that an added ``-z`` opposing it is a friction, as at a junction.  The ``tau`` output stays eq. (11b) of the pressures and the angle,
+  as the library's output is: it does not see a change of the force law.
 * storage ``k_s`` (C of the seesaw, content ``psi``).
 
 Signals: ``seesaw`` (dpsi, rad/s), ``P1``, ``P2`` (Pa, for pressure-dependent
@@ -51,6 +56,7 @@ _KU = [0.5 * j for j in range(21)]
 _KA = [0.0, 0.1378, 0.1828, 0.2134, 0.2390, 0.2631, 0.2856, 0.3069, 0.3269, 0.3458, 0.3645,
        0.3844, 0.4057, 0.4288, 0.4545, 0.4835, 0.5174, 0.5589, 0.6134, 0.6962, 1.0]
 _DP_CLAMP = 20e3          # Pa, lower clamp of P_i - P_out in T_p (conventions)
+_MUSCLES = ("muscle1", "muscle2")   # the force-law doors (the graph's PneumaticChamber elements)
 _SUBSTEPS = 4             # RK4 sub-steps per 1 ms sample: h = 0.25 ms, the friction hold
 
 
@@ -91,11 +97,14 @@ class _Pam:
         pv1, pv2, pw1, pw2 = _FORCE[i]
         return (pv1 * l + pv2) * P + pw1 * l + pw2                          # eqs. (6)-(7), N
 
-    def mechanics(self, psi, P1, P2):
-        """Lengths (eq. (2)), forces and the joint torque eq. (9)."""
+    def mechanics(self, psi, P1, P2, extra=None):
+        """Lengths (eq. (2)), forces and the joint torque eq. (9); `extra` may add a force to a
+        muscle's law (``extra["muscle<i>"]``, N, in the sense of its contraction force)."""
         s = self.p["r"] * math.sin(psi)
         l1, l2 = self.p["L0"] - s, self.p["L0"] + s
         F1, F2 = self.force(1, P1, l1), self.force(2, P2, l2)
+        if extra:
+            F1, F2 = F1 + extra.get("muscle1", 0.0), F2 + extra.get("muscle2", 0.0)
         return l1, l2, F1, F2, self.p["r"] * math.cos(psi) * (F1 - F2)
 
     def chamber(self, P, m, l, l_dot):
@@ -103,15 +112,15 @@ class _Pam:
         V = self.volume(l)
         return (self.k1RT * m - self.p["k2"] * (2.0 * self.p["D1"] * l + self.p["D2"]) * l_dot * P) / V
 
-    def kikuuwe(self, x, t_extra, h):
+    def kikuuwe(self, x, extra, h):
         """Friction torque eq. (10) (conventions: Z = h/J, T_p clamp), N m, held over a sub-step."""
         p = self.p
         psi, dpsi, P1, P2 = (float(v) for v in x)
         if not math.isfinite(psi):
             return math.nan
-        _, _, F1, F2, tau = self.mechanics(psi, P1, P2)
+        _, _, F1, F2, tau = self.mechanics(psi, P1, P2, extra)
         Z = h / p["J"]
-        T0 = tau - p["k_s"] * psi + t_extra                  # every torque but friction
+        T0 = tau - p["k_s"] * psi + extra.get("seesaw", 0.0)   # every torque but friction
         w = dpsi + Z * T0                                     # implicit-Euler velocity without friction
         T_s = p["r_p"] * p["mu_s"] * abs(F1 + F2 - p["M"] * p["g"])
         d1, d2 = max(P1 - p["P_out"], _DP_CLAMP), max(P2 - p["P_out"], _DP_CLAMP)
@@ -125,7 +134,7 @@ class _Pam:
         psi, dpsi, P1, P2 = (float(v) for v in x)
         if not math.isfinite(psi):          # a run an effect has driven out of range: NaN, no raise
             return np.full(4, np.nan)
-        l1, l2, _, _, tau = self.mechanics(psi, P1, P2)
+        l1, l2, _, _, tau = self.mechanics(psi, P1, P2, extra)
         ld = p["r"] * math.cos(psi) * dpsi                   # dl2/dt = -dl1/dt
         m1 = self.mass_flow(u["u1"], P1) + extra.get("chamber1", 0.0)
         m2 = self.mass_flow(u["u2"], P2) + extra.get("chamber2", 0.0)
@@ -159,7 +168,12 @@ def _build(name: str, model: str, friction: bool) -> TruthPlant:
     p = j.p
 
     def signals(x, u):
-        return {"seesaw": x[1], "P1": x[2], "P2": x[3], "chamber1": x[2], "chamber2": x[3], "k_s": x[0]}
+        # a law door's flow is its muscle's contraction rate (dl2/dt = -dl1/dt = r cos(psi) dpsi):
+        # with the force added to its contraction force, extra * flow is the power into the muscle
+        # side, as at a junction (a friction -z opposing it is dissipative)
+        ld = p["r"] * math.cos(x[0]) * x[1]
+        return {"seesaw": x[1], "P1": x[2], "P2": x[3], "chamber1": x[2], "chamber2": x[3], "k_s": x[0],
+                "muscle1": ld, "muscle2": -ld}
 
     def measure(x, u):
         return {"psi": math.degrees(x[0]), "P1": x[2], "P2": x[3], "tau": j.mechanics(x[0], x[2], x[3])[-1]}
@@ -170,7 +184,7 @@ def _build(name: str, model: str, friction: bool) -> TruthPlant:
                 "chamber2": {"P": x[3], "V": j.volume(p["L0"] + s), "ambient": p["P_out"]}}
 
     def hold(x, u, extra, h):
-        return {"T_f": j.kikuuwe(x, extra.get("seesaw", 0.0), h)}
+        return {"T_f": j.kikuuwe(x, extra, h)}
 
     x0 = j.rest(5.0, 5.0)
     valve = dict(unit="V", low=0.5, high=9.5, quantum=0.01, hold=(0.2, 0.8), ambient=5.0)
@@ -187,9 +201,15 @@ def _build(name: str, model: str, friction: bool) -> TruthPlant:
         # joint (from there it swings past the muscles' range on a valve step and the run fails)
         x0=x0, nominal_x0={"q_psi": x0[0], "p_J": p["J"] * x0[1], "P_1": x0[2], "P_2": x0[3]},
         rhs=j.rhs, signals=signals, measure=measure,
-        junctions=(JunctionSpec("seesaw", "1", "rotation", pressures=("P1", "P2")),
+        junctions=(JunctionSpec("seesaw", "1", "rotation", pressures=("P1", "P2"), equivalent=_MUSCLES),
                    JunctionSpec("chamber1", "0", "pneumatic", ambient=p["P_out"]),
-                   JunctionSpec("chamber2", "0", "pneumatic", ambient=p["P_out"])),
+                   JunctionSpec("chamber2", "0", "pneumatic", ambient=p["P_out"]),
+                   # each muscle's force law (eqs. (6)-(7)) acts on the seesaw only through its
+                   # lever arm r cos(psi): the same place as the seesaw up to that modulus
+                   # (and the two muscles' through arms of opposite sign: dl2 = -dl1, F1 - F2)
+                   *(JunctionSpec(m, "1", "translation", law=True,
+                                  equivalent=("seesaw",) + tuple(o for o in _MUSCLES if o != m))
+                     for m in _MUSCLES)),
         storages=(StorageSpec("k_s", "seesaw", p["k_s"], content_range=(-0.6, 0.6)),),
         rate=1000.0, duration=15.0, substeps=_SUBSTEPS, method="rk4",
         drifts=False, laws={"chamber": chamber}, hold=hold if friction else None,

@@ -190,3 +190,18 @@ def test_a_muscles_force_law_is_a_door_of_the_pam_truth():
     law_run = simulate_truth(plant, t, u, law)["psi"]
     nominal = simulate_truth(plant, t, u)["psi"]
     assert np.max(np.abs(law_run - nominal)) > 0.05          # deg: the braid friction shows
+
+
+def test_an_lsoda_truth_that_crawls_counts_as_a_failed_run(monkeypatch):
+    """A sample that takes more right-hand-side evaluations than the budget ends the run as
+    non-finite (the calibration then tries a smaller effect) instead of running for hours."""
+    import diagnosis.benchmark.simulate as simulate
+
+    plant = PLANTS["exoskeleton"]()
+    assert plant.method == "lsoda"
+    t = np.arange(0.0, 0.2, 1.0 / plant.rate)
+    u = {i.name: np.full(t.size, 0.5 * (i.low + i.high)) for i in plant.inputs}
+    assert simulate_truth(plant, t, u)["_finite"]
+    monkeypatch.setattr(simulate, "MAX_EVALS_PER_SAMPLE", 3)
+    out = simulate_truth(plant, t, u)
+    assert not out["_finite"] and np.isnan(next(iter(v for k, v in out.items() if not k.startswith("_")))[-1])

@@ -43,7 +43,7 @@ from plants import load as load_model
 
 from .errors import DiagnosisError
 from .initial_state import start_inconsistent
-from .place_choice import MIN_PLACE_SHARE, actuator_places, located_places
+from .place_choice import MIN_PLACE_SHARE, actuator_places, companions, located_places, without_companions
 from .rounds import JointRefit, Round
 
 __all__ = ["diagnose", "MIN_PLACE_SHARE", "MAX_FIT_SAMPLES"]
@@ -311,8 +311,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         windows, rv = [], {}
         say("graph location", "restarted windows of the training part")
         scores = locate_on_segments(graph, train, res.noise, progress=progress)
-        place_list = ([s.place for s in scores[:int(top)] if s.explained >= MIN_PLACE_SHARE]
-                      or _every_place(graph, exp))
+        place_list = ([s.place for s in without_companions(graph, scores)[:int(top)]
+                       if s.explained >= MIN_PLACE_SHARE] or _every_place(graph, exp))
     else:
         windows = _merge([w for o in exp.outputs
                           for w in significant_windows(exp.t, res.residual[o], res.noise[o])])
@@ -325,7 +325,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         except (np.linalg.LinAlgError, FloatingPointError) as exc:   # numerics, not the user's input
             raise DiagnosisError(f"graph location of {graph.name!r} failed on {rec.source}: "
                                  f"{type(exc).__name__}: {exc}") from exc
-        place_list = [s.place for s in located_places(scores, int(top))]
+        place_list = [s.place for s in located_places(without_companions(graph, scores), int(top))]
         place_list += actuator_places(graph, place_list, train)
 
     # a diverging nominal's candidates take their scales from where it still runs
@@ -343,6 +343,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                              abandon_above=abandon_above, judge=judge)
 
     fits, best = fit_in_turn(cands, fit_one, say, "fitting")
+    fits += _companion_fits(graph, fits, place_list, cand_part, rv, fit_one, say, "fitting", best, x0)
     fits += _twin_fits(graph, fits, cand_part, rv, fit_one, say, "fitting", best, x0, len(place_list))
     if uncertain:
         say("fitting", f"nominal parameters {', '.join(uncertain)} alone")
@@ -433,6 +434,21 @@ def _lookup(evidence):
     return evidence_lookup(evidence) if evidence else None
 
 
+def _companion_fits(graph, fits, places, train, rv, fit, say, label, best, x0=None) -> list:
+    """Fits at the law places acting on a located junction (:mod:`diagnosis.place_choice`'s
+    companions) of the kinds that fitted best at that junction."""
+    from .catalogue import candidates
+    from .fit_in_turn import fit_in_turn
+    from .place_choice import companion_candidates
+
+    laws_at = companions(graph, places)
+    if not laws_at:
+        return []
+    cands = companion_candidates(fits, laws_at, lambda place: candidates(graph, place, regime_variables=rv,
+                                                                           experiment=train, x0=x0))
+    return fit_in_turn(cands, fit, say, label, best=best, suffix=", laws")[0]
+
+
 def _twin_fits(graph, fits, train, rv, fit, say, label, best, x0=None, n_places: int = 3) -> list:
     """Fits of the same kind at all twins of the best single-place fits' places
     (:mod:`diagnosis.twins`): an effect on every copy of a repeated component.  `fit` is
@@ -483,7 +499,7 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     except (np.linalg.LinAlgError, FloatingPointError) as exc:   # numerics: no further effect
         return Round(None, [], dict(reference), dict(reference), scores=[],
                      note=f"graph location failed: {type(exc).__name__}: {exc}")
-    places = located_places(scores, top)
+    places = located_places(without_companions(graph, scores), top)
     by_place = {s.place: s for s in scores}
     places += [by_place[p] for p in actuator_places(graph, [s.place for s in places], train) if p in by_place]
     done = {(c.kind, c.place) for r in rounds if r.chosen is not None and r.chosen.candidate is not None
@@ -499,6 +515,8 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
                              judge=judge)
 
     fits, best = fit_in_turn(cands, fit_one, say, f"{label}: fitting")
+    fits += _companion_fits(graph, fits, [s.place for s in places], train, rv, fit_one, say, f"{label}: fitting",
+                            best, x0)
     fits += _twin_fits(graph, fits, train, rv, fit_one, say, f"{label}: fitting", best, x0, len(places))
     say(f"{label}: choosing")
     chosen = _choose(reference, fits, floor, evidence, res, exp, train, judge.kind != "open-loop")

@@ -27,7 +27,10 @@ from dataclasses import dataclass
 from .errors import DiagnosisError, UnknownNameError
 from .place import Place
 
-__all__ = ["LawPort", "law_ports", "law_places", "split_law", "split_laws"]
+__all__ = ["LawPort", "law_ports", "law_places", "split_law", "split_laws", "acts_on"]
+
+#: two-ports a law's effort or flow passes through unchanged but for a modulus
+_TWO_PORTS = frozenset({"TF", "GY", "MTF", "MGY"})
 
 #: element kinds whose law is not a place of its own: junctions, sources (the law is the
 #: input's: an input place), transformers and gyrators (a modulus is geometry, not physics)
@@ -148,3 +151,30 @@ def split_laws(graph, places):
         if place.kind == "law":
             graph, out[place] = split_law(graph, place)
     return graph, out
+
+
+def acts_on(graph, place: Place) -> str | None:
+    """The junction a law place reaches through two-ports only (its lever arm, a gear): there a
+    correction of the law is a correction of the junction scaled by the moduli.  None when the
+    bond leads to another law first.
+
+    Examples
+    --------
+    >>> from plants import library
+    >>> pam = library.build("pam")
+    >>> acts_on(pam, law_places(pam)[0])
+    'seesaw'
+    """
+    port = law_port(graph, place)
+    came, at = port.element, None
+    bond = graph.bonds[port.bond]
+    at = bond.head.element if bond.tail.element == came else bond.tail.element
+    seen = {came}
+    while graph.elements[at].kind in _TWO_PORTS and at not in seen:
+        seen.add(at)
+        onward = [b for b, _ in graph.bonds_of(at) if b.name != bond.name]
+        if len(onward) != 1:
+            return None
+        bond = onward[0]
+        came, at = at, bond.head.element if bond.tail.element == at else bond.tail.element
+    return at if graph.elements[at].kind in ("0", "1") else None

@@ -4,15 +4,21 @@ Graph location (:mod:`diagnosis.graph_location`) ranks every junction, input and
 share of the residual a correction there explains.  The candidates of the best few are fitted
 (:func:`located_places`), with the places location cannot tell from them: further places that
 explain as much, and the inputs that drive a located junction directly (:func:`actuator_places`).
+A constitutive law acting on a located junction through a lever arm or a gear is that junction's
+companion (:func:`without_companions`, :func:`companions`): the kinds that fit best at the junction
+are fitted at the law too (:func:`companion_candidates`).
 """
 from __future__ import annotations
+
+import numpy as np
 
 from bondgraph.editing_inputs import expression_fields, mentions
 
 from .catalogue_common import junction_elements
 from .place import Place
 
-__all__ = ["located_places", "actuator_places", "MIN_PLACE_SHARE", "PLACE_TIE"]
+__all__ = ["located_places", "actuator_places", "without_companions", "companions", "companion_candidates",
+           "MIN_PLACE_SHARE", "PLACE_TIE", "COMPANION_KINDS"]
 
 #: places whose correction explains less than this share of the residual get no candidates
 MIN_PLACE_SHARE = 0.02
@@ -58,3 +64,61 @@ def located_places(scores, top: int) -> list:
     last = 1.0 - kept[top - 1].explained
     tied = [s for s in kept[top:2 * top] if 1.0 - s.explained <= PLACE_TIE * last]
     return kept[:top] + tied
+
+
+
+def without_companions(graph, scores) -> list:
+    """`scores` without the law places (:mod:`diagnosis.law_places`) whose junction is scored too.
+
+    A law that reaches a junction through a lever arm or a gear changes what that junction does,
+    scaled by the moduli: the location scores the two alike and every kind fits both alike, so
+    a law place would take a located place's slot and the catalogue would be fitted twice for
+    nothing.  Such a law is its junction's *companion* instead (:func:`companions`)."""
+    from .law_places import acts_on
+
+    scored = {(s.place.kind, s.place.name) for s in scores}
+    return [s for s in scores if s.place.kind != "law" or ("junction", acts_on(graph, s.place)) not in scored]
+
+
+def companions(graph, places) -> dict:
+    """Per located junction among `places`, the law places acting on it (:func:`without_companions`)."""
+    from .law_places import acts_on, law_places
+
+    located = {p.name for p in places if p.kind == "junction"}
+    out = {}
+    for law in law_places(graph):
+        junction = acts_on(graph, law)
+        if junction in located:
+            out.setdefault(junction, []).append(law)
+    return out
+
+
+#: how many of a junction's best kinds are fitted at its companion law places
+COMPANION_KINDS = 2
+
+
+def companion_candidates(fits, laws_at: dict, make_candidates) -> list:
+    """At each junction's companion law places (`laws_at`, from :func:`companions`), the
+    candidates of the :data:`COMPANION_KINDS` kinds (with their regime) that fitted best at the
+    junction: a law fits clearly better only where its own variables matter (a hysteresis whose
+    level follows one muscle's pressure), and a tie goes to the junction (:func:`diagnosis.fit.choose`).
+
+    `fits` are the round's fits; `make_candidates(place)` lists the catalogue's candidates at a place."""
+    def err(f):
+        return float(np.sum([v ** 2 for v in f.holdout_nrmse.values()]))
+
+    out = []
+    for junction, laws in laws_at.items():
+        at = sorted((f for f in fits if f.success and f.candidate is not None
+                     and not hasattr(f.candidate, "members") and f.candidate.place.kind == "junction"
+                     and f.candidate.place.name == junction and np.isfinite(err(f))), key=err)
+        best = []
+        for f in at:
+            key = (f.candidate.kind, f.candidate.regime)
+            if key not in best:
+                best.append(key)
+        for law in laws:
+            offered = make_candidates(law)
+            for key in best[:COMPANION_KINDS]:
+                out += [c for c in offered if (c.kind, c.regime) == key][:1]
+    return out

@@ -119,3 +119,34 @@ def test_a_tie_between_a_junction_and_a_law_goes_to_the_junction():
     # a law that fits clearly better (beyond the 2 % tie) wins
     clearly = fit(Place("law", "muscle1"), 0.0200, 0.015)
     assert choose({"x": 0.12}, [clearly, at_junction], noise={"x": 0.01}) is clearly
+
+
+def test_a_law_acting_on_a_located_junction_is_its_companion(pam):
+    from diagnosis.graph_location import PlaceScore
+    from diagnosis.law_places import acts_on
+    from diagnosis.place_choice import companion_candidates, companions, without_companions
+
+    muscle1, muscle2 = law_places(pam)
+    assert acts_on(pam, muscle1) == acts_on(pam, muscle2) == "seesaw"     # through the lever arms
+
+    def score(place, share):
+        return PlaceScore(place, share, np.zeros(3), "", None)
+
+    seesaw, chamber = Place("junction", "seesaw"), Place("junction", "chamber1")
+    scores = [score(seesaw, 0.96), score(muscle1, 0.96), score(muscle2, 0.96), score(chamber, 0.5)]
+    # the laws take no located place's slot: the chamber stays in the top two
+    assert [s.place for s in without_companions(pam, scores)] == [seesaw, chamber]
+    laws_at = companions(pam, [seesaw, chamber])
+    assert laws_at == {"seesaw": [muscle1, muscle2]}
+
+    def fit(kind, held, place=seesaw):
+        return CandidateFit(SimpleNamespace(kind=kind, place=place, regime=None), {}, {"x": held}, {"x": held},
+                            2, True, "")
+
+    fits = [fit("coulomb_friction", 0.05), fit("hysteresis", 0.02), fit("stribeck_friction", 0.03),
+            fit("hysteresis", 0.01, chamber)]
+    picked = companion_candidates(fits, laws_at, lambda place: candidates(pam, place))
+    # the two kinds that fitted best at the seesaw, at each law
+    assert [(c.kind, c.place.name) for c in picked] == [
+        ("hysteresis", "muscle1"), ("stribeck_friction", "muscle1"),
+        ("hysteresis", "muscle2"), ("stribeck_friction", "muscle2")]

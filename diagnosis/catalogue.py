@@ -261,5 +261,8 @@ def site_of(graph, place: Place, *, regime_variables=None, experiment=None, x0=N
             raise UnknownNameError("output", place.name, list(graph.outputs), model=graph.name)
         measured = experiment.outputs.get(place.name) if experiment is not None else None
         recorded = None if measured is None else np.asarray(measured, float)
+    start = dict(x0) if isinstance(x0, dict) else None
+    if x0 is not None and start is None:       # a state vector in the model's order
+        start = dict(zip(graph.equations().state_names, map(float, np.ravel(x0))))
     return Site(graph, place, place.kind, taken, Scales(span=span, dt=dt, from_data=experiment is not None),
-                regime_variables=regime_variables, recorded=recorded)
+                regime_variables=regime_variables, recorded=recorded, x0=start)

@@ -219,8 +219,10 @@ def _shape(spec, plant, rec, rng, scales):
         p_ref = sum(101325.0 if scales["rms"][name] > 5e4 else 0.0 for name in names)
         p = sum(scales["rms"][name] for name in names) - p_ref
         sh["c0"], sh["p_ref"] = float(rng.uniform(0.1, 0.5)) * p, p_ref
-    if k == "valve_lag":
-        sh["u0"] = float(rec.u[spec.name][0])
+    if k in ("valve_lag", "transport_delay"):
+        # the recording starts with the plant at rest at the inputs' ambient values: the actuator
+        # delivered the ambient value before t = 0 (its first command is a step at t = 0)
+        sh["u0"] = next(i.ambient for i in plant.inputs if i.name == spec.name)
     if k == "coulomb_viscous_friction":
         sh["beta"], sh["v_rms"] = float(rng.uniform(0.5, 2.0)), v_rms
     if k == "nonlinear_stiffness":

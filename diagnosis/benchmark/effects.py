@@ -167,7 +167,8 @@ class TruthEffect(NoEffect):
         else:   # a delay of m seconds, whole samples plus the fraction held (ZOH stays exact on
             dt = float(t[1] - t[0])  # the sample grid only for whole samples: round to them)
             k = max(1, int(round(self.m / dt)))
-            u[self.name] = np.concatenate([np.full(k, v[0]), v[:-k]])
+            # before t = 0 the actuator delivered the ambient value the plant rested at
+            u[self.name] = np.concatenate([np.full(k, self.shape.get("u0", v[0])), v[:-k]])
         return u
 
     def inputs_now(self, u, z):

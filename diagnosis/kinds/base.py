@@ -54,6 +54,8 @@ class Site:
         Signals that may modulate a friction at a 1-junction (label -> expression).
     recorded : ndarray or None
         The recorded input (input sites) or the measured output (output sites), model units.
+    x0 : dict or None
+        The state the recording starts from (state name -> value; None: the model's own).
     """
 
     graph: object
@@ -65,6 +67,7 @@ class Site:
     regime_variables: dict | None = None
     signals: dict = field(default_factory=dict)
     recorded: object = None
+    x0: dict | None = None
 
     @property
     def name(self) -> str:

@@ -53,7 +53,7 @@ def _input_record(site) -> InputRecord:
     recorded = site.recorded
     values = (np.asarray(recorded, dtype=float) if recorded is not None
               else np.array([decl.default - 1.0, decl.default + 1.0]))
-    return InputRecord(values, decl.unit, resting_input(site.graph, site.name, recorded))
+    return InputRecord(values, decl.unit, resting_input(site.graph, site.name, recorded, site.x0))
 
 
 def trial_times(site) -> list[float]:
@@ -61,35 +61,61 @@ def trial_times(site) -> list[float]:
     return [k * site.scales.dt for k in (0.5, 2, 8, 32) if k * site.scales.dt < site.scales.span / 4]
 
 
-def resting_input(graph, u: str, recorded) -> float:
-    """The value of input `u` before the experiment.
+def resting_input(graph, u: str, recorded, x0=None) -> float:
+    """The value of input `u` before the experiment: where the recording's initial state rests.
 
-    Of 0, the input's default and its first recorded value, the one at which the
-    nominal initial state is closest to rest: the rates :math:`|f_i(x_0, u)|` (other
-    inputs at their defaults) are normalised per state by their largest value over
-    the three, summed, and the smallest sum wins (ties: in that order).  The first
-    recorded value when the model cannot be evaluated, or when the rates do not depend
-    on the input at all (nothing says where it rested: the actuator is taken to have
-    followed its first command).
+    Of 0, the input's default, its first recorded value and 33 values across its recorded range
+    (refined between the best one's neighbours), the one at which the initial state `x0` (dict
+    state name -> value; default the model's) is closest to rest: the rates :math:`|f_i(x_0, u)|`
+    (other inputs at their defaults) are normalised per state by their largest value over the
+    trials, summed, and the smallest sum wins (ties: in that order).  A valve that held a joint at
+    rest at 5 V before the record began rested at 5 V, whatever its first command.  The first
+    recorded value when the model cannot be evaluated, or when the rates do not depend on the
+    input at all (nothing says where it rested: the actuator is taken to have followed its first
+    command).
     """
+    from scipy.optimize import minimize_scalar
+
     from bondgraph.numerics.evaluate import compile_model
     decl = next(d for d in graph.inputs() if d.name == u)
     first = float(recorded[0]) if recorded is not None else float(decl.default)
-    options = (0.0, float(decl.default), first)
+    options = [0.0, float(decl.default), first]
+    if recorded is not None and np.ptp(recorded) > 0:
+        options += list(np.linspace(float(np.min(recorded)), float(np.max(recorded)), 33))
     try:
         eqs = graph.equations()
         model = compile_model(eqs, backend="numpy")
         base = np.array([float(eqs.input_defaults.get(n, 0.0)) for n in model.input_names])
-        trials = np.tile(base, (len(options), 1))
-        trials[:, list(model.input_names).index(u)] = options
-        x0 = np.tile(model.default_state, (len(options), 1))
-        rates = np.abs(np.asarray(model.f(x0, trials), dtype=float)).reshape(len(options), -1)
+        column = list(model.input_names).index(u)
+        state = np.array(model.default_state, dtype=float)
+        for i, name in enumerate(model.state_names):
+            if x0 is not None and name in x0:
+                state[i] = float(x0[name])
+
+        def rates(values):
+            trials = np.tile(base, (len(values), 1))
+            trials[:, column] = values
+            out = model.f(np.tile(state, (len(values), 1)), trials)
+            return np.abs(np.asarray(out, dtype=float)).reshape(len(values), -1)
+
+        r = rates(options)
     except (BondcosimError, ValueError, TypeError):
         return first
-    if not np.isfinite(rates).all():
+    if not np.isfinite(r).all() or np.allclose(r, r[0], rtol=1e-12, atol=0.0):
         return first
-    peak = rates.max(axis=0)
-    score = (rates[:, peak > 0] / peak[peak > 0]).sum(axis=1)
-    if np.allclose(rates, rates[0], rtol=1e-12, atol=0.0):
-        return first
-    return options[int(np.argmin(score))]
+    peak = r.max(axis=0)
+    moving = peak > 0
+
+    def score(values):
+        return (rates(values)[:, moving] / peak[moving]).sum(axis=1)
+
+    scores = (r[:, moving] / peak[moving]).sum(axis=1)
+    best = int(np.argmin(scores))
+    if best < 3:
+        return options[best]
+    grid = options[3:]
+    k = best - 3
+    lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
+    found = minimize_scalar(lambda v: float(score([v])[0]), bounds=(lo, hi), method="bounded",
+                            options={"xatol": 1e-6 * (grid[-1] - grid[0])})
+    return float(found.x) if found.success and found.fun <= scores[best] else options[best]

@@ -431,7 +431,7 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
        them apart (a constant load and a sensor offset look alike once a
        transient is over).  Among
        tied fits: fewer parameters, then a junction before a law place acting on it through a
-       transformer (:mod:`diagnosis.law_places`), then the smaller training error (where the
+       lever arm or a gear (:mod:`diagnosis.law_places`), then the smaller training error (where the
        start of the record may tell them apart; within 2 % again a tie), then
        catalogue order (effects exactly equivalent on the data, such as a
        sensor offset and a constant load on a linear spring, go to the simpler
@@ -505,8 +505,8 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
             or raw_score(f) <= raw_score(leader) * (1 + TIE) ** 2]
     fewest = min(f.n_params for f in tied)
     tied = [f for f in tied if f.n_params == fewest]
-    # a junction before a law that acts on it through a transformer (diagnosis.law_places): the
-    # two differ by the transformer's modulus only, and the simpler place is the plainer answer
+    # a junction before a law that acts on it through a lever arm or a gear (diagnosis.law_places):
+    # the two differ by the two-ports' moduli only, and the simpler place is the plainer answer
     tied = [f for f in tied if not _at_law(f.candidate)] or tied
     lowest = min(train(f) for f in tied)
     tied = [f for f in tied if train(f) <= lowest * (1 + TIE) ** 2] or tied

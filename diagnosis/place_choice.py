@@ -66,7 +66,6 @@ def located_places(scores, top: int) -> list:
     return kept[:top] + tied
 
 
-
 def without_companions(graph, scores) -> list:
     """`scores` without the law places (:mod:`diagnosis.law_places`) whose junction is scored too.
 

@@ -205,3 +205,14 @@ def test_an_lsoda_truth_that_crawls_counts_as_a_failed_run(monkeypatch):
     monkeypatch.setattr(simulate, "MAX_EVALS_PER_SAMPLE", 3)
     out = simulate_truth(plant, t, u)
     assert not out["_finite"] and np.isnan(next(iter(v for k, v in out.items() if not k.startswith("_")))[-1])
+
+
+def test_an_effect_that_cannot_be_sized_is_a_generator_error(monkeypatch, tmp_path):
+    """A truth that runs only far below the drawn size is not the drawn case: reported as a
+    generator error, not scored as a miss or a hit."""
+    import diagnosis.benchmark.draw as draw
+
+    spec = CaseSpec(0, 5, "msd", "viscous_friction", "junction", "v_mass", target_change=0.1, ratio=10.0)
+    monkeypatch.setattr(draw, "SIZE_TOLERANCE", 1.0001)       # no realised size is close enough
+    out = run_case(spec, PLANTS, tmp_path)
+    assert "could not be sized" in out["generator_error"]

@@ -278,6 +278,10 @@ def _initial_magnitude(spec, plant, rec, scales, sh, probe_gain):
     return base
 
 
+#: a realised change further than this factor from the drawn one is a generator error
+SIZE_TOLERANCE = 10.0
+
+
 def _calibrate(rec: Realised, rng) -> None:
     spec, plant = rec.spec, rec.plant
     scales = _scales(rec.nominal)
@@ -350,6 +354,11 @@ def _calibrate(rec: Realised, rng) -> None:
     if best is None:
         raise BenchmarkError(f"{spec.label}: no finite truth run while sizing the effect")
     eff, out, name, c, m = best
+    if abs(math.log(c / target)) > math.log(SIZE_TOLERANCE):
+        # not the case that was drawn (a truth that only runs far below the drawn size): a
+        # generator error, reported and not scored
+        raise BenchmarkError(f"{spec.label}: the effect could not be sized: it changes {name} by "
+                             f"{100 * c:.3g} % of its spread at best, {100 * target:.3g} % was drawn")
     rec.effect, rec.truth, rec.affected, rec.change = eff, out, name, c
     rec.calibration_runs = runs
     diff_rms = c * float(np.std(rec.nominal[name]))

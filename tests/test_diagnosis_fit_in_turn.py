@@ -49,3 +49,41 @@ def test_each_fit_gets_ten_times_the_best_training_cost_so_far():
     fits, best = fit_in_turn.fit_in_turn(["a", "b", "c", "d"], fit, lambda *a: None, "fitting")
     assert seen == [None, pytest.approx(5.0), pytest.approx(1.0), pytest.approx(1.0)]
     assert best == 0.05 and len(fits) == 4
+
+
+def test_a_richer_friction_starts_where_the_coulomb_fit_it_extends_ended():
+    """Coulomb + viscous, Stribeck, pressure-dependent and modulated friction extend Coulomb
+    friction: each starts at the fitted Coulomb level with its extra terms at zero, where its law
+    IS the fitted Coulomb law (same simulated output), so it starts no worse than that fit."""
+    from types import SimpleNamespace
+
+    import plants
+    from bondgraph.numerics import simulate
+    from diagnosis.catalogue import candidates
+    from diagnosis.place import Place
+
+    msd = plants.load("mass-spring-damper")
+    at = {c.kind: c for c in candidates(msd, Place("junction", "v_mass"))}
+    coulomb = at["coulomb_friction"]
+    fitted = {coulomb.params[0].name: 0.3}
+    done = [SimpleNamespace(candidate=coulomb, success=True, values=fitted)]
+
+    def x(graph, values):
+        return simulate(graph, (0.0, 4.0), inputs={"F": lambda s: 2.0 if s < 2.0 else -1.0},
+                        params=values, output_interval=0.01)["x"]
+
+    reference = x(coulomb.build(msd, fitted), None)
+    extending = [k for k in at if "coulomb_friction" in at[k].definition.nests]
+    assert extending == ["stribeck_friction", "coulomb_viscous_friction"]    # those offered on the msd
+    for kind in extending:
+        richer = at[kind]
+        warmed = fit_in_turn.nested_starts(richer, done)
+        (start,) = [s for s in warmed.starts if s not in richer.starts]
+        assert start[richer.params[0].name] == 0.3
+        # the same law: the outputs agree to the integrator's tolerance
+        assert np.max(np.abs(x(richer.build(msd, start), None) - reference)) < 1e-6 * np.ptp(reference)
+    # a kind that extends nothing, and one fitted at another place, get no such start
+    assert fit_in_turn.nested_starts(at["hysteresis"], done) is at["hysteresis"]
+    elsewhere = [SimpleNamespace(candidate=coulomb, success=True, values=fitted)]
+    other = candidates(msd, Place("junction", "v_mass"))[0]
+    assert other.kind == "coulomb_friction" and fit_in_turn.nested_starts(other, elsewhere) is other

@@ -40,3 +40,18 @@ def test_a_limit_between_the_levels_of_a_prbs_input_is_found(tmp_path):
     assert effect["parameters"]["u_min_F"] <= -1.0          # the low level is never clipped
     nominal, improved = data["fit"]["nominal"]["x"], data["fit"]["improved"]["x"]
     assert improved < 0.2 * nominal
+
+
+def test_a_constant_input_still_gets_a_valid_saturation_candidate():
+    """An input held constant (a load torque recorded as 0) has no span to start a limit inside:
+    the candidate is offered with its plain starts (no start outside its bounds)."""
+    from diagnosis.catalogue import candidates
+    from diagnosis.place import Place
+    from diagnosis.recording import Experiment
+    import plants
+
+    t = np.arange(0.0, 2.0, 0.02)
+    exp = Experiment(t, {"F": np.zeros(t.size)}, {"x": np.zeros(t.size)}, {"F": "N", "x": "m"}, "constant")
+    (sat,) = [c for c in candidates(plants.load("mass-spring-damper"), Place("input", "F"), experiment=exp)
+              if c.kind == "saturation"]
+    assert all(p.lower <= s[p.name] <= p.upper for s in sat.starts for p in sat.params if p.name in s)

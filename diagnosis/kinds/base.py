@@ -112,6 +112,10 @@ class Kind:
     #: the parameters its feature group is priced by (the candidate's; a grid choice such as a
     #: Stribeck velocity counting as one)
     feature_price: ClassVar[int] = 0
+    #: the simpler kinds this one extends: simpler kind -> {own parameter index: the simpler's
+    #: parameter index}; the other parameters at 0 reduce this law to the simpler one
+    #: (:meth:`start_from`)
+    nests: ClassVar[dict] = {}
 
     def propose(self, site: Site) -> list[Proposal]:
         """The candidates of this kind at `site` (none where the domain does not fit)."""
@@ -133,6 +137,24 @@ class Kind:
     def settle(self, cand, values: dict, experiment) -> dict:
         """Fitted `values` with what the training data cannot tell released (unchanged here)."""
         return values
+
+    def start_from(self, cand, simpler, values: dict) -> dict | None:
+        """A start for `cand` where a fit of the `simpler` candidate it extends (same place, a
+        kind in :attr:`nests`) ended with `values`: the mapped parameters take the simpler fit's
+        values, the others 0 (the simpler law) where the bounds allow, else their guess; None
+        when this kind does not extend that one.  A richer law then starts no worse than the
+        simpler one fitted, instead of from a guess a hopeless-fit rule may give up on."""
+        mapping = self.nests.get(simpler.kind)
+        if mapping is None:
+            return None
+        start = {}
+        for i, spec in enumerate(cand.params):
+            if i in mapping:
+                value = values.get(simpler.params[mapping[i]].name, spec.guess)
+            else:
+                value = 0.0 if spec.lower <= 0.0 <= spec.upper else spec.guess
+            start[spec.name] = float(min(max(value, spec.lower), spec.upper))
+        return start
 
     def features(self, signals) -> list:
         """What this kind's effect looks like at a junction, for the feature regression

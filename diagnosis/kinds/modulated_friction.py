@@ -90,6 +90,7 @@ class ModulatedFriction(Kind):
     name = "modulated_friction"
     doors = ("1",)
     feature_doors, feature_names, feature_price = "1", ("sign(v)", "(lag(m) - m_mean) sign(v)"), 3
+    nests = {"coulomb_friction": {0: 0}}
 
     def features(self, s):
         """Sign, and the sign times each modulating signal through a lag of 2, 20 and 200

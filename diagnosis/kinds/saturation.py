@@ -150,9 +150,10 @@ def _input_range(site) -> Proposal:
     starts += [{u_min: a, u_max: b} for a, b in limits]
     # an input of a few held levels (a PRBS, steps) has its quantiles AT its levels, where a limit
     # clips nothing and the fit sees no gradient: start each side inside the recorded span too
-    starts += [s for f in (0.25, 0.5) for s in ({u_min: lo - 1e-3 * width, u_max: hi - f * width},
-                                                {u_min: lo + f * width, u_max: hi + 1e-3 * width})
-               if not any(abs(s[u_min] - t[u_min]) + abs(s[u_max] - t[u_max]) < 0.02 * width for t in starts)]
+    inside = [s for f in (0.25, 0.5) for s in ({u_min: lo - 1e-3 * width, u_max: max(hi - f * width, lo)},
+                                               {u_min: min(lo + f * width, hi), u_max: hi + 1e-3 * width})]
+    starts += [s for s in inside if hi > lo and not any(
+        abs(s[u_min] - t[u_min]) + abs(s[u_max] - t[u_max]) < 0.02 * width for t in starts)]
     # a recording of a saturated input has many samples AT the limit: its median may be the limit
     # itself, so each limit may range over the whole recorded span
     return Proposal(starts=tuple(starts), params=(

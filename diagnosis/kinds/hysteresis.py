@@ -42,7 +42,10 @@ class Hysteresis(Kind):
         name = namer(site)
         return [with_level_starts([
             ParamSpec(name("Fh"), 0.1 * E, 1e-3 * E, 10 * E, e_unit, f"Dahl friction level at {j}"),
-            ParamSpec(name("sigma_dahl"), 2.0 * E / X, 2e-3 * E / X, 2e3 * E / X,
+            # the stiffness down to a thousandth of the level guess over one RMS displacement: the
+            # effort scale may be far above the friction (a cylinder's p A), and a seal's loop may
+            # close only over most of a stroke
+            ParamSpec(name("sigma_dahl"), 2.0 * E / X, 1e-4 * E / X, 2e3 * E / X,
                       f"{e_unit}/{displacement_unit(f_unit)}", f"Dahl pre-sliding stiffness at {j}")])]
 
     def build(self, graph, cand, values):

@@ -216,3 +216,11 @@ def test_an_effect_that_cannot_be_sized_is_a_generator_error(monkeypatch, tmp_pa
     monkeypatch.setattr(draw, "SIZE_TOLERANCE", 1.0001)       # no realised size is close enough
     out = run_case(spec, PLANTS, tmp_path)
     assert "could not be sized" in out["generator_error"]
+
+
+def test_the_pam_truths_signals_survive_a_run_gone_to_infinity():
+    """A calibration probe may drive the joint out of range: its signals are NaN, not a raise."""
+    from diagnosis.benchmark.plants_pam import pam
+
+    sig = pam().signals(np.array([np.inf, 1.0, 4e5, 4e5]), {})
+    assert np.isnan(sig["muscle1"]) and np.isnan(sig["muscle2"])

@@ -171,7 +171,7 @@ def _build(name: str, model: str, friction: bool) -> TruthPlant:
         # a law door's flow is its muscle's contraction rate (dl2/dt = -dl1/dt = r cos(psi) dpsi):
         # with the force added to its contraction force, extra * flow is the power into the muscle
         # side, as at a junction (a friction -z opposing it is dissipative)
-        ld = p["r"] * math.cos(x[0]) * x[1]
+        ld = p["r"] * math.cos(x[0]) * x[1] if math.isfinite(x[0]) else math.nan   # a run gone to inf
         return {"seesaw": x[1], "P1": x[2], "P2": x[3], "chamber1": x[2], "chamber2": x[3], "k_s": x[0],
                 "muscle1": ld, "muscle2": -ld}
 

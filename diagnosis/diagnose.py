@@ -172,10 +172,12 @@ def _every_place(graph, experiment):
     """Every junction, recorded input, measured output and law place of `graph`: the places tried when no
     graph location is possible (a diverging nominal has no run to linearise along)."""
     from .place import Place
-    from .law_places import law_places
+    from .law_places import acts_on, law_places
     junctions = [Place("junction", n) for n, e in graph.elements.items() if e.kind in ("0", "1")]
+    # a law acting on a junction is fitted as its companion (diagnosis.place_choice), not as a place
+    laws = [p for p in law_places(graph) if acts_on(graph, p) is None]
     return (junctions + [Place("input", n) for n in experiment.inputs]
-            + [Place("output", n) for n in experiment.outputs] + law_places(graph))
+            + [Place("output", n) for n in experiment.outputs] + laws)
 
 
 def _holdout_nrmse(sim, params, x0, judge):

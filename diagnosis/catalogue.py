@@ -151,12 +151,9 @@ class Candidate:
         values = self.values_with_guesses(values)
         graph = model_graph.copy(name=f"{model_graph.name}_{self.kind}",
                                  description=f"{model_graph.description} + {self.kind} at {self.place}".strip(" +"))
-        if self.place.kind == "law":    # the law's bond split by a junction (diagnosis.law_places)
-            from .law_places import split_law
-            graph, junction = split_law(graph, self.place)
-            graph = self.definition.build(graph, replace(self, place=Place("junction", junction)), values)
-        else:
-            graph = self.definition.build(graph, self, values)
+        from .law_places import at_junction
+        graph, at = at_junction(graph, self.place)      # a law's bond split by a junction
+        graph = self.definition.build(graph, self if at == self.place else replace(self, place=at), values)
         known = graph.parameters()      # a parameter the model has already (a C's own value) is refitted
         declared = [Param(spec.name, values[spec.name], spec.unit, spec.description)
                     for spec in self.params if spec.name not in known]
@@ -219,10 +216,9 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None, x
     """
     if place.kind == "law":
         # the junction kinds at the junction that splits the law's bond (diagnosis.law_places)
-        from .law_places import split_law
-        split, junction = split_law(graph, place)
-        return [replace(c, place=place) for c in candidates(split, Place("junction", junction),
-                                                            regime_variables=regime_variables,
+        from .law_places import at_junction
+        split, at = at_junction(graph, place)
+        return [replace(c, place=place) for c in candidates(split, at, regime_variables=regime_variables,
                                                             experiment=experiment, x0=x0)]
     site = site_of(graph, place, regime_variables=regime_variables, experiment=experiment, x0=x0)
     out = [Candidate(kind.name, place, list(prop.params), regime=prop.regime, constants=tuple(prop.constants),

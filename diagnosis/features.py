@@ -76,7 +76,7 @@ from .kinds.feature_signals import SIGN_FRACTION, FeatureSignals, dahl_state
 from .kinds.modulated_friction import modulating_signals
 from .catalogue_scales import pressure_variables
 from .errors import BondcosimError
-from .place import Place
+from .law_places import at_junction
 
 __all__ = ["KIND_FEATURES", "SIGN_FRACTION", "FEATURE_PRICE", "MAX_SELECTED", "KindEvidence", "FeatureEvidence",
            "evidence_lookup", "prune_candidates", "prefer_by_evidence",
@@ -361,11 +361,7 @@ def feature_evidence(graph, places, experiment, *, x0=None, regime_variables=Non
             continue
         d_hat = next((e for q, e in (estimates or {}).items() if (q.kind, q.name) == (p.kind, p.name)), None)
         try:
-            at_graph, at = graph, p
-            if p.kind == "law":         # the junction that splits the law's bond (diagnosis.law_places)
-                from .law_places import split_law
-                at_graph, junction = split_law(graph, p)
-                at = Place("junction", junction)
+            at_graph, at = at_junction(graph, p)     # a law: the junction that splits its bond
             ev = _evidence_at(at_graph, at, experiment, x0, regime_variables, d_hat)
         except (BondcosimError, FloatingPointError, np.linalg.LinAlgError, ValueError):
             ev = None

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 from .errors import DiagnosisError, UnknownNameError
 from .place import Place
 
-__all__ = ["LawPort", "law_ports", "law_places", "split_law", "split_laws", "acts_on"]
+__all__ = ["LawPort", "law_ports", "law_places", "split_law", "split_laws", "at_junction", "acts_on"]
 
 #: two-ports a law's effort or flow passes through unchanged but for a modulus
 _TWO_PORTS = frozenset({"TF", "GY", "MTF", "MGY"})
@@ -142,6 +142,15 @@ def split_law(graph, place: Place):
     junction = cls(port.junction, description=f"the {port.sets} law of {port.element}"
                    + (f" at its port {port.port}" if port.port else ""))
     return graph.insert_on_bond(port.bond, junction), port.junction
+
+
+def at_junction(graph, place: Place):
+    """``(graph, place)`` where a correction at `place` is a junction's: for a law place the split
+    graph and its splitting junction (:func:`split_law`), any other place unchanged."""
+    if place.kind != "law":
+        return graph, place
+    split, junction = split_law(graph, place)
+    return split, Place("junction", junction)
 
 
 def split_laws(graph, places):

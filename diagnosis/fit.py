@@ -29,6 +29,7 @@ from .catalogue_common import RELEASED, ParamSpec
 from .errors import BondcosimError, DiagnosisError
 
 __all__ = ["CandidateFit", "fit_candidate", "choose", "noise_floor", "needs_explaining", "usable_fits",
+           "single_fits_by_holdout",
            "acceptance", "PARAMETER_PRICE", "MIN_SHARE", "MIN_GAIN", "TIE"]
 
 #: relative reduction of the held-out excess error each extra parameter must buy
@@ -538,6 +539,17 @@ def needs_explaining(nominal_holdout: dict, floor: dict) -> list:
     :func:`choose`): above a tenth of the floor's square and above rounding."""
     return [o for o in nominal_holdout if nominal_holdout[o] ** 2 - floor.get(o, 0.0) ** 2
             > max(0.1 * floor.get(o, 0.0) ** 2, _EXPLAINED)]
+
+
+def single_fits_by_holdout(fits) -> list:
+    """The successful single-place fits (not twin groups) with a finite held-out error, lowest
+    held-out sum of squared NRMSEs first (the fits whose kinds are tried at twins and companions)."""
+    def err(f):
+        return float(np.sum([v ** 2 for v in f.holdout_nrmse.values()]))
+
+    singles = [f for f in fits if f.success and f.candidate is not None and not hasattr(f.candidate, "members")
+               and np.isfinite(err(f))]
+    return sorted(singles, key=err)
 
 
 def usable_fits(fits, names) -> list:

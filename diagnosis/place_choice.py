@@ -10,8 +10,6 @@ are fitted at the law too (:func:`companion_candidates`).
 """
 from __future__ import annotations
 
-import numpy as np
-
 from bondgraph.editing_inputs import expression_fields, mentions
 
 from .catalogue_common import junction_elements
@@ -103,14 +101,12 @@ def companion_candidates(fits, laws_at: dict, make_candidates) -> list:
     level follows one muscle's pressure), and a tie goes to the junction (:func:`diagnosis.fit.choose`).
 
     `fits` are the round's fits; `make_candidates(place)` lists the catalogue's candidates at a place."""
-    def err(f):
-        return float(np.sum([v ** 2 for v in f.holdout_nrmse.values()]))
+    from .fit import single_fits_by_holdout
 
+    ranked = single_fits_by_holdout(fits)
     out = []
     for junction, laws in laws_at.items():
-        at = sorted((f for f in fits if f.success and f.candidate is not None
-                     and not hasattr(f.candidate, "members") and f.candidate.place.kind == "junction"
-                     and f.candidate.place.name == junction and np.isfinite(err(f))), key=err)
+        at = [f for f in ranked if f.candidate.place.kind == "junction" and f.candidate.place.name == junction]
         best = []
         for f in at:
             key = (f.candidate.kind, f.candidate.regime)

@@ -136,15 +136,10 @@ def twin_groups(graph, fits, all_places, make_candidates, *, experiment=None, be
     `make_candidates(place)` lists the catalogue's candidates at a place; a twin joins the group
     with its candidate of the same kind (and the same target element kind, if any).
     """
-    import numpy as np
+    from .fit import single_fits_by_holdout
 
-    def err(f):
-        return float(np.sum([v ** 2 for v in f.holdout_nrmse.values()]))
-
-    singles = [f for f in fits if f.success and f.candidate is not None and not hasattr(f.candidate, "members")
-               and np.isfinite(err(f))]
     groups, seen = [], set()
-    for fit in sorted(singles, key=err):
+    for fit in single_fits_by_holdout(fits):
         if len(groups) >= best:
             break
         cand = fit.candidate

@@ -1,4 +1,4 @@
-"""The library mass-spring-damper as a hand-written truth for the diagnosis tests.
+"""The library mass-spring-damper as a hand-written truth for the diagnosis tests, and the RK4 it runs on.
 
 ``m v' = F - b v - k x - extra(x, v)``, ``x' = v`` (m = 1 kg, b = 0.4 N s/m, k = 4 N/m, the
 library's values), the force held over each sample, integrated by a classic RK4 written out here:
@@ -8,20 +8,26 @@ independent reference.
 import numpy as np
 
 
+def rk4_states(rate, t, force, *, substeps):
+    """States of x' = rate(x, F) (two states) at the sample times, from rest, F held over each
+    interval; classic RK4 written out here, not bondgraph's integrator."""
+    state, out = np.zeros(2), np.zeros((t.size, 2))
+    for i in range(t.size - 1):
+        h = (t[i + 1] - t[i]) / substeps
+        for _ in range(substeps):
+            k1 = rate(state, force[i])
+            k2 = rate(state + h / 2 * k1, force[i])
+            k3 = rate(state + h / 2 * k2, force[i])
+            k4 = rate(state + h * k3, force[i])
+            state = state + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        out[i + 1] = state
+    return out
+
+
 def msd_positions(t, force, extra=None, *, m=1.0, b=0.4, k=4.0, substeps=20):
     """Positions x(t) (m) from rest, `extra(x, v)` the concealed force (N) taken from the mass."""
     def rate(s, f):
         e = extra(s[0], s[1]) if extra is not None else 0.0
         return np.array([s[1], (f - b * s[1] - k * s[0] - e) / m])
 
-    s, x = np.zeros(2), np.zeros(t.size)
-    for i in range(t.size - 1):
-        h = (t[i + 1] - t[i]) / substeps
-        for _ in range(substeps):
-            k1 = rate(s, force[i])
-            k2 = rate(s + h / 2 * k1, force[i])
-            k3 = rate(s + h / 2 * k2, force[i])
-            k4 = rate(s + h * k3, force[i])
-            s = s + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        x[i + 1] = s[0]
-    return x
+    return rk4_states(rate, t, force, substeps=substeps)[:, 0]

@@ -10,6 +10,7 @@ from diagnosis.fit import noise_floor
 from diagnosis.recording import Experiment
 from diagnosis.residuals import OutputSimulator, residuals
 from diagnosis.segments import Judge, choose_judge, drifting_mode, plan_segments
+from msd_truth import rk4_states
 from plants import build
 
 FS = 100.0      # Hz
@@ -18,22 +19,6 @@ SIGMA = 1e-3    # m, position noise
 MASS = 20.0     # kg, the library carriage
 FC = 1.5        # N, the concealed Coulomb level (carriage)
 V_SMOOTH = 0.01  # m/s, width of the truth's smoothed sign
-
-
-def _rk4(rate, t, force, substeps=10):
-    """States of x' = rate(x, F) at the sample times, F held over each interval; classic RK4
-    written out here (not bondgraph's), from rest."""
-    state, out = np.zeros(2), np.zeros((t.size, 2))
-    for i in range(t.size - 1):
-        h = (t[i + 1] - t[i]) / substeps
-        for _ in range(substeps):
-            k1 = rate(state, force[i])
-            k2 = rate(state + h / 2 * k1, force[i])
-            k3 = rate(state + h / 2 * k2, force[i])
-            k4 = rate(state + h * k3, force[i])
-            state = state + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        out[i + 1] = state
-    return out
 
 
 def _carriage_rate(fc):
@@ -56,13 +41,13 @@ def _write(path, t, force, x, seed):
 def _carriage_recording(path, fc, seed=1):
     t = np.arange(0.0, SPAN, 1.0 / FS)
     force = 6.0 * np.sin(2 * np.pi * 0.4 * t) + 3.0 * np.sin(2 * np.pi * 1.1 * t + 1.0)
-    return _write(path, t, force, _rk4(_carriage_rate(fc), t, force)[:, 0], seed)
+    return _write(path, t, force, rk4_states(_carriage_rate(fc), t, force, substeps=10)[:, 0], seed)
 
 
 def _msd_recording(path, fc, seed=2):
     t = np.arange(0.0, SPAN, 1.0 / FS)
     force = 2.0 * np.sin(2 * np.pi * 0.3 * t) + np.sin(2 * np.pi * 0.7 * t + 1.0)
-    return _write(path, t, force, _rk4(_msd_rate(fc), t, force, substeps=4)[:, 0], seed)
+    return _write(path, t, force, rk4_states(_msd_rate(fc), t, force, substeps=4)[:, 0], seed)
 
 
 BIND = dict(inputs=["F=F:N"], outputs=["x=x:m"])
@@ -157,7 +142,7 @@ def _judge_of(path, model="carriage", x0=REST):
 def test_a_sensor_gain_on_a_carriage_is_no_drift(tmp_path):
     t = np.arange(0.0, SPAN, 1.0 / FS)
     force = 6.0 * np.sin(2 * np.pi * 0.4 * t) + 3.0 * np.sin(2 * np.pi * 1.1 * t + 1.0)
-    x = _rk4(_carriage_rate(0.0), t, force)[:, 0]
+    x = rk4_states(_carriage_rate(0.0), t, force, substeps=10)[:, 0]
     judge, judged = _judge_of(_write(tmp_path / "gain.csv", t, force, 1.1 * x, 3))
     # a restart absorbs most of a 10 % position gain, but an
     # offset and gain fitted on the training part take all of it away: open-loop stays the judge

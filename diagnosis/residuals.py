@@ -33,7 +33,9 @@ __all__ = ["OutputSimulator", "SimRun", "input_matrix", "simulate_outputs", "nrm
            "Residuals", "residuals"]
 
 _RK4_ACCURACY = 0.5       # h * |lambda_max| per sub-step for smooth models
-_MAX_SUBSTEPS = 1000      # per sample interval
+#: RK4 sub-steps per sample interval beyond which a smooth model is integrated by the
+#: linearly implicit ROS2 instead (:mod:`bondgraph.numerics.evaluate_stiff`)
+_STIFF_SUBSTEPS = 1000
 
 
 @dataclass
@@ -249,11 +251,19 @@ class OutputSimulator:
         d = np.ascontiguousarray(np.tile(m.default_held, (n, 1)))
         h_max = min(self._sub_step(x_init, P[i:i + 1]) for i in range(n))
         subs = np.maximum(1, np.ceil(self._dt / h_max - 1e-9)).astype(int)
-        if subs.max() > _MAX_SUBSTEPS:
+        if subs.max() <= _STIFF_SUBSTEPS:
+            X, D = m.rk4_samples(self.t, self.U, subs, x, d, P)
+            most = int(subs.max())
+        elif self.equations.is_smooth:
+            # a fast mode RK4 would have to resolve (a smoothed Coulomb friction at rest, a
+            # damper across a stiff gear): the L-stable linearly implicit ROS2 steps over it
+            from bondgraph.numerics.evaluate_stiff import ros2_samples
+            X, D, most = ros2_samples(m, self.t, self.U, x, d, P)
+        else:
             raise SimulationError(f"model {self.equations.name!r}: {subs.max()} RK4 sub-steps of "
-                                  f"{h_max:.3g} s per sample interval needed (stiff model or sparse "
-                                  "samples); resample the recording", time=float(self.t[0]))
-        X, D = m.rk4_samples(self.t, self.U, subs, x, d, P)
+                                  f"{h_max:.3g} s per sample interval needed (stiff model with held "
+                                  "variables, or sparse samples); resample the recording",
+                                  time=float(self.t[0]))
         runs = []
         for i in range(n):
             Xi, Di = np.ascontiguousarray(X[:, i]), np.ascontiguousarray(D[:, i])
@@ -267,8 +277,7 @@ class OutputSimulator:
             Y = (m.h(Xi, self.U, t=self.t, p=P[i:i + 1], d=Di) if m.output_names
                  else np.empty((self.t.size, 0)))
             outputs = {nm: Y[:, j].copy() for nm, j in zip(self.output_names, self._out_idx)}
-            runs.append(SimRun(self.t, Xi, self.U, outputs, m.state_names, m.input_names,
-                               int(subs.max())))
+            runs.append(SimRun(self.t, Xi, self.U, outputs, m.state_names, m.input_names, most))
         return runs
 
     def __call__(self, params=None, x0=None) -> dict:

@@ -1,0 +1,92 @@
+"""The linearly implicit ROS2 path (bondgraph.numerics.evaluate_stiff) against independent
+references: the mass-spring-damper's analytic step response (second-order convergence) and
+scipy's Radau on a mass with a sharply smoothed Coulomb friction, a model the RK4 path cannot
+afford (it would need thousands of sub-steps per sample)."""
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from bondgraph import R
+from bondgraph.numerics.evaluate_stiff import ros2_samples
+from diagnosis.errors import SimulationError
+from diagnosis.recording import Experiment
+from diagnosis.residuals import OutputSimulator
+from plants import library
+from plants.library import mass_spring_damper
+
+
+def _msd_step(t):
+    """x(t) of m x'' + b x' + k x = 1 from rest (m = 1, b = 0.4, k = 4), analytic."""
+    wn, zeta = 2.0, 0.1
+    wd = wn * np.sqrt(1 - zeta ** 2)
+    return (1 - np.exp(-zeta * wn * t) * (np.cos(wd * t) + zeta * wn / wd * np.sin(wd * t))) / 4.0
+
+
+def _ros2_position(n):
+    t = np.linspace(0.0, 2.0, n)
+    exp = Experiment(t, {"F": np.ones_like(t)}, {"x": t}, {"F": "N", "x": "m"})
+    m = OutputSimulator(library.build("mass-spring-damper"), exp).model
+    P = m.param_vector(None).reshape(1, -1)
+    X, _, most = ros2_samples(m, t, np.ones((n, 1)), m.default_state.reshape(1, -1),
+                              m.default_held.reshape(1, -1), P)
+    return m.h(X[:, 0], np.ones((n, 1)), t=t, p=P)[:, m.output_index["x"]], t, most
+
+
+def test_ros2_converges_at_second_order_to_the_analytic_step_response():
+    errors = []
+    for n in (201, 401, 801):
+        x, t, most = _ros2_position(n)
+        assert most == 1                      # |lambda| dt = 0.02 and less: one sub-step
+        errors.append(np.max(np.abs(x - _msd_step(t))))
+    assert errors[0] < 1e-3                   # of a 0.37 m response, 10 ms steps
+    ratios = np.array(errors[:-1]) / np.array(errors[1:])
+    np.testing.assert_allclose(ratios, 4.0, rtol=0.1)
+
+
+def _sticky_mass(eps):
+    g = mass_spring_damper(b=0.4)
+    g.add(R("seal", effort="Fc*tanh(f/eps)", params={"Fc": 0.3, "eps": eps}, domain="translation"))
+    g.connect("v_mass", "seal")
+    return g
+
+
+def _radau_reference(t, force, eps):
+    """The same plant (m = 1, b = 0.4, k = 4, seal 0.3 tanh(v/eps)) by scipy's Radau, the force
+    held over each sample."""
+    x, out = np.zeros(2), [0.0]
+    for k in range(t.size - 1):   # one solve per held interval: no kink inside a step
+        sol = solve_ivp(lambda time, s: [s[1], force[k] - 0.4 * s[1] - 4.0 * s[0] - 0.3 * np.tanh(s[1] / eps)],
+                        (t[k], t[k + 1]), x, method="Radau", rtol=1e-9, atol=1e-12)
+        x = sol.y[:, -1]
+        out.append(x[0])
+    return np.array(out)
+
+
+def test_a_sharp_coulomb_friction_runs_on_ros2_and_matches_radau():
+    eps = 1e-5                               # m/s: a slope of 3e4 N s/m at rest
+    t = np.linspace(0.0, 3.0, 301)
+    force = 1.2 * np.sin(2 * np.pi * 0.7 * t)
+    exp = Experiment(t, {"F": force}, {"x": np.zeros_like(t)}, {"F": "N", "x": "m"})
+    run = OutputSimulator(_sticky_mass(eps), exp).run()
+    assert run.substeps < 1000              # RK4 would need 0.5 / 3e4 s sub-steps: 600 per sample
+    reference = _radau_reference(t, force, eps)
+    spread = np.ptp(reference)
+    assert np.max(np.abs(run.outputs["x"] - reference)) < 0.01 * spread
+
+
+def test_a_smooth_model_keeps_rk4_where_it_is_cheap():
+    t = np.linspace(0.0, 2.0, 201)
+    exp = Experiment(t, {"F": np.ones_like(t)}, {"x": t}, {"F": "N", "x": "m"})
+    run = OutputSimulator(library.build("mass-spring-damper"), exp).run()
+    np.testing.assert_allclose(run.outputs["x"], _msd_step(t), atol=1e-6)   # RK4's accuracy
+
+
+def test_a_diverging_stiff_model_names_its_state_and_time():
+    g = mass_spring_damper(b=0.4)
+    g.add(R("seal", effort="-Fc*tanh(f/eps) - c*f**3", params={"Fc": 0.3, "eps": 1e-7, "c": 50.0},
+            domain="translation"))
+    g.connect("v_mass", "seal")
+    t = np.linspace(0.0, 3.0, 301)
+    exp = Experiment(t, {"F": np.ones_like(t)}, {"x": np.zeros_like(t)}, {"F": "N", "x": "m"})
+    with pytest.raises(SimulationError, match=r"non-finite state\(s\) .* at t = .* \(linearly implicit ROS2\)"):
+        OutputSimulator(g, exp).run()

@@ -11,6 +11,9 @@ them), and each interval is integrated by the compiled classic RK4 of
   the largest eigenvalue modulus of :math:`\\partial f/\\partial x` at the
   initial point (RK4 stays accurate for :math:`h|\\lambda| \\le 0.5`).
 
+A smooth model that would need more than ``_STIFF_SUBSTEPS`` (1000) such sub-steps per sample
+runs on the L-stable linearly implicit ROS2 of :mod:`bondgraph.numerics.evaluate_stiff` instead.
+
 This is the fixed-step scheme of :func:`bondgraph.numerics.simulate` with the sample
 intervals of the recording as output intervals, uneven sampling included;
 unlike ``simulate`` it does not restart an adaptive solver at every table
@@ -52,7 +55,7 @@ class SimRun:
     outputs : dict str -> ndarray, shape (n,)
     state_names, input_names : tuple of str
     substeps : int
-        RK4 sub-steps per (longest) sample interval.
+        Most sub-steps of a sample interval (RK4, or ROS2 for a stiff smooth model).
     """
 
     t: np.ndarray

@@ -398,7 +398,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
 def _features(graph, scores, places, train, x0, rv, cands, say, label):
     """The feature regression at the junction places (:mod:`diagnosis.features`) and the
     candidates it leaves to fit: ``(evidence by place, candidates kept, candidates pruned)``."""
-    from .features import feature_evidence, prune_candidates
+    from .features import feature_evidence, prune_candidates, with_feature_starts
     junctions = [p for p in places if p.kind in ("junction", "law")]
     if not junctions or not scores:       # no location (a diverging nominal): nothing to regress
         return {}, cands, []
@@ -406,7 +406,7 @@ def _features(graph, scores, places, train, x0, rv, cands, say, label):
     evidence = feature_evidence(graph, junctions, train, x0=x0, regime_variables=rv,
                                 estimates={s.place: s.estimate for s in scores})
     kept, pruned = prune_candidates(cands, evidence)
-    return evidence, kept, [str(c) for c in pruned]
+    return evidence, with_feature_starts(kept, evidence), [str(c) for c in pruned]
 
 
 def _choose(reference, fits, floor, evidence, res, exp, train, not_open_loop):

@@ -79,7 +79,7 @@ from .errors import BondcosimError
 from .law_places import at_junction
 
 __all__ = ["KIND_FEATURES", "SIGN_FRACTION", "FEATURE_PRICE", "MAX_SELECTED", "KindEvidence", "FeatureEvidence",
-           "evidence_lookup", "prune_candidates", "prefer_by_evidence",
+           "evidence_lookup", "prune_candidates", "with_feature_starts", "prefer_by_evidence",
            "feature_evidence", "regress_kinds", "dahl_state"]
 
 #: kind -> (junction kinds it applies at, the feature columns in words, the parameters it is
@@ -484,6 +484,36 @@ def prune_candidates(cands: list, evidence: dict) -> tuple[list, list]:
         left, best_left = 1.0 - ev.excess_share, max(1.0 - best.excess_share, 0.0)
         (dropped if left > max(PRUNE_FACTOR * best_left, PRUNE_FLOOR) else keep).append(cand)
     return keep, dropped
+
+
+def with_feature_starts(cands: list, evidence: dict) -> list:
+    """`cands`, each with one more start where its kind's feature coefficients estimate its
+    leading parameters (``Kind.feature_params``: a Coulomb level from ``sign(v)``, a viscous
+    coefficient from ``v``, a leak conductance from ``e - P_amb``), clipped to their bounds.
+
+    The catalogue's guesses scale with the junction's effort (10 % of it for a friction level);
+    a friction a million times smaller (a frictionless joint's seal) starts decades away from
+    them, where the fit stalls and is given up (:mod:`diagnosis.fit_in_turn`).  The regression
+    on the located estimate has already measured the level."""
+    from dataclasses import replace
+
+    from .kinds import REGISTRY
+    lookup = evidence_lookup(evidence)
+    out = []
+    for cand in cands:
+        kind = REGISTRY.get(cand.kind)
+        n = getattr(kind, "feature_params", 0)
+        ev = lookup(cand) if n and not hasattr(cand, "members") else None
+        if ev is None:
+            out.append(cand)
+            continue
+        coef = [ev.coefficients.get(name) for name in kind.feature_names[:n]]
+        if not all(c is not None and np.isfinite(c) for c in coef):
+            out.append(cand)
+            continue
+        start = {spec.name: float(np.clip(c, spec.lower, spec.upper)) for spec, c in zip(cand.params, coef)}
+        out.append(replace(cand, starts=tuple(cand.starts) + (start,)))
+    return out
 
 
 def prefer_by_evidence(default, near: list, lookup):

@@ -159,3 +159,24 @@ def test_diagnose_reports_the_feature_regression(tmp_path):
     assert features["place"] == "junction v_mass" and features["selected"] == ["coulomb_friction"]
     assert features["kinds"][0]["coefficients"]["sign(v)"] == pytest.approx(0.3, rel=0.05)
     assert "Feature regression at junction v_mass" in report.text
+
+
+def test_feature_coefficients_start_the_fits_of_the_kinds_they_estimate():
+    """with_feature_starts: a Coulomb level from sign(v), a viscous coefficient from v, clipped to
+    the parameter's bounds; a kind whose parameters the features do not give is left alone."""
+    from diagnosis.catalogue import candidates
+    from diagnosis.features import with_feature_starts
+    from plants import library
+    graph = library.build("mass-spring-damper")
+    ev = _evidence(lambda x, v: 0.3 * np.tanh(v / 0.01), seed=1)
+    cands = candidates(graph, PLACE, experiment=_truth(lambda x, v: 0.3 * np.tanh(v / 0.01), seed=1))
+    started = {c.kind: c for c in with_feature_starts(cands, {PLACE: ev})}
+    before = {c.kind: c for c in cands}
+    coulomb = started["coulomb_friction"]
+    assert coulomb.starts[:-1] == before["coulomb_friction"].starts
+    assert coulomb.starts[-1] == {coulomb.params[0].name: pytest.approx(0.3, rel=0.05)}
+    viscous = started["viscous_friction"].starts[-1]
+    spec = started["viscous_friction"].params[0]
+    assert viscous == {spec.name: float(np.clip(_by_kind(ev)["viscous_friction"].coefficients["v"],
+                                                spec.lower, spec.upper))}
+    assert started["hysteresis"].starts == before["hysteresis"].starts

@@ -112,6 +112,10 @@ class Kind:
     #: the parameters its feature group is priced by (the candidate's; a grid choice such as a
     #: Stribeck velocity counting as one)
     feature_price: ClassVar[int] = 0
+    #: how many leading parameters the feature coefficients estimate directly, in
+    #: :attr:`feature_names` order (a level from ``sign(v)``, a coefficient from ``v``): each
+    #: candidate's fit also starts there (:func:`diagnosis.features.with_feature_starts`)
+    feature_params: ClassVar[int] = 0
     #: the simpler kinds this one extends: simpler kind -> {own parameter index: the simpler's
     #: parameter index}; the other parameters at 0 reduce this law to the simpler one
     #: (:meth:`start_from`)

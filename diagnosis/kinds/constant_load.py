@@ -23,6 +23,7 @@ class ConstantLoad(Kind):
     name = "constant_load"
     doors = ("1", "0")
     feature_doors, feature_names, feature_price = "01", ("1",), 1
+    feature_params = 1
 
     def features(self, s):
         return [FeatureGroup(None, "", ["1"], np.ones((s.t.size, 1)))]

@@ -12,6 +12,7 @@ class CoulombFriction(Kind):
     name = "coulomb_friction"
     doors = ("1",)
     feature_doors, feature_names, feature_price = "1", ("sign(v)",), 1
+    feature_params = 1
 
     def features(self, s):
         return [FeatureGroup(None, "", ["sign(v)"], s.sign[:, None])]

@@ -16,6 +16,7 @@ class CoulombViscousFriction(Kind):
     name = "coulomb_viscous_friction"
     doors = ("1",)
     feature_doors, feature_names, feature_price = "1", ("sign(v)", "v"), 2
+    feature_params = 2
     nests = {"coulomb_friction": {0: 0}, "viscous_friction": {1: 0}}
 
     def features(self, s):

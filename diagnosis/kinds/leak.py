@@ -20,6 +20,7 @@ class Leak(Kind):
     name = "leak"
     doors = ("0",)
     feature_doors, feature_names, feature_price = "0", ("e - P_amb",), 1
+    feature_params = 1
 
     def features(self, s):
         e = np.asarray(s.values["effort"], float)

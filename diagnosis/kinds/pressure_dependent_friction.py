@@ -20,6 +20,7 @@ class PressureDependentFriction(Kind):
     name = "pressure_dependent_friction"
     doors = ("1",)
     feature_doors, feature_names, feature_price = "1", ("sign(v)", "(P - P_mean) sign(v)"), 2
+    feature_params = 2
     nests = {"coulomb_friction": {0: 0}}
 
     def features(self, s):

@@ -20,6 +20,7 @@ class StribeckFriction(Kind):
     name = "stribeck_friction"
     doors = ("1",)
     feature_doors, feature_names, feature_price = "1", ("sign(v)", "exp(-(v/v_s)^2) sign(v)"), 3
+    feature_params = 2
     nests = {"coulomb_friction": {0: 0}}
 
     def features(self, s):

@@ -11,6 +11,7 @@ class ViscousFriction(Kind):
     name = "viscous_friction"
     doors = ("1",)
     feature_doors, feature_names, feature_price = "1", ("v",), 1
+    feature_params = 1
 
     def features(self, s):
         return [FeatureGroup(None, "", ["v"], s.v[:, None])]

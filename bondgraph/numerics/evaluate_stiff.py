@@ -36,6 +36,7 @@ from ..errors import SimulationError
 
 __all__ = ["ros2_samples", "MAX_SUBSTEPS", "ACCURACY"]
 
+#: ROS2's gamma: 1 + 1/sqrt(2) makes it L-stable
 GAMMA = 1.0 + 1.0 / np.sqrt(2.0)
 #: h |lambda| per sub-step for the modes a step follows (second order: a fifth of RK4's 0.5)
 ACCURACY = 0.1
@@ -49,8 +50,6 @@ def _sub_step_count(J, dt: float) -> int:
     turning = (np.abs(lam.imag) >= 0.5 * np.abs(lam.real)) & (np.abs(lam) <= np.pi / dt)
     followed = lam[turning | (lam.real > 0)]
     fastest = float(np.max(np.abs(followed))) if followed.size else 0.0
-    if not np.isfinite(fastest):
-        return 1
     return int(min(max(np.ceil(dt * fastest / ACCURACY - 1e-9), 1), MAX_SUBSTEPS))
 
 
@@ -82,7 +81,7 @@ def ros2_samples(model, t, U, x, d, p):
     Raises
     ------
     SimulationError
-        A non-finite state (named, with the time).
+        A non-finite state (named, with the time) or Jacobian.
     """
     x = np.array(x, dtype=float)
     n = x.shape[0]
@@ -96,18 +95,17 @@ def ros2_samples(model, t, U, x, d, p):
         dt, tk = float(t[k + 1] - t[k]), float(t[k])
         with np.errstate(all="ignore"):        # a run leaving the finite numbers is named below
             J = model.jac_x(x, u, t=tk, p=p, d=d)
-            finite = np.isfinite(J).all()
-            m = _sub_step_count(J, dt) if finite else 1
+            if not np.isfinite(J).all():
+                raise SimulationError(f"model {model.equations.name!r}: non-finite Jacobian of the state "
+                                      f"derivatives at t = {tk:.6g} s (linearly implicit ROS2)", time=tk)
+            m = _sub_step_count(J, dt)
             h = dt / m
-            if finite:
-                Winv = np.linalg.inv(eye - (GAMMA * h) * J)
-            for _ in range(m if finite else 0):
+            Winv = np.linalg.inv(eye - (GAMMA * h) * J)
+            for _ in range(m):
                 k1 = np.einsum("nij,nj->ni", Winv, model.f(x, u, t=tk, p=p, d=d))
                 k2 = np.einsum("nij,nj->ni", Winv, model.f(x + h * k1, u, t=tk, p=p, d=d) - 2.0 * k1)
                 x = x + 1.5 * h * k1 + 0.5 * h * k2
                 tk += h
-            if not finite:
-                x = np.where(np.isfinite(x), np.nan, x)
         if not np.isfinite(x).all():
             bad = [nm for nm, v in zip(model.state_names, x.T) if not np.isfinite(v).all()]
             raise SimulationError(f"model {model.equations.name!r}: non-finite state(s) {', '.join(bad)} "

@@ -114,6 +114,12 @@ class Candidate:
         """Starting values by parameter name."""
         return {p.name: p.guess for p in self.params}
 
+    def with_starts(self, starts) -> "Candidate":
+        """This candidate with the fit starts `starts` (dicts name -> value) after its own; itself
+        when there are none."""
+        starts = tuple(starts)
+        return replace(self, starts=tuple(self.starts) + starts) if starts else self
+
     def values_with_guesses(self, values=None) -> dict[str, float]:
         """`values` completed with the guesses; unknown names raise UnknownNameError."""
         values = dict(values or {})

@@ -65,6 +65,10 @@ class ParamSpec:
             raise DiagnosisError(f"parameter {self.name!r}: need lower < upper and lower <= guess <= upper, "
                                  f"got {self.lower} <= {self.guess} <= {self.upper} {self.unit}")
 
+    def clipped(self, value: float) -> float:
+        """`value` within the bounds."""
+        return float(min(max(value, self.lower), self.upper))
+
 
 def fresh_name(taken, base: str) -> str:
     """`base`, or `base_2`, `base_3`... whichever is not in `taken`."""

@@ -495,25 +495,18 @@ def with_feature_starts(cands: list, evidence: dict) -> list:
     a friction a million times smaller (a frictionless joint's seal) starts decades away from
     them, where the fit stalls and is given up (:mod:`diagnosis.fit_in_turn`).  The regression
     on the located estimate has already measured the level."""
-    from dataclasses import replace
-
-    from .kinds import REGISTRY
     lookup = evidence_lookup(evidence)
-    out = []
-    for cand in cands:
-        kind = REGISTRY.get(cand.kind)
-        n = getattr(kind, "feature_params", 0)
-        ev = lookup(cand) if n and not hasattr(cand, "members") else None
-        if ev is None:
-            out.append(cand)
-            continue
-        coef = [ev.coefficients.get(name) for name in kind.feature_names[:n]]
-        if not all(c is not None and np.isfinite(c) for c in coef):
-            out.append(cand)
-            continue
-        start = {spec.name: float(np.clip(c, spec.lower, spec.upper)) for spec, c in zip(cand.params, coef)}
-        out.append(replace(cand, starts=tuple(cand.starts) + (start,)))
-    return out
+
+    def started(cand):
+        kind = getattr(cand, "definition", None)            # a group of twins has none
+        n = kind.feature_params if kind is not None else 0
+        ev = lookup(cand) if n else None
+        coef = [ev.coefficients.get(name) for name in kind.feature_names[:n]] if ev is not None else []
+        if not coef or not all(c is not None and np.isfinite(c) for c in coef):
+            return cand
+        return cand.with_starts([{spec.name: spec.clipped(c) for spec, c in zip(cand.params, coef)}])
+
+    return [started(c) for c in cands]
 
 
 def prefer_by_evidence(default, near: list, lookup):

@@ -80,8 +80,6 @@ def nested_starts(cand, fits):
     than the Coulomb fit.  From its own guesses it may start ten times above that fit's
     training cost and be given up as hopeless (the benchmark's pam Coulomb + viscous case was
     answered Coulomb so).  Groups of twins are returned unchanged."""
-    from dataclasses import replace
-
     if hasattr(cand, "members") or not hasattr(cand, "definition"):
         return cand
     starts = []
@@ -92,7 +90,7 @@ def nested_starts(cand, fits):
             start = cand.definition.start_from(cand, simpler, fit.values)
             if start is not None:
                 starts.append(start)
-    return replace(cand, starts=tuple(cand.starts) + tuple(starts)) if starts else cand
+    return cand.with_starts(starts)
 
 
 def _outcome(fit) -> str:

@@ -157,7 +157,7 @@ class Kind:
                 value = values.get(simpler.params[mapping[i]].name, spec.guess)
             else:
                 value = 0.0 if spec.lower <= 0.0 <= spec.upper else spec.guess
-            start[spec.name] = float(min(max(value, spec.lower), spec.upper))
+            start[spec.name] = spec.clipped(value)
         return start
 
     def features(self, signals) -> list:

@@ -84,14 +84,18 @@ class LinearisedResponse:
             A[:, :, j], self.C[:, :, j] = self._partials(X, U, t, X, j, 1e-5, states=True)
         self.Phi, self.Gamma = _discretise(A[:-1], self.B[:-1], np.diff(t))
 
-    def _fh(self, x, u, t):
-        """f and the chosen outputs h, with held variables re-evaluated at (x, u): a held law
-        (Kikuuwe friction) is a function of the state over a sub-step, so its slope belongs in
-        the linearisation (stiction acts as a very stiff damper there)."""
+    def _fh(self, x, u, t, held_at=None):
+        """f and the chosen outputs h, with held variables re-evaluated at (x, `held_at` or u): a
+        held law (Kikuuwe friction) is a function of the state over a sub-step, so its slope
+        belongs in the linearisation (stiction acts as a very stiff damper there).  An input
+        perturbation keeps the held law at the nominal inputs (`held_at`): a friction that sees
+        an extra effort at its junction (the correction input) would switch between stick and
+        slip within the difference step, and its slope there is the jump over the step."""
         m, p = self._m, self._p
         d = None
         if m.held_names:
-            d = m.update_held(x, u, t=t, p=p, step=float(m.equations.fixed_step or 0.0))
+            d = m.update_held(x, u if held_at is None else held_at, t=t, p=p,
+                              step=float(m.equations.fixed_step or 0.0))
         f = m.f(x, u, t=t, p=p, d=d) if x.shape[1] else np.zeros((x.shape[0], 0))
         return f, m.h(x, u, t=t, p=p, d=d)[:, self._jy]
 
@@ -101,8 +105,8 @@ class LinearisedResponse:
         plus, minus = which.copy(), which.copy()
         plus[:, j] += delta
         minus[:, j] -= delta
-        fp, hp = self._fh(plus, U, t) if states else self._fh(X, plus, t)
-        fm, hm = self._fh(minus, U, t) if states else self._fh(X, minus, t)
+        fp, hp = self._fh(plus, U, t) if states else self._fh(X, plus, t, held_at=U)
+        fm, hm = self._fh(minus, U, t) if states else self._fh(X, minus, t, held_at=U)
         clean = lambda a: np.nan_to_num(a, nan=0.0, posinf=0.0, neginf=0.0)   # noqa: E731
         return clean((fp - fm) / (2 * delta)), clean((hp - hm) / (2 * delta))
 

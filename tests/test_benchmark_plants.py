@@ -215,3 +215,29 @@ def test_truth_plants_import_neither_bondgraph_nor_the_catalogue():
                 continue
             for root in roots:
                 assert not root.startswith(("bondgraph", "diagnosis.catalogue", "..")), (name, root)
+
+
+def test_pam_friction_sees_an_effort_added_at_the_seesaw():
+    """Kikuuwe's velocity predictor (eq. (10)) takes every torque on the joint but friction: a
+    load torque added to the library graph at the seesaw (an Se bonded there, as a diagnosis
+    candidate is) must enter it exactly as the truth's hand-written extra torque does.  A
+    predictor that missed it would let the load creep a joint that stiction holds."""
+    from bondgraph.elements import Se
+
+    load = 0.03          # N m: of the order of the joint's friction, so the joint sticks and slips
+
+    class Load(NoEffect):
+        def extra(self, sig, u, z):
+            return {"seesaw": load}, np.zeros(0)
+
+    truth_plant = pam()
+    t = np.arange(0.0, 1.0 + 0.5e-3, 1e-3)
+    u = random_inputs(truth_plant, t, seed=3)
+    truth = simulate_truth(truth_plant, t, u, Load())
+    graph = library.build("pam").insert(Se("load", load, domain="rotation"), at="seesaw")
+    res = simulate(graph, (0.0, t[-1]), inputs={k: (t, v) for k, v in u.items()},
+                   output_interval=1e-3, x0=truth_plant.nominal_x0)
+    nominal = simulate_truth(truth_plant, t, u)
+    for o in ("psi", "tau"):
+        assert np.max(np.abs(truth[o] - res[o])) < 1e-9 * np.std(truth[o])
+        assert np.max(np.abs(truth[o] - nominal[o])) > 1e-2 * np.std(truth[o])   # the load shows

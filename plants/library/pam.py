@@ -258,7 +258,10 @@ def _friction() -> EquationElement:
            f"(w/{z}, True))")
     named = {
         "F_1": _force(1, "q_psi"), "F_2": _force(2, "q_psi"),
-        "w": f"f_shaft + {z}*(r*cos(q_psi)*(F_1 - F_2) - k_s*q_psi)",   # velocity predictor
+        # velocity predictor: every torque on the seesaw but friction is e_J + T_f (J's effort
+        # with the held friction added back), so an effort attached to the seesaw later (a load,
+        # another friction) is in it too; for this graph it is r cos(psi) (F_1 - F_2) - k_s psi
+        "w": f"f_shaft + {z}*(e_J + T_f)",
         "T_s": "r_p*mu_s*Abs(F_1 + F_2 - M*g)",                          # shaft Coulomb
         "T_p": f"mu_p*(1/Max(P_1 - P_out, {DP_CLAMP!r})**2 + 1/Max(P_2 - P_out, {DP_CLAMP!r})**2)",
         "F_c": "T_s + T_p",

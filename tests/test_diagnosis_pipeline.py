@@ -17,7 +17,7 @@ SPAN = 20.0        # s
 SIGMA = 5e-3       # m, position-sensor noise
 QUANTUM = 1e-3     # m, position-sensor resolution
 FC = 0.3           # N, the concealed Coulomb level
-V_SMOOTH = 0.1     # m/s, width of the smoothed sign of the truth's friction
+V_SMOOTH = 0.01    # m/s, width of the truth friction's smoothed sign: sharp, 0.5 % of the RMS speed
 
 
 def _truth_positions(t, force, *, fc):

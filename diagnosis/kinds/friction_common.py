@@ -3,8 +3,13 @@ parameter and its starts, the units, and the R element with a friction law.
 
 The sign of the flow is smoothed, :math:`\\tanh(f / v_\\varepsilon)`, so the model stays smooth
 (variable-step integration, Model-Exchange FMU); :math:`v_\\varepsilon` is fixed (not fitted) at
-5 % of the RMS flow of the nominal simulation at the junction, so the friction reaches 76 % of its
-level at 5 % of the typical speed.
+1 % of the RMS flow of the nominal simulation at the junction, so the friction reaches 76 % of its
+level at 1 % of the typical speed.  A dry friction is a sign: the smoothing is numerical, and it
+is kept as small as the integrators afford.  At 5 % the smoothed law was a visibly different
+curve: near rest it acts as a damper of slope :math:`F_c/v_\\varepsilon`, and a sharp Coulomb
+friction then fitted better as a stiff Dahl hysteresis, a Stribeck peak worse than no friction
+at all.  The slope at rest this sharpness costs is a real decaying mode, which the ROS2 path
+(:mod:`bondgraph.numerics.evaluate_stiff`) steps over.
 """
 from __future__ import annotations
 
@@ -17,7 +22,7 @@ __all__ = ["V_EPS_FRACTION", "smoothing_flow", "namer", "level", "viscous", "wit
            "friction_r", "displacement_unit"]
 
 #: smoothing velocity of the sign, as a fraction of the RMS junction flow
-V_EPS_FRACTION = 0.05
+V_EPS_FRACTION = 0.01
 
 
 def namer(site):

@@ -90,3 +90,30 @@ def test_a_diverging_stiff_model_names_its_state_and_time():
     exp = Experiment(t, {"F": np.ones_like(t)}, {"x": np.zeros_like(t)}, {"F": "N", "x": "m"})
     with pytest.raises(SimulationError, match=r"non-finite state\(s\) .* at t = .* \(linearly implicit ROS2\)"):
         OutputSimulator(g, exp).run()
+
+
+def test_the_c_sub_steps_are_the_python_loop():
+    """bondgraph.numerics.evaluate_stiff_c takes the same ROS2 sub-steps as the Python loop: a
+    batch of three parameter sets (one shared input row per sample, a time-varying force) of a
+    stiff spring (a 32 Hz mode below the 50 Hz Nyquist frequency: 20 sub-steps per sample) with
+    a seal friction, and of the exoskeleton's drive, to rounding.  (The seal is smoothed over
+    1 cm/s: a sharper one makes the stick phases amplify rounding, the sums' order included.)"""
+    from bondgraph.numerics.evaluate_stiff_c import c_derivative
+    stiff = mass_spring_damper(b=0.4, k=4e4)
+    stiff.add(R("seal", effort="Fc*tanh(f/eps)", params={"Fc": 0.3, "eps": 1e-2}, domain="translation"))
+    stiff.connect("v_mass", "seal")
+    for graph, fewest in ((stiff, 20), (library.build("exoskeleton"), 1)):
+        t = np.linspace(0.0, 0.5, 51)
+        m = OutputSimulator(graph, Experiment(t, {}, {}, {})).model
+        if c_derivative(m) is None:
+            pytest.skip("no C compiler: the Python loop is the only path")
+        U = np.tile(m.default_inputs, (t.size, 1))
+        U[:, 0] += 1.2 * np.sin(2 * np.pi * 3.0 * t)          # the first input, whatever it is
+        P = m.param_vector(None) * np.array([[1.0], [1.3], [0.7]])
+        x0, d0 = np.tile(m.default_state, (3, 1)), np.tile(m.default_held, (3, 1))
+        X_c, _, most_c = ros2_samples(m, t, U, x0, d0, P)
+        X_py, _, most_py = ros2_samples(m, t, U, x0, d0, P, use_c=False)
+        assert most_c == most_py >= fewest
+        assert np.ptp(X_py[:, 1] - X_py[:, 0]) > 0              # the rows differ
+        scale = np.maximum(np.max(np.abs(X_py), axis=(0, 1)), 1e-9)   # a state that stays at 0
+        assert np.max(np.abs(X_c - X_py) / scale) < 1e-12, graph.name

@@ -53,7 +53,7 @@ def _sub_step_count(J, dt: float) -> int:
     return int(min(max(np.ceil(dt * fastest / ACCURACY - 1e-9), 1), MAX_SUBSTEPS))
 
 
-def ros2_samples(model, t, U, x, d, p):
+def ros2_samples(model, t, U, x, d, p, *, use_c: bool = True):
     """Integrate a batch over the sample intervals of `t` with ROS2 (module docstring).
 
     Parameters
@@ -70,6 +70,10 @@ def ros2_samples(model, t, U, x, d, p):
         Held values (constant).
     p : ndarray, shape (1 or n_batch, n_params)
         Parameters.
+    use_c : bool
+        Take each interval's sub-steps in C (:mod:`bondgraph.numerics.evaluate_stiff_c`) where
+        the model allows (C backend, no algebraic loops, a compiler found); False: the Python
+        loop (the reference and the fallback).
 
     Returns
     -------
@@ -85,11 +89,14 @@ def ros2_samples(model, t, U, x, d, p):
     """
     x = np.array(x, dtype=float)
     n = x.shape[0]
-    p = np.broadcast_to(np.asarray(p, dtype=float), (n, np.shape(p)[-1]))
+    p_rows = np.ascontiguousarray(p, dtype=float).reshape(-1, np.shape(p)[-1])
+    p = np.broadcast_to(p_rows, (n, p_rows.shape[1]))
     X = np.empty((t.size, *x.shape))
     D = np.broadcast_to(np.asarray(d, dtype=float), (t.size, *np.shape(d))).copy()
     X[0] = x
     eye, most = np.eye(x.shape[1]), 1
+    sub_steps = _c_sub_steps(model, n, d, p_rows) if use_c else None
+    U = np.ascontiguousarray(U, dtype=float)
     for k in range(t.size - 1):
         u = np.broadcast_to(U[k], (n, U.shape[1]))
         dt, tk = float(t[k + 1] - t[k]), float(t[k])
@@ -101,11 +108,14 @@ def ros2_samples(model, t, U, x, d, p):
             m = _sub_step_count(J, dt)
             h = dt / m
             Winv = np.linalg.inv(eye - (GAMMA * h) * J)
-            for _ in range(m):
-                k1 = np.einsum("nij,nj->ni", Winv, model.f(x, u, t=tk, p=p, d=d))
-                k2 = np.einsum("nij,nj->ni", Winv, model.f(x + h * k1, u, t=tk, p=p, d=d) - 2.0 * k1)
-                x = x + 1.5 * h * k1 + 0.5 * h * k2
-                tk += h
+            if sub_steps is not None:
+                sub_steps(x, U[k], tk, h, m, Winv)
+            else:
+                for _ in range(m):
+                    k1 = np.einsum("nij,nj->ni", Winv, model.f(x, u, t=tk, p=p, d=d))
+                    k2 = np.einsum("nij,nj->ni", Winv, model.f(x + h * k1, u, t=tk, p=p, d=d) - 2.0 * k1)
+                    x = x + 1.5 * h * k1 + 0.5 * h * k2
+                    tk += h
         if not np.isfinite(x).all():
             bad = [nm for nm, v in zip(model.state_names, x.T) if not np.isfinite(v).all()]
             raise SimulationError(f"model {model.equations.name!r}: non-finite state(s) {', '.join(bad)} "
@@ -113,3 +123,22 @@ def ros2_samples(model, t, U, x, d, p):
         X[k + 1] = x
         most = max(most, m)
     return X, D, most
+
+
+def _c_sub_steps(model, n, d, p_rows):
+    """A function ``(x, u_row, t0, h, m, Winv)`` taking `m` sub-steps on `x` in place in C, or
+    None where the model needs the Python loop (:func:`~bondgraph.numerics.evaluate_stiff_c.c_derivative`)."""
+    from .evaluate_stiff_c import c_derivative, steps_driver
+    fn = c_derivative(model)
+    if fn is None:
+        return None
+    driver, nx = steps_driver(), len(model.state_names)
+    d = np.ascontiguousarray(np.broadcast_to(np.asarray(d, dtype=float), (n, np.shape(d)[-1])))
+    z, work = np.zeros(1), np.empty(4 * n * nx)
+    sp = 0 if p_rows.shape[0] == 1 and n != 1 else p_rows.shape[1]
+
+    def steps(x, u_row, t0, h, m, Winv):
+        u_row, Winv = np.ascontiguousarray(u_row, dtype=float), np.ascontiguousarray(Winv)
+        driver(fn, n, nx, t0, h, m, x.ctypes.data, u_row.ctypes.data, z.ctypes.data, d.ctypes.data,
+               d.shape[1], p_rows.ctypes.data, sp, Winv.ctypes.data, work.ctypes.data)
+    return steps

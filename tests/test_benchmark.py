@@ -106,6 +106,20 @@ def test_realised_effect_has_the_drawn_size():
     assert np.sqrt(np.mean(d ** 2)) / rec.sigma[rec.affected] == pytest.approx(10.0, rel=1e-9)
 
 
+def test_the_truths_sign_sharpness_is_drawn_per_case():
+    """tanh(v/eps) with eps/v_rms log-uniform in draw.SHARPNESS, from the case's own stream: the
+    catalogue's fixed smoothing is not the truth's."""
+    from diagnosis.benchmark import draw
+    ratios = []
+    for seed in (5, 6, 7, 8):
+        spec = CaseSpec(0, seed, "msd", "coulomb_friction", "junction", "v_mass", target_change=0.1, ratio=10.0)
+        rec = realise(spec, tb.mass_spring_damper())
+        v_rms = np.sqrt(np.mean(rec.nominal["_signals"]["v_mass"] ** 2))
+        ratios.append(rec.effect.shape["eps"] / v_rms)
+    assert all(draw.SHARPNESS[0] <= r <= draw.SHARPNESS[1] for r in ratios)
+    assert max(ratios) / min(ratios) > 1.5
+
+
 def test_summary_counts():
     base = dict(seconds_diagnose=1.0, place_ok=True, answer_place="", plant="msd")
     results = [dict(base, label="a", kind="coulomb_friction", answer_kind="coulomb_friction", kind_ok=True,

@@ -36,6 +36,10 @@ KINDS = tuple(KIND_PLACES)
 DRIFT_EVERY = 7
 #: Null cases, every this many (offset 3).
 NULL_EVERY = 6
+#: range of the truth's sign smoothing, tanh(v / eps), as fractions of the junction's RMS flow: drawn
+#: log-uniformly per case, so that the catalogue's fixed smoothing (1 %) is sharper than some
+#: truths and blunter than others, as it is against a real rig's friction
+SHARPNESS = (0.003, 0.03)
 
 
 @dataclass(frozen=True)
@@ -206,7 +210,9 @@ def _shape(spec, plant, rec, rng, scales):
     j = plant.storage(spec.name).junction if spec.door == "storage" else spec.name
     v_rms = scales["rms"].get(j, 1.0) or 1.0
     hold = float(np.mean([i.hold[0] + i.hold[1] for i in plant.inputs])) / 2.0
-    sh["eps"] = 0.01 * v_rms
+    # its own stream (not `rng`): every other draw of the case stays what it was
+    sharp = np.random.default_rng([spec.seed, 7]).uniform(*np.log(SHARPNESS))
+    sh["eps"] = float(np.exp(sharp)) * v_rms
     sh["sign"] = float(rng.choice([-1.0, 1.0]))
     if k == "stribeck_friction":
         sh["fs_over_fc"], sh["vs"] = float(rng.uniform(1.5, 3.0)), float(rng.uniform(0.1, 0.5)) * v_rms

@@ -47,8 +47,6 @@ from .simulate import NoEffect
 
 __all__ = ["KIND_PLACES", "TruthEffect", "make_effect", "places_for"]
 
-#: Sharpness of the truth's sign laws: tanh(v / (SHARP * v_rms)).
-SHARP = 0.01
 
 MECHANICAL = ("translation", "rotation")
 

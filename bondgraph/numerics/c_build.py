@@ -38,7 +38,7 @@ from . import c_shipped, codegen_c
 from .codegen_c import PARTS, generate_source
 from ..errors import CompilationError
 
-__all__ = ["compile_source", "build_library", "find_compiler", "c_available", "cache_dir", "source_key",
+__all__ = ["compile_source", "driver_function", "build_library", "find_compiler", "c_available", "cache_dir", "source_key",
            "equations_key", "CLibrary", "CFLAGS"]
 
 #: Compiler flags (besides ``-o``, source and ``-lm``).
@@ -111,6 +111,25 @@ def compile_source(source: str, *, compiler: str | None = None) -> Path:
         _compile(source, compiler, key, target)
     c_shipped.note(source_key(source), target)
     return target
+
+
+_DRIVERS: dict = {}   # (source key, name) -> loaded function, or None (no compiler)
+
+
+def driver_function(source: str, name: str, argtypes, restype):
+    """Function `name` of the model-independent C `source` (a sample-loop driver), compiled
+    once per machine (:func:`compile_source`) and loaded once per process; None when no
+    compiler can build it (the caller then keeps its Python loop)."""
+    key = (source_key(source), name)
+    if key not in _DRIVERS:
+        try:
+            fn = getattr(ctypes.CDLL(str(compile_source(source))), name)
+        except (CompilationError, OSError):
+            fn = None
+        if fn is not None:
+            fn.argtypes, fn.restype = list(argtypes), restype
+        _DRIVERS[key] = fn
+    return _DRIVERS[key]
 
 
 def _compile(source: str, compiler: str, key: str, target: Path) -> None:

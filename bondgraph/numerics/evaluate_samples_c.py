@@ -15,10 +15,6 @@ from __future__ import annotations
 
 import ctypes
 
-import numpy as np
-
-from ..errors import CompilationError
-
 __all__ = ["DRIVER_SOURCE", "sample_driver", "run_samples"]
 
 DRIVER_SOURCE = r"""
@@ -54,23 +50,13 @@ int bc_rk4_samples(void *fn, int n, int nt, const double *t, const double *hs, c
 }
 """
 
-_DRIVER = []   # the loaded driver function, or None when it cannot be had (no compiler)
-
 
 def sample_driver():
     """The compiled ``bc_rk4_samples`` (ctypes function), or None without a C compiler."""
-    if not _DRIVER:
-        from .c_build import compile_source
-        try:
-            fn = ctypes.CDLL(str(compile_source(DRIVER_SOURCE))).bc_rk4_samples
-        except (CompilationError, OSError):
-            fn = None
-        if fn is not None:
-            vp, i = ctypes.c_void_p, ctypes.c_int
-            fn.argtypes = [vp, i, i, vp, vp, vp, vp, i, vp, i, vp, vp, vp, i, vp, i, vp, i, vp, vp]
-            fn.restype = i
-        _DRIVER.append(fn)
-    return _DRIVER[0]
+    from .c_build import driver_function
+    vp, i = ctypes.c_void_p, ctypes.c_int
+    return driver_function(DRIVER_SOURCE, "bc_rk4_samples",
+                           [vp, i, i, vp, vp, vp, vp, i, vp, i, vp, vp, vp, i, vp, i, vp, i, vp, vp], i)
 
 
 def run_samples(driver, rk4, t, hs, ms, U, x, z, zinit, d, p, sp, status, check, X, D) -> int:

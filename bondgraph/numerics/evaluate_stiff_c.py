@@ -16,10 +16,6 @@ from __future__ import annotations
 
 import ctypes
 
-import numpy as np
-
-from ..errors import CompilationError
-
 __all__ = ["STEPS_SOURCE", "steps_driver", "c_derivative"]
 
 STEPS_SOURCE = r"""
@@ -66,23 +62,13 @@ void bc_ros2_steps(void *fn, int n, int nx, double t0, double h, int m, double *
 }
 """
 
-_DRIVER = []   # the loaded driver function, or None when it cannot be had (no compiler)
-
 
 def steps_driver():
     """The compiled ``bc_ros2_steps`` (ctypes function), or None without a C compiler."""
-    if not _DRIVER:
-        from .c_build import compile_source
-        try:
-            fn = ctypes.CDLL(str(compile_source(STEPS_SOURCE))).bc_ros2_steps
-        except (CompilationError, OSError):
-            fn = None
-        if fn is not None:
-            vp, i, dbl = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
-            fn.argtypes = [vp, i, i, dbl, dbl, i, vp, vp, vp, vp, i, vp, i, vp, vp]
-            fn.restype = None
-        _DRIVER.append(fn)
-    return _DRIVER[0]
+    from .c_build import driver_function
+    vp, i, dbl = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
+    return driver_function(STEPS_SOURCE, "bc_ros2_steps", [vp, i, i, dbl, dbl, i, vp, vp, vp, vp, i, vp, i, vp, vp],
+                           None)
 
 
 def c_derivative(model):

@@ -130,6 +130,8 @@ class KindEvidence:
         weighted validation SSE less one noise variance per value), at most 1.
     drop : float
         Drop of the weighted validation SSE, in noise variances.
+    grid : tuple of float
+        The variant's free choice as numbers (``FeatureGroup.grid``: an end stop's limits), or ().
     """
 
     kind: str
@@ -141,6 +143,7 @@ class KindEvidence:
     significant: bool
     excess_share: float = 0.0
     drop: float = 0.0
+    grid: tuple = ()
 
     @property
     def label(self) -> str:
@@ -409,10 +412,11 @@ def _evidence_at(graph, p, experiment, x0, regime_variables, d_hat):
              for o in outputs]
     w = 1.0 / np.square(sigma)
     one = graph.elements[p.name].kind == "1"
-    groups = {}
+    groups, grids = {}, {}
     for kind in [name for name, definition in REGISTRY.items() if definition.feature_doors]:
-        for variant, detail, cols, F in _kind_variants(kind, one, values, t, junction_domain(graph, p.name)):
-            groups[(kind, variant, detail)] = (cols, F)
+        for group in _kind_variants(kind, one, values, t, junction_domain(graph, p.name)):
+            groups[(kind, group.variant, group.detail)] = (group.names, group.columns)
+            grids[(kind, group.variant, group.detail)] = tuple(group.grid)
     if not groups:
         return None
     keys = list(groups)
@@ -429,7 +433,7 @@ def _evidence_at(graph, p, experiment, x0, regime_variables, d_hat):
             names = responses[(kind, variant, detail)][0]
             best[(kind, variant)] = KindEvidence(kind, variant, detail, float(share), float(score),
                                                  {nm: -float(c) for nm, c in zip(names, beta)}, sig,
-                                                 excess, float(drop))
+                                                 excess, float(drop), grids[(kind, variant, detail)])
     kinds = sorted(best.values(), key=lambda k: k.score)
     chosen = [f"{k[0]} ({k[1]})" if k[1] else k[0] for k in selected]
     return FeatureEvidence(p, kinds, chosen, float(joint), junction_unit(graph, p.name))
@@ -499,12 +503,9 @@ def with_feature_starts(cands: list, evidence: dict) -> list:
 
     def started(cand):
         kind = getattr(cand, "definition", None)            # a group of twins has none
-        n = kind.feature_params if kind is not None else 0
-        ev = lookup(cand) if n else None
-        coef = [ev.coefficients.get(name) for name in kind.feature_names[:n]] if ev is not None else []
-        if not coef or not all(c is not None and np.isfinite(c) for c in coef):
-            return cand
-        return cand.with_starts([{spec.name: spec.clipped(c) for spec, c in zip(cand.params, coef)}])
+        ev = lookup(cand) if kind is not None else None
+        start = kind.feature_start(cand, ev) if ev is not None else None
+        return cand.with_starts([start]) if start else cand
 
     return [started(c) for c in cands]
 

@@ -183,6 +183,23 @@ def test_saturation_recovered_and_a_limit_never_reached_is_released(msd):
     assert max(fit.holdout_nrmse.values()) < 1e-3
 
 
+def test_a_soft_end_stop_is_recovered_with_its_stiffness(msd):
+    """A rubber bumper engaging at x = 0.3 m, half as stiff as the spring: the fitted end stop has
+    its position and its stiffness (a wall's fixed stiffness could not stand for it).  A rigid
+    stop is found through the feature regression's start (tests/test_diagnosis_end_stops.py)."""
+    stop = mass_spring_damper(b=0.4)                 # written out by hand: an R pushing back
+    stop.add(R("bumper", effort="k_b*Max(q_k - x_b, 0)", params={"k_b": 2.0, "x_b": 0.3}, domain="translation"))
+    stop.connect("v_mass", "bumper")
+    train, hold = _record(stop).split(0.3)
+    assert np.max(OutputSimulator(msd, train)()["x"]) > 0.9      # well inside the nominal's stroke
+    fit = fit_candidate(msd, _candidate(msd, Place("junction", "v_mass"), "saturation", train), train, hold)
+    assert fit.success, fit.message
+    assert fit.values["q_max_k"] == pytest.approx(0.3, rel=1e-4)
+    assert fit.values["k_stop_k"] == pytest.approx(2.0, rel=1e-4)
+    assert fit.values["q_min_k"] == -RELEASED                          # nothing below: released
+    assert max(fit.holdout_nrmse.values()) < 1e-6
+
+
 def test_hardening_spring_recovered(msd):
     stiff = BondGraph("msd_hardening")                 # written out by hand: k x + k3 x^3
     stiff.add(Se("F", 0.0, domain="translation"))

@@ -17,6 +17,8 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import ClassVar
 
+import numpy as np
+
 from ..catalogue_common import ParamSpec
 from ..catalogue_scales import Scales
 from ..errors import DiagnosisError
@@ -159,6 +161,18 @@ class Kind:
                 value = 0.0 if spec.lower <= 0.0 <= spec.upper else spec.guess
             start[spec.name] = spec.clipped(value)
         return start
+
+    def feature_start(self, cand, evidence) -> dict | None:
+        """A start for `cand` from the feature regression of its kind at its place (`evidence`, a
+        :class:`~diagnosis.features.KindEvidence`): its :attr:`feature_params` leading parameters
+        at their feature coefficients, clipped to their bounds; None without such coefficients.
+        A kind whose features also choose a value of a grid (an end stop's position) overrides
+        it (:attr:`KindEvidence.grid <diagnosis.features.KindEvidence>`)."""
+        n = self.feature_params
+        coef = [evidence.coefficients.get(name) for name in self.feature_names[:n]] if n else []
+        if not coef or not all(c is not None and np.isfinite(c) for c in coef):
+            return None
+        return {spec.name: spec.clipped(c) for spec, c in zip(cand.params, coef)}
 
     def features(self, signals) -> list:
         """What this kind's effect looks like at a junction, for the feature regression

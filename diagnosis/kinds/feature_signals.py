@@ -30,6 +30,7 @@ class FeatureGroup(NamedTuple):
     detail: str              # the grid value, in words ("v_s = 0.03"), or ""
     names: list              # the columns in words
     columns: np.ndarray      # shape (n, len(names))
+    grid: tuple = ()         # the grid value as numbers (an end stop's limits), for a fit's start
 
 
 @dataclass

@@ -4,8 +4,10 @@
   candidate per C whose content moves in the nominal simulation: at a 1-junction, end stops, an R
   whose effort :math:`k_{stop} (\\max(q - q_{max}, 0) + \\min(q - q_{min}, 0))` pushes back beyond
   either limit; at a 0-junction, an overflow, an R whose flow :math:`k_{of} \\max(q - q_{max}, 0)`
-  spills what exceeds the limit.  The stiffnesses are fixed, not fitted: :math:`k_{stop}` 30 times
-  the spring's stiffness scale, :math:`k_{of}` one fifth of a sample's worth per second, so the
+  spills what exceeds the limit.  An end stop's stiffness is fitted with its limits: a rigid wall
+  (30 times the junction's stiffness scale) and a bumper as soft as the C itself (a rubber stop,
+  a second spring that engages) are both end stops, and a fixed wall cannot stand for the soft one.
+  The overflow rate is fixed, :math:`k_{of}` one fifth of a sample's worth per second, so the
   content stays within a few per cent of the limit;
 * an input: :math:`\\min(\\max(u, u_{min}), u_{max})` (routed as in
   :mod:`~diagnosis.kinds.signal_common`);
@@ -43,8 +45,27 @@ class Saturation(Kind):
                 top, bottom = np.quantile(q, hi), np.quantile(q, lo)
                 cols = [np.maximum(q - top, 0.0)] + ([np.minimum(q - bottom, 0.0)] if s.one else [])
                 out.append(FeatureGroup(c, f"q in [{bottom:.3g}, {top:.3g}]",
-                                        ["max(q - q_hi, 0)", "min(q - q_lo, 0)"][:len(cols)], np.stack(cols, axis=1)))
+                                        ["max(q - q_hi, 0)", "min(q - q_lo, 0)"][:len(cols)], np.stack(cols, axis=1),
+                                        (float(bottom), float(top))))
         return out
+
+    def feature_start(self, cand, evidence):
+        """End stops where the regression's hinges were, their stiffness its coefficient (the
+        effort pushed back per unit beyond the limit); a side the regression found no push on
+        starts beyond the content's range.  The open-loop error of a mass bouncing off a stop is
+        steep and rugged in the stop's stiffness and position, and this start is already near."""
+        if cand.place.kind not in ("junction",) or len(cand.params) != 3 or len(evidence.grid) != 2:
+            return None
+        q_min, q_max, k = cand.params
+        bottom, top = evidence.grid
+        up = evidence.coefficients.get("max(q - q_hi, 0)", 0.0)
+        down = evidence.coefficients.get("min(q - q_lo, 0)", 0.0)
+        pushes = [c for c in (up, down) if np.isfinite(c) and c > 0]
+        if not pushes:
+            return None
+        return {q_min.name: q_min.clipped(bottom if down > 0 else q_min.guess),
+                q_max.name: q_max.clipped(top if up > 0 else q_max.guess),
+                k.name: k.clipped(max(pushes))}
 
     def propose(self, site):
         if site.door == "input":
@@ -66,11 +87,11 @@ class Saturation(Kind):
             return graph.with_output(name, lambda y: sp.Min(sp.Max(y, lo), hi))
         if cand.place.kind == "input":
             return graph.route_input(name, f"Min(Max({name}, {p[0]}), {p[1]})")
-        q, k = cand.regime, cand.constants[0][0]
+        q = cand.regime
         if graph.elements[name].kind == "0":
-            law = {"flow": f"{k}*Max({q} - {p[0]}, 0)"}
+            law = {"flow": f"{cand.constants[0][0]}*Max({q} - {p[0]}, 0)"}
         else:
-            law = {"effort": f"{k}*(Max({q} - {p[1]}, 0) + Min({q} - {p[0]}, 0))"}
+            law = {"effort": f"{p[2]}*(Max({q} - {p[1]}, 0) + Min({q} - {p[0]}, 0))"}
         return hang(graph, R(f"limit_{cand.target}", domain=junction_domain(graph, name), **law,
                              description=f"limits of the content of {cand.target}"), name)
 
@@ -97,8 +118,8 @@ class Saturation(Kind):
         if len(p) == 1:
             return (f"the storage {cand.target} at {name} holds no more than {show(p[0])}: what exceeds it "
                     f"overflows (saturation of {cand.target})")
-        return (f"the content of {cand.target} at {name} stays within {show(p[0])} .. {show(p[1])}: end stops "
-                f"(saturation of {cand.target})")
+        return (f"the content of {cand.target} at {name} is pushed back {_range(values, p[:2], show)} by end "
+                f"stops of stiffness {show(p[2])} (saturation of {cand.target})")
 
 
 def _range(values, names, show) -> str:
@@ -126,13 +147,25 @@ def _content_limit(site, element, q) -> Proposal:
                         params=(ParamSpec(q_max, hi + 1e-3 * width, lo, hi + width, q_unit,
                                           f"content of {c} beyond which it overflows"),))
     q_min, k = fresh_name(taken, f"q_min_{c}"), fresh_name(taken, f"k_stop_{c}")
-    return Proposal(target=c, regime=element.state,
-                    constants=((k, 30.0 * stiffness_scale(site, element), stiffness_unit,
-                                f"stiffness of the end stops of {c}"),),
-                    starts=tuple([{q_min: lo - 1e-3 * width, q_max: lo + f * width} for f in (0.9, 0.7)]
-                                 + [{q_min: lo + f * width, q_max: hi + 1e-3 * width} for f in (0.1, 0.3)]),
-                    params=(ParamSpec(q_min, lo - 1e-3 * width, lo - width, hi, q_unit, f"lower end stop of {c}"),
-                            ParamSpec(q_max, hi + 1e-3 * width, lo, hi + width, q_unit, f"upper end stop of {c}")))
+    wall = 30.0 * stiffness_scale(site, element)
+    soft = min(_own_stiffness(element) or wall / 1e3, wall)
+    positions = ([{q_min: lo - 1e-3 * width, q_max: lo + f * width} for f in (0.9, 0.7, 0.4)]
+                 + [{q_min: lo + f * width, q_max: hi + 1e-3 * width} for f in (0.1, 0.3, 0.6)])
+    # a wall engages near the extremes; a bumper as soft as the spring may engage anywhere
+    starts = [{**at, k: wall} for at in positions[:2] + positions[3:5]]
+    starts += [{**at, k: soft} for at in positions]
+    return Proposal(target=c, regime=element.state, starts=tuple(starts), params=(
+        ParamSpec(q_min, lo - 1e-3 * width, lo - width, hi, q_unit, f"lower end stop of {c}"),
+        ParamSpec(q_max, hi + 1e-3 * width, lo, hi + width, q_unit, f"upper end stop of {c}"),
+        ParamSpec(k, wall, soft / 10.0, 100.0 * wall, stiffness_unit, f"stiffness of the end stops of {c}")))
+
+
+def _own_stiffness(element) -> float | None:
+    """A linear C's stiffness (its value, or one over its compliance); None for a law."""
+    value = element.value
+    if value is None or not float(value.value) > 0:
+        return None
+    return float(value.value) if element.stiffness_form else 1.0 / float(value.value)
 
 
 def _input_range(site) -> Proposal:

@@ -26,8 +26,16 @@ class StribeckFriction(Kind):
     def features(self, s):
         """Sign and Stribeck decay, the decay velocity on a grid of the RMS flow."""
         return [FeatureGroup(None, f"v_s = {f * s.v_rms:.3g}", ["sign(v)", "exp(-(v/v_s)^2) sign(v)"],
-                             np.stack([s.sign, np.exp(-(s.v / (f * s.v_rms)) ** 2) * s.sign], axis=1))
+                             np.stack([s.sign, np.exp(-(s.v / (f * s.v_rms)) ** 2) * s.sign], axis=1),
+                             (float(f * s.v_rms),))
                 for f in FEATURE_GRID]
+
+    def feature_start(self, cand, evidence):
+        """The two levels from their coefficients and the Stribeck velocity the regression chose."""
+        start = super().feature_start(cand, evidence)
+        if start is None or len(evidence.grid) != 1:
+            return start
+        return {**start, cand.params[2].name: cand.params[2].clipped(evidence.grid[0])}
 
     def propose(self, site):
         j, V = site.name, site.scales.flow

@@ -352,7 +352,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         fits.append(fit_candidate(graph, None, fit_part, held, uncertain=uncertain, x0=fit_x0,
                                   through=train, judge=judge))
     say("choosing")
-    chosen = _choose(nominal, fits, floor, evidence, res, exp, train, diverged or judge.kind != "open-loop")
+    chosen = _choose(nominal, fits, floor, evidence, res, exp, train, held, diverged or judge.kind != "open-loop")
 
     say("improved model")
     improved_judged = nominal_judged
@@ -409,7 +409,7 @@ def _features(graph, scores, places, train, x0, rv, cands, say, label):
     return evidence, with_feature_starts(kept, evidence), [str(c) for c in pruned]
 
 
-def _choose(reference, fits, floor, evidence, res, exp, train, not_open_loop):
+def _choose(reference, fits, floor, evidence, res, exp, train, held, not_open_loop):
     """:func:`~diagnosis.fit.choose` on the held-out part; when it answers "none" and the
     held-out part is judged open-loop (`not_open_loop` False: the nominal neither diverges nor
     drifts), the training part's answer among the fits the held-out part cannot judge
@@ -424,7 +424,9 @@ def _choose(reference, fits, floor, evidence, res, exp, train, not_open_loop):
         mark_silent(fits, res.simulated, exp.outputs, res.noise, n)
     for f in fits:
         f.y = None
-    chosen = choose(reference, fits, noise=floor, evidence=_lookup(evidence))
+    chosen = choose(reference, fits, noise=floor, evidence=_lookup(evidence), measured=held.outputs)
+    for f in fits:
+        f.extra.pop("holdout_y", None)     # read by the choice only
     if chosen is not None or not_open_loop:
         return chosen
     nominal_train = {o: nrmse(train.outputs[o], res.simulated[o][:n]) for o in exp.outputs}
@@ -521,7 +523,7 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
                             best, x0)
     fits += _twin_fits(graph, fits, train, rv, fit_one, say, f"{label}: fitting", best, x0, len(places))
     say(f"{label}: choosing")
-    chosen = _choose(reference, fits, floor, evidence, res, exp, train, judge.kind != "open-loop")
+    chosen = _choose(reference, fits, floor, evidence, res, exp, train, held, judge.kind != "open-loop")
     out = Round(chosen, fits, dict(reference), dict(reference), scores=scores,
                 features=list(evidence.values()), pruned=pruned)
     if chosen is not None:

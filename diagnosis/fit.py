@@ -27,6 +27,7 @@ import numpy as np
 
 from .catalogue_common import RELEASED, ParamSpec
 from .errors import BondcosimError, DiagnosisError
+from .holdout_resolution import Z_RESOLVED, held_out_prediction, resolution
 
 __all__ = ["CandidateFit", "fit_candidate", "choose", "noise_floor", "needs_explaining", "usable_fits",
            "single_fits_by_holdout",
@@ -355,6 +356,8 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     if judge is not None and holdout is not None:
         judged = judge.evaluate(objective.sim.on(full), values, x0)
         holdout_nrmse, open_loop = judged.nrmse, judged.open_loop
+        scored = judged.segments if judged.segments is not None else {
+            o: v[-holdout.t.size:] for o, v in judged.y.items()}
         try:
             y = judged.y if np.isfinite(judged.y[outputs[0]][:n]).all() else objective.sim(values, x0)
             train_nrmse = {o: nrmse(train.outputs[o], y[o][:n]) for o in outputs}
@@ -370,6 +373,7 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
             train_nrmse = {o: nrmse(train.outputs[o], y[o][:n]) for o in outputs}
             holdout_nrmse = ({o: nrmse(holdout.outputs[o], y[o][lead.t.size:]) for o in outputs}
                              if holdout is not None else {})
+            scored = {o: y[o][lead.t.size:] for o in outputs} if holdout is not None else None
         except BondcosimError as exc:
             return CandidateFit(candidate, message=f"{label}: the fitted model does not run: {exc}", graph=model,
                                 n_simulations=objective.n_runs, **failed)
@@ -378,7 +382,9 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
                         message if converged else f"{label} did not converge: {message}", model,
                         objective.n_runs + 1,
                         {"train_cost": 0.5 * float(sum(v ** 2 for v in train_nrmse.values())),
-                         "open_loop": open_loop}, y)
+                         "open_loop": open_loop,
+                         "holdout_y": held_out_prediction(scored) if scored is not None else None},
+                        y)
 
 
 def noise_floor(holdout, noise_sigma: dict | None = None) -> dict:
@@ -410,7 +416,7 @@ def excess_error(nrmse: dict, floor: dict, names) -> float:
     return float(sum(max(nrmse[o] ** 2 - floor.get(o, 0.0) ** 2, 0.0) for o in names))
 
 
-def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=None):
+def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=None, measured: dict | None = None):
     """The best candidate by held-out error and parsimony, or None ("none").
 
     Rule (all on the held-out part, per output :math:`o`, with noise floor
@@ -430,7 +436,11 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
        the excess magnifies differences the held-out part cannot resolve; an
        output at its floor would only add its noise to both), are tied: the held-out part cannot tell
        them apart (a constant load and a sensor offset look alike once a
-       transient is over).  Among
+       transient is over).  The second tie needs `measured`'s confirmation where it is given:
+       when the held-out part resolves the leader's lower error
+       (:func:`~diagnosis.holdout_resolution.resolution`, :math:`z \\ge 3` against the noise the
+       leader's own residual shows), the two are not tied, and a simpler fit set aside so records
+       ``extra["resolved_over"]`` on the leader.  Among
        tied fits: fewer parameters, then a junction before a law place acting on it through a
        lever arm or a gear (:mod:`diagnosis.law_places`), then the smaller training error (where the
        start of the record may tell them apart; within 2 % again a tie), then
@@ -461,6 +471,9 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
         Noise floor per output as an NRMSE (:func:`noise_floor`); default 0.
     evidence : callable, optional
         ``fit -> KindEvidence or None`` (:func:`diagnosis.features.evidence_lookup`).
+    measured : dict str -> ndarray, optional
+        The recorded held-out outputs, for the fits' held-out predictions
+        (``extra["holdout_y"]``, :func:`fit_candidate`) to be compared with.
 
     Returns
     -------
@@ -501,9 +514,22 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
     def raw_score(f):     # on the outputs that need explaining: the others only add their noise
         return sum(f.holdout_nrmse[o] ** 2 for o in significant) * (1 + PARAMETER_PRICE) ** f.n_params
 
+    def predicted(f):
+        return f.extra.get("holdout_y")
+
     leader = min(usable, key=score)
-    tied = [f for f in usable if score(f) <= score(leader) * (1 + TIE)
-            or raw_score(f) <= raw_score(leader) * (1 + TIE) ** 2]
+    # near the floor the priced held-out errors may tie where the excess does not, unless the
+    # held-out part resolves the leader's lower error (diagnosis.holdout_resolution)
+    tied, resolved_over = [], []
+    for f in usable:
+        if score(f) <= score(leader) * (1 + TIE):
+            tied.append(f)
+        elif raw_score(f) <= raw_score(leader) * (1 + TIE) ** 2:
+            z = resolution(measured, predicted(leader), predicted(f), significant)
+            if z >= Z_RESOLVED and f.n_params < leader.n_params:
+                resolved_over.append((str(f.candidate), z))
+            elif not z >= Z_RESOLVED:
+                tied.append(f)
     fewest = min(f.n_params for f in tied)
     tied = [f for f in tied if f.n_params == fewest]
     # a junction before a law that acts on it through a lever arm or a gear (diagnosis.law_places):
@@ -524,6 +550,8 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
         if preferred is not best and share >= MIN_SHARE and gain >= MIN_GAIN:
             preferred.extra["preferred_over"] = str(best.candidate)
             return preferred
+    if best is leader and resolved_over:
+        best.extra["resolved_over"] = max(resolved_over, key=lambda item: item[1])
     share, gain = acceptance(nominal_holdout, best, floor)
     return best if share >= MIN_SHARE and gain >= MIN_GAIN else None
 

@@ -317,6 +317,32 @@ def test_held_out_ties_are_broken_by_the_training_error():
     assert choose({"x": 0.0152}, [better, worse], noise=floor) is better
 
 
+def test_a_near_tie_the_held_out_part_resolves_goes_to_the_better_fit(rng):
+    """A richer fit at the noise floor and a simpler one off by a constant: their priced held-out
+    errors are within 2 %, a tie that goes to fewer parameters, unless the held-out samples
+    resolve the difference (z >= 3 against the noise the leader's residual shows)."""
+    from types import SimpleNamespace
+    t = np.linspace(0.0, 10.0, 1000)
+    truth, sigma = np.sin(t), 0.1
+    held = {"x": truth + sigma * rng.standard_normal(t.size)}
+    floor = {"x": sigma / np.std(held["x"])}
+
+    def fit(kind, n_params, y):
+        return CandidateFit(SimpleNamespace(kind=kind), {}, {"x": 0.0}, {"x": nrmse(held["x"], y)}, n_params,
+                            True, "", extra={"holdout_y": {"x": y}})
+
+    for offset, resolvable in ((0.03, True), (0.005, False)):   # z about 4.7 and 0.8
+        richer, simpler = fit("modulated_friction", 3, truth), fit("pressure_dependent_friction", 2, truth + offset)
+        ratio = (simpler.holdout_nrmse["x"] / richer.holdout_nrmse["x"]) ** 2 / 1.1
+        assert ratio < 1.02 ** 2                                # the priced errors tie
+        assert choose({"x": 0.5}, [richer, simpler], noise=floor) is simpler          # nothing to test
+        chosen = choose({"x": 0.5}, [richer, simpler], noise=floor, measured=held)
+        assert chosen is (richer if resolvable else simpler)
+        assert ("resolved_over" in richer.extra) is resolvable
+        if resolvable:                                          # the report says so, with z
+            assert 3.0 <= richer.extra["resolved_over"][1] < 7.0
+
+
 def test_a_diverging_nominal_is_beaten_only_by_a_fit_better_than_the_mean():
     from types import SimpleNamespace
 

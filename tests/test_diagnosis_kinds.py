@@ -104,6 +104,30 @@ def test_modulated_friction_recovers_an_mr_dampers_level_gain_and_lag(rng):
     assert "following V with a lag of 0.0" in coil.explain(values)
 
 
+def test_modulated_friction_starts_where_the_feature_regression_found_it(rng):
+    """The regression on the damper's located residual picks the lag of its grid nearest the
+    truth's (20 samples = 0.1 s; truth 0.08 s) and estimates level and gain: that start is closer
+    than every guess of the catalogue's (lags 2, 20, 200 samples, slopes +-30 % of the effort
+    scale), by training cost."""
+    from diagnosis.features import feature_evidence, with_feature_starts
+    rig, place = _damper_rig(), Place("junction", "piston")
+    train, _ = _mr_damper_recording(rng).split(0.3)
+    coil = next(c for c in candidates(rig, place, experiment=train) if c.kind == "modulated_friction")
+    evidence = feature_evidence(rig, [place], train)
+    started = with_feature_starts([coil], evidence)[0]
+    assert len(started.starts) == len(coil.starts) + 1
+    start = started.starts[-1]
+    assert start["tau_mod_piston_V"] == pytest.approx(0.1)
+    assert start["k_mod_piston_V"] == pytest.approx(15.0, rel=0.3)
+    assert start["F0_piston_V"] == pytest.approx(20.0 + 15.0 * coil.constants[1][1], rel=0.3)
+    sim = OutputSimulator(coil.build(rig), train)
+
+    def cost(values):
+        y = sim(values)
+        return sum(nrmse(train.outputs[o], y[o]) ** 2 for o in train.outputs)
+    assert cost(start) < min(cost(s) for s in coil.starts)
+
+
 # -- Coulomb + viscous as one law -------------------------------------------------------------
 
 def test_coulomb_and_viscous_friction_are_fitted_together(rng):

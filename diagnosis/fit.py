@@ -439,8 +439,8 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
        transient is over).  The second tie needs `measured`'s confirmation where it is given:
        when the held-out part resolves the leader's lower error
        (:func:`~diagnosis.holdout_resolution.resolution`, :math:`z \\ge 3` against the noise the
-       leader's own residual shows), the two are not tied, and a simpler fit set aside so records
-       ``extra["resolved_over"]`` on the leader.  Among
+       leader's own residual shows), the two are not tied; the simpler fit so set aside, with its
+       z, is recorded on the leader as ``extra["resolved_over"]``.  Among
        tied fits: fewer parameters, then a junction before a law place acting on it through a
        lever arm or a gear (:mod:`diagnosis.law_places`), then the smaller training error (where the
        start of the record may tell them apart; within 2 % again a tie), then

@@ -15,9 +15,10 @@ motion are what they are); what could have come out differently is the noise.  S
 conditional on the recording: :math:`z = D / \\sqrt{\\mathrm{Var}}` (the Diebold-Mariano
 comparison of two forecasts, Diebold and Mariano, J. Bus. Econ. Stat. 13(3), 1995, with the
 forecasts' difference known).  :math:`C_e` is estimated from the better fit's own residual up to
-:func:`max_lag` lags with Bartlett weights (Newey and West, Econometrica 55(3), 1987).  What that
-fit leaves unexplained, coloured noise or a slow mismatch both fits share, therefore widens the
-variance: a residual that is not white makes the test more cautious, never less.
+:func:`max_lag` lags with Bartlett weights (Newey and West, Econometrica 55(3), 1987), so what
+that fit leaves unexplained enters the variance: coloured noise, or a slow mismatch both fits
+share, widens it where the white-noise variance :math:`4 \\sigma^2 \\sum_t w_t^2` would claim a
+resolution the recording does not hold.
 
 :func:`diagnosis.fit.choose` lets two fits whose priced held-out errors are within 2 % of each
 other tie (the tie goes to fewer parameters) unless the held-out part resolves the leader's

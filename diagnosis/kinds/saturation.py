@@ -54,7 +54,7 @@ class Saturation(Kind):
         effort pushed back per unit beyond the limit); a side the regression found no push on
         starts beyond the content's range.  The open-loop error of a mass bouncing off a stop is
         steep and rugged in the stop's stiffness and position, and this start is already near."""
-        if cand.place.kind not in ("junction",) or len(cand.params) != 3 or len(evidence.grid) != 2:
+        if cand.place.kind != "junction" or len(cand.params) != 3 or len(evidence.grid) != 2:
             return None
         q_min, q_max, k = cand.params
         bottom, top = evidence.grid

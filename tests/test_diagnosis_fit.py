@@ -183,6 +183,19 @@ def test_saturation_recovered_and_a_limit_never_reached_is_released(msd):
     assert max(fit.holdout_nrmse.values()) < 1e-3
 
 
+def test_a_two_level_input_clipped_on_both_levels_is_a_saturation(msd, rng):
+    """A PRBS between -1.8 N and 0.94 N through a drive that delivers only -0.95 .. 0.25 N: either
+    limit alone clips nothing the other's start can see; the fit starts both inside too."""
+    levels = np.repeat(rng.choice([-1.8, 0.94], size=T.size // 25 + 1), 25)[:T.size]
+    y = OutputSimulator(msd, Experiment(T, {"F": np.clip(levels, -0.95, 0.25)}, {"x": T, "v": T}, UNITS))()
+    train, hold = Experiment(T, {"F": levels}, y, UNITS).split(0.3)
+    fit = fit_candidate(msd, _candidate(msd, Place("input", "F"), "saturation", train), train, hold)
+    assert fit.success, fit.message
+    assert (fit.values["u_min_F"], fit.values["u_max_F"]) == (pytest.approx(-0.95, abs=0.01),
+                                                              pytest.approx(0.25, abs=0.01))
+    assert max(fit.holdout_nrmse.values()) < 1e-3
+
+
 def test_a_soft_end_stop_is_recovered_with_its_stiffness(msd):
     """A rubber bumper engaging at x = 0.3 m, half as stiff as the spring: the fitted end stop has
     its position and its stiffness (a wall's fixed stiffness could not stand for it).  A rigid

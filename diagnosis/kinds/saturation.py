@@ -185,6 +185,8 @@ def _input_range(site) -> Proposal:
     # clips nothing and the fit sees no gradient: start each side inside the recorded span too
     inside = [s for f in (0.25, 0.5) for s in ({u_min: lo - 1e-3 * width, u_max: max(hi - f * width, lo)},
                                                {u_min: min(lo + f * width, hi), u_max: hi + 1e-3 * width})]
+    # both sides at once: a two-level input clipped on both levels is clipped nowhere by one side alone
+    inside += [{u_min: lo + f * width, u_max: hi - g * width} for f in (0.25, 0.4) for g in (0.25, 0.4)]
     starts += [s for s in inside if hi > lo and not any(
         abs(s[u_min] - t[u_min]) + abs(s[u_max] - t[u_max]) < 0.02 * width for t in starts)]
     # a recording of a saturated input has many samples AT the limit: its median may be the limit

@@ -39,10 +39,12 @@ def test_textbook_truth_equals_library_graph(factory):
     t, u = _levels(plant, min(plant.duration, 3.0))
     truth = simulate_truth(plant, t, u)
     ref = simulate(library.build(plant.model), (0.0, float(t[-1])), inputs={k: (t, v) for k, v in u.items()},
-                   output_interval=float(t[1] - t[0]))
+                   output_interval=float(t[1] - t[0]), x0=plant.nominal_x0)
+    # the tanks start at rest: in 3 s the lower level moves 0.1 mm, less than its scale
+    floor = {"h1": 1e-3, "h2": 1e-3, "Q_out": 1e-6} if plant.name == "tanks" else {}
     for o in plant.outputs:
         y, r = truth[o.name], np.asarray(ref[o.name])
-        assert np.max(np.abs(y - r)) <= 1e-4 * np.std(r) + 1e-12, o.name
+        assert np.max(np.abs(y - r)) <= 1e-4 * max(np.std(r), floor.get(o.name, 0.0)) + 1e-12, o.name
 
 
 def test_constant_load_on_msd_gives_the_static_deflection():

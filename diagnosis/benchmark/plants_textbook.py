@@ -89,10 +89,19 @@ def coupled_tanks() -> TruthPlant:
     """Volumes ``V1' = Q_in - Q12``, ``V2' = Q12 - Q_out`` with Torricelli orifices.
 
     ``Q12 = a12 sign(dP) sqrt(2 |dP| / rho)``, ``Q_out = a2 sqrt(2 P2 / rho)``,
-    ``P_i = rho g V_i / A_i`` (gauge).  Library defaults; initial volumes
-    0.01 and 0.005 m^3.
+    ``P_i = rho g V_i / A_i`` (gauge).  Library parameters.  Like every benchmark plant the
+    record starts at rest at the input's ambient value (``draw``: a delay line or a lag holds
+    it before t = 0): the inflow that holds the lower level at 0.25 m,
+    ``Q = a2 sqrt(2 g h2)``, with ``h1 = h2 + (Q / a12)^2 / (2 g)`` (0.41 m).  (Until session
+    11 the tanks started at the library's 0.01 and 0.005 m^3 with an ambient inflow of 0, not
+    at rest: a truth actuator that held 0 before t = 0 drained the tanks for the length of its
+    delay, which no reading of the record as starting at rest reproduces.)
     """
     A1, A2, a12, a2, rho, g = 0.02, 0.02, 5e-5, 4e-5, 1000.0, 9.81
+    h2 = 0.25
+    q_rest = a2 * np.sqrt(2.0 * g * h2)
+    h1 = h2 + (q_rest / a12) ** 2 / (2.0 * g)
+    x0 = np.array([A1 * h1, A2 * h2])
 
     def pressures(x):
         return rho * g * x[0] / A1, rho * g * x[1] / A2
@@ -114,9 +123,9 @@ def coupled_tanks() -> TruthPlant:
 
     return TruthPlant(
         name="tanks", model="coupled-tanks",
-        inputs=(InputSpec("Q_in", "m^3/s", 0.5e-4, 3.0e-4, 1e-6, (20.0, 60.0)),),
+        inputs=(InputSpec("Q_in", "m^3/s", 0.5e-4, 3.0e-4, 1e-6, (20.0, 60.0), ambient=float(q_rest)),),
         outputs=(OutputSpec("h1", "m"), OutputSpec("h2", "m"), OutputSpec("Q_out", "m^3/s")),
-        states=("V1", "V2"), x0=np.array([0.01, 0.005]), rhs=rhs,
+        states=("V1", "V2"), x0=x0, nominal_x0={"V1": float(x0[0]), "V2": float(x0[1])}, rhs=rhs,
         signals=lambda x, u: dict(zip(("P1", "P2"), pressures(x))) | {"tank1": x[0], "tank2": x[1],
                                                                         "Q12": flows(x, {})[0]},
         measure=measure,

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["Z_RESOLVED", "held_out_prediction", "max_lag", "resolution", "resolved"]
+__all__ = ["Z_RESOLVED", "held_out_prediction", "max_lag", "resolution"]
 
 #: z from which the held-out part resolves a difference (one-sided p of about 0.001)
 Z_RESOLVED = 3.0
@@ -52,7 +52,18 @@ def resolution(measured: dict | None, better: dict | None, worse: dict | None, o
     """:math:`z` of `better`'s lower held-out error over `worse`'s (module docstring), summed
     over `outputs`, each over its spread.  NaN predictions (samples a segment judge does not
     score) are left out; NaN when fewer than :data:`MIN_SAMPLES` remain, nothing differs, or a
-    prediction is missing (nothing to test)."""
+    prediction is missing (nothing to test).
+
+    Examples
+    --------
+    White noise of 0.1 on 1000 samples; a fit off by 0.05 is resolved from the truth
+    (:data:`Z_RESOLVED`), one off by 0.002 is not:
+
+    >>> rng = np.random.default_rng(0)
+    >>> t = np.linspace(0, 10, 1000); truth = np.sin(t); y = {"x": truth + 0.1 * rng.standard_normal(t.size)}
+    >>> [bool(resolution(y, {"x": truth}, {"x": truth + off}, ["x"]) >= Z_RESOLVED) for off in (0.05, 0.002)]
+    [True, False]
+    """
     if measured is None or better is None or worse is None or not all(
             o in measured and o in better and o in worse for o in outputs):
         return float("nan")
@@ -86,21 +97,3 @@ def _weighted_long_run_variance(w, r, lags: int) -> float:
     s = np.fft.irfft(np.abs(np.fft.rfft(w, size)) ** 2, size)[:lags + 1]
     weights = np.concatenate([[1.0], 2.0 * (1.0 - np.arange(1, lags + 1) / (lags + 1.0))])
     return max(float(np.sum(weights * c * s)), 0.0)
-
-
-def resolved(measured: dict | None, better: dict | None, worse: dict | None, outputs) -> bool:
-    """Whether the held-out part resolves `better`'s lower error over `worse`'s at
-    :data:`Z_RESOLVED`; False when either has no held-out prediction (the tie stands).
-
-    Examples
-    --------
-    White noise of 0.1 on 1000 samples; a fit off by 0.05 is resolved from the truth, one off by
-    0.002 is not:
-
-    >>> rng = np.random.default_rng(0)
-    >>> t = np.linspace(0, 10, 1000); truth = np.sin(t); y = {"x": truth + 0.1 * rng.standard_normal(t.size)}
-    >>> resolved(y, {"x": truth}, {"x": truth + 0.05}, ["x"]), resolved(y, {"x": truth}, {"x": truth + 0.002}, ["x"])
-    (True, False)
-    """
-    z = resolution(measured, better, worse, outputs)
-    return bool(np.isfinite(z) and z >= Z_RESOLVED)

@@ -118,6 +118,9 @@ class Kind:
     #: :attr:`feature_names` order (a level from ``sign(v)``, a coefficient from ``v``): each
     #: candidate's fit also starts there (:func:`diagnosis.features.with_feature_starts`)
     feature_params: ClassVar[int] = 0
+    #: the parameters (indices) a feature group's grid value sets, in the order of
+    #: ``FeatureGroup.grid`` (a Stribeck velocity, a modulating signal's lag)
+    feature_grid_params: ClassVar[tuple] = ()
     #: the simpler kinds this one extends: simpler kind -> {own parameter index: the simpler's
     #: parameter index}; the other parameters at 0 reduce this law to the simpler one
     #: (:meth:`start_from`)
@@ -165,14 +168,19 @@ class Kind:
     def feature_start(self, cand, evidence) -> dict | None:
         """A start for `cand` from the feature regression of its kind at its place (`evidence`, a
         :class:`~diagnosis.features.KindEvidence`): its :attr:`feature_params` leading parameters
-        at their feature coefficients, clipped to their bounds; None without such coefficients.
-        A kind whose features also choose a value of a grid (an end stop's position) overrides
-        it (:attr:`KindEvidence.grid <diagnosis.features.KindEvidence>`)."""
+        at their feature coefficients, and its :attr:`feature_grid_params` at the grid value the
+        regression chose (:attr:`KindEvidence.grid <diagnosis.features.KindEvidence>`), clipped
+        to their bounds; None without such coefficients.  A kind whose grid sets its parameters
+        otherwise (an end stop's position on one side or both) overrides it."""
         n = self.feature_params
         coef = [evidence.coefficients.get(name) for name in self.feature_names[:n]] if n else []
         if not coef or not all(c is not None and np.isfinite(c) for c in coef):
             return None
-        return {spec.name: spec.clipped(c) for spec, c in zip(cand.params, coef)}
+        start = {spec.name: spec.clipped(c) for spec, c in zip(cand.params, coef)}
+        if self.feature_grid_params and len(evidence.grid) == len(self.feature_grid_params):
+            for i, value in zip(self.feature_grid_params, evidence.grid):
+                start[cand.params[i].name] = cand.params[i].clipped(value)
+        return start
 
     def features(self, signals) -> list:
         """What this kind's effect looks like at a junction, for the feature regression

@@ -91,6 +91,10 @@ class ModulatedFriction(Kind):
     doors = ("1",)
     feature_doors, feature_names, feature_price = "1", ("sign(v)", "(lag(m) - m_mean) sign(v)"), 3
     nests = {"coulomb_friction": {0: 0}}
+    # F0, k from the coefficients; the lag from the grid.  Guessed, a slope of the wrong size or a
+    # lag decades off left the fit ten times above a pressure-dependent friction that needs neither,
+    # and it was given up (diagnosis.fit_in_turn) while the features had found this law
+    feature_params, feature_grid_params = 2, (2,)
 
     def features(self, s):
         """Sign, and the sign times each modulating signal through a lag of 2, 20 and 200
@@ -103,17 +107,6 @@ class ModulatedFriction(Kind):
                 out.append(FeatureGroup(expr, f"lag {tau:.3g} s", ["sign(v)", "(lag(m) - m_mean) sign(v)"],
                                         np.stack([s.sign, (lag - lag.mean()) * s.sign], axis=1), (float(tau),)))
         return out
-
-    def feature_start(self, cand, evidence):
-        """The level at the mean signal and its slope from their coefficients, the lag the
-        regression chose.  Guessed, a slope of the wrong size or a lag decades off leaves the
-        fit ten times above a pressure-dependent friction that needs neither, and it is given
-        up (:mod:`diagnosis.fit_in_turn`) while the features had found this law."""
-        coef = [evidence.coefficients.get(name) for name in self.feature_names]
-        if len(evidence.grid) != 1 or not all(c is not None and np.isfinite(c) for c in coef):
-            return None
-        f0, k, tau = cand.params
-        return {f0.name: f0.clipped(coef[0]), k.name: k.clipped(coef[1]), tau.name: tau.clipped(evidence.grid[0])}
 
     def propose(self, site):
         """One candidate per modulating signal that varies in the nominal simulation

@@ -20,7 +20,7 @@ class StribeckFriction(Kind):
     name = "stribeck_friction"
     doors = ("1",)
     feature_doors, feature_names, feature_price = "1", ("sign(v)", "exp(-(v/v_s)^2) sign(v)"), 3
-    feature_params = 2
+    feature_params, feature_grid_params = 2, (2,)    # Fc, dFs from the coefficients; v_s from the grid
     nests = {"coulomb_friction": {0: 0}}
 
     def features(self, s):
@@ -29,13 +29,6 @@ class StribeckFriction(Kind):
                              np.stack([s.sign, np.exp(-(s.v / (f * s.v_rms)) ** 2) * s.sign], axis=1),
                              (float(f * s.v_rms),))
                 for f in FEATURE_GRID]
-
-    def feature_start(self, cand, evidence):
-        """The two levels from their coefficients and the Stribeck velocity the regression chose."""
-        start = super().feature_start(cand, evidence)
-        if start is None or len(evidence.grid) != 1:
-            return start
-        return {**start, cand.params[2].name: cand.params[2].clipped(evidence.grid[0])}
 
     def propose(self, site):
         j, V = site.name, site.scales.flow

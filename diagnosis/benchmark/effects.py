@@ -195,7 +195,12 @@ class TruthEffect(NoEffect):
                 # at most 90 % of k itself: the truth's own linear stiffness stays positive (a
                 # strong cubic on a weak spring would otherwise make it negative: bistable)
                 share = min(sh["alpha"] * sh["q2"], 0.9 * self.storage.stiffness / m) if m > 0 else 0.0
-                return {j: -s * m * (q ** 3 - share * q)}, np.zeros(0)
+                change = s * m * (q ** 3 - share * q)
+                if self.plant.junction(j).kind == "0":
+                    # at a 0-junction the storage's effort is the junction's: the law itself
+                    # changes (the plant's right-hand side reads it), not a flow added there
+                    return {self.storage.name: change}, np.zeros(0)
+                return {j: -change}, np.zeros(0)
             if k == "backlash":                 # the spring carries nothing inside +-m
                 kk = self.storage.stiffness
                 dead = q - np.clip(q, -m, m)
@@ -243,7 +248,8 @@ class TruthEffect(NoEffect):
         if not self.changes_sensed_storage:
             return y
         y = dict(y)
-        change = -self.storage.sign * ext.get(self.junction, 0.0)
+        name = self.storage.name
+        change = ext[name] if name in ext else -self.storage.sign * ext.get(self.junction, 0.0)
         for name in self.storage.sensed:
             y[name] = y[name] + change
         return y

@@ -9,7 +9,10 @@ enters through one of four doors:
 
 * ``extra`` -- an effort added at a 1-junction or a flow added at a
   0-junction, keyed by the junction's element name in the nominal graph
-  (friction, a constant load, a leak, a changed spring law, an end stop);
+  (friction, a constant load, a leak, a changed spring law, an end stop); a
+  storage element on a 0-junction changes the junction's effort itself, so a
+  changed law there is an effort added to the element's law, keyed by the
+  element's name (``extra["C1"]``: an oil volume's cubic stiffness);
 * a plant-specific law hook (:attr:`TruthPlant.laws`): some effects change a
   constitutive law that is not a junction sum (a chamber's heat exchange);
 * the inputs before the plant (actuator saturation, delay, lag: done by the

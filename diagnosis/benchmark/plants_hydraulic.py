@@ -9,7 +9,8 @@ pressure ``p_i = V_i / C_i`` with ``C_i = V_i0 / beta``) and the pipe flow
 Doors: 0-junctions ``p1``, ``p2`` (a flow added there: a leak ``-Q(p)`` to
 the tank at gauge 0) and the 1-junction ``q_pipe`` (a pressure added along
 the pipe: a turbulent loss, a check valve); storages ``C1``, ``C2`` (content:
-the compressed oil volume, stiffness ``beta / V`` in Pa/m^3).
+the compressed oil volume, stiffness ``beta / V`` in Pa/m^3; ``extra["C1"]`` a pressure added to
+the volume's law, a changed stiffness).
 """
 from __future__ import annotations
 
@@ -31,7 +32,8 @@ def hydraulic() -> TruthPlant:
 
     def rhs(x, u, extra):
         V1, V2, q = (float(v) for v in x)
-        p1, p2 = V1 / C, V2 / C
+        # a changed law of a volume is its pressure's (its 0-junction's effort), not a flow
+        p1, p2 = V1 / C + extra.get("C1", 0.0), V2 / C + extra.get("C2", 0.0)
         return np.array([u["Q_p"] - q + extra.get("p1", 0.0),
                          q - p2 / R_out + extra.get("p2", 0.0),
                          (p1 - p2 - R_pipe * q + extra.get("q_pipe", 0.0)) / I])

@@ -35,7 +35,7 @@ class NonlinearStiffness(Kind):
             k_lin = site.scales.effort / X
             out.append(Proposal(target=c, params=(
                 ParamSpec(fresh_name(site.taken, f"k3_{c}"), 0.0, -100 * k_lin / X ** 2, 100 * k_lin / X ** 2,
-                          f"{e_unit}/{q_unit}^3" if q_unit else s_unit, f"cubic stiffness coefficient of {c}"),
+                          _cubed(e_unit, q_unit) if q_unit else s_unit, f"cubic stiffness coefficient of {c}"),
                 _linear_value(element, site.taken, k_lin))))
         return out
 
@@ -78,3 +78,8 @@ def _linear_value(element, taken, k_lin: float) -> ParamSpec:
         return ParamSpec(c, v, low, high, element.value.unit, f"linear {quantity} of {c} (refitted)")
     return ParamSpec(fresh_name(taken, f"dk_{c}"), 0.0, -3 * k_lin, 3 * k_lin, units_of(element)[0],
                      f"change of the linear stiffness of {c} (refitted)")
+
+
+def _cubed(e_unit: str, q_unit: str) -> str:
+    """The unit of a cubic coefficient: ``N/m^3``, ``Pa/(m^3)^3``."""
+    return f"{e_unit}/({q_unit})^3" if "^" in q_unit or "/" in q_unit else f"{e_unit}/{q_unit}^3"

@@ -341,8 +341,9 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     fit_part = _before_divergence(fit_part, diverged)
 
     def fit_one(cand, abandon_above):
+        # every fit starts at the recording's first sample, where an added actuator still rested
         return fit_candidate(graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0, through=train,
-                             abandon_above=abandon_above, judge=judge)
+                             mid_run=False, abandon_above=abandon_above, judge=judge)
 
     fits, best = fit_in_turn(cands, fit_one, say, "fitting")
     fits += _companion_fits(graph, fits, place_list, cand_part, rv, fit_one, say, "fitting", best, x0)
@@ -515,8 +516,8 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     fit_part, fit_x0 = _fit_window(train, res.run, x0)
 
     def fit_one(cand, abandon_above):
-        return fit_candidate(graph, cand, fit_part, held, x0=fit_x0, through=train, abandon_above=abandon_above,
-                             judge=judge)
+        return fit_candidate(graph, cand, fit_part, held, x0=fit_x0, through=train, mid_run=False,
+                             abandon_above=abandon_above, judge=judge)
 
     fits, best = fit_in_turn(cands, fit_one, say, f"{label}: fitting")
     fits += _companion_fits(graph, fits, [s.place for s in places], train, rv, fit_one, say, f"{label}: fitting",

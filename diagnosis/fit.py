@@ -256,7 +256,8 @@ def _best_start(objective, candidate, theta0):
 
 
 def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, max_nfev: int = 40,
-                  abandon_above: float | None = None, through=None, judge=None) -> CandidateFit:
+                  abandon_above: float | None = None, through=None, judge=None,
+                  mid_run: bool | None = None) -> CandidateFit:
     """Fit a candidate's parameters (and uncertain nominal ones) by simulation-error least squares.
 
     Parameters
@@ -271,8 +272,9 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
         Nominal parameters fitted alongside (within a factor 3 of their value).
     x0 : dict str -> float or array_like, optional
         Initial state of the nominal model at ``train.t[0]``.  Added states start at their own
-        initial values; given `x0` (a window cut from a longer run), an added actuator state starts
-        at the first recorded command instead.
+        initial values (an actuator's where its input rested before the recording began); in a
+        window cut from a longer run (`mid_run`), an added actuator state starts at the first
+        recorded command instead.
     max_nfev : int
         Budget of residual evaluations of :func:`scipy.optimize.least_squares`
         (each Jacobian is one more batch of ``n_params`` runs).
@@ -292,6 +294,11 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
         the nominal drifts or diverges); default open-loop.  The open-loop held-out NRMSE is
         kept in ``extra["open_loop"]`` (inf where that run diverges: under the segment judge
         such a fit is still judged).
+    mid_run : bool, optional
+        Whether `train` (and `x0`) is a window cut from a longer run rather than the recording's
+        start; default: whenever `x0` is given.  :func:`diagnosis.diagnose.diagnose` fits from
+        the recording's first sample and says False: there `x0` is the state the recording
+        starts in (given or estimated), at which the actuator still rested.
 
     Returns
     -------
@@ -313,7 +320,8 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     label = str(candidate) if candidate is not None else f"refit of {graph.name}"
     failed = dict(values={s.name: s.guess for s in specs}, train_nrmse={o: np.nan for o in outputs},
                   holdout_nrmse={o: np.nan for o in outputs}, n_params=len(specs), success=False)
-    candidate = _started_mid_run(candidate, train, x0)
+    if mid_run if mid_run is not None else x0 is not None:
+        candidate = _started_mid_run(candidate, train, x0)
     try:
         model = candidate.build(graph) if candidate is not None else graph
         x0 = _state_dict(graph, x0)

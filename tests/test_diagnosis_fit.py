@@ -95,6 +95,18 @@ def test_valve_lag_recovered(msd):
     assert max(fit.holdout_nrmse.values()) < 1e-3
 
 
+def test_a_given_start_state_keeps_the_lag_where_the_input_rested(msd):
+    """x0 given for the recording's start (the user's, or estimated), not a window cut mid-run:
+    the lag starts where its input rested before the record (0 N), not at the first command."""
+    train, hold = _record(lag_truth(0.3)).split(0.3)
+    cand = _candidate(msd, Place("input", "F"), "valve_lag", train)
+    at_rest = {"p_m": 0.0, "q_k": 0.0}
+    fit = fit_candidate(msd, cand, train, hold, x0=at_rest, mid_run=False)
+    assert fit.values["tau_lag_F"] == pytest.approx(0.3, rel=1e-3)
+    # read as a window cut mid-run, the lag would start at the first command (2 N) instead
+    assert fit_candidate(msd, cand, train, hold, x0=at_rest).values["tau_lag_F"] != pytest.approx(0.3, rel=0.02)
+
+
 def test_transport_delay_recovered_from_a_shifted_input(msd):
     shift = 5                                              # samples: 0.1 s, exact for a zero-order hold
     delayed = np.concatenate([np.zeros(shift), F[:-shift]])   # the command was 0 before t = 0
@@ -257,6 +269,11 @@ def test_added_actuator_states_start_where_the_input_rested():
     preloaded = library.build("mass-spring-damper")
     preloaded.elements["k"].initial = 0.25                             # k x0 = 1 N: rests under F = 1 N
     assert resting_input(preloaded, "F", np.array([3.0])) == 1.0
+    # a rest outside the recorded range, away from 0 and the default (1 N): commands that never went
+    # down to it (seed 9191's tanks, resting at an inflow below every recorded level)
+    preloaded = library.build("mass-spring-damper")
+    preloaded.elements["k"].initial = 0.5                              # rests under F = 2 N
+    assert resting_input(preloaded, "F", np.array([2.5, 3.0])) == pytest.approx(2.0, abs=1e-5)
     # the cylinder's state (the rod follower) does not feel the pressure: nothing says where the
     # pressure rested, so the lag starts at the first recorded pressure, not at 0 Pa
     cylinder = library.build("pneumatic-cylinder")

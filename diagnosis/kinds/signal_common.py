@@ -65,7 +65,7 @@ def resting_input(graph, u: str, recorded, x0=None) -> float:
     """The value of input `u` before the experiment: where the recording's initial state rests.
 
     Of 0, the input's default, its first recorded value and 33 values across its recorded range
-    (refined between the best one's neighbours), the one at which the initial state `x0` (dict
+    (refined between the best one's neighbours among them all), the one at which the initial state `x0` (dict
     state name -> value; default the model's) is closest to rest: the rates :math:`|f_i(x_0, u)|`
     (other inputs at their defaults) are normalised per state by their largest value over the
     trials, summed, and the smallest sum wins (ties: in that order).  A valve that held a joint at
@@ -111,11 +111,15 @@ def resting_input(graph, u: str, recorded, x0=None) -> float:
 
     scores = (r[:, moving] / peak[moving]).sum(axis=1)
     best = int(np.argmin(scores))
-    if best < 3:
+    if scores[best] == 0.0:
         return options[best]
-    grid = options[3:]
-    k = best - 3
-    lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
+    # between the best one's neighbours among all the trials: a rest outside the recorded range
+    # (levels that never went down to the inflow the tanks rested at) lies between 0 and its edge
+    ordered = sorted(set(options))
+    k = ordered.index(options[best])
+    lo, hi = ordered[max(k - 1, 0)], ordered[min(k + 1, len(ordered) - 1)]
+    if hi <= lo:
+        return options[best]
     found = minimize_scalar(lambda v: float(score([v])[0]), bounds=(lo, hi), method="bounded",
-                            options={"xatol": 1e-6 * (grid[-1] - grid[0])})
-    return float(found.x) if found.success and found.fun <= scores[best] else options[best]
+                            options={"xatol": 1e-6 * (ordered[-1] - ordered[0])})
+    return float(found.x) if found.success and found.fun < scores[best] else options[best]

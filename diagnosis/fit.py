@@ -320,7 +320,8 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     label = str(candidate) if candidate is not None else f"refit of {graph.name}"
     failed = dict(values={s.name: s.guess for s in specs}, train_nrmse={o: np.nan for o in outputs},
                   holdout_nrmse={o: np.nan for o in outputs}, n_params=len(specs), success=False)
-    if mid_run if mid_run is not None else x0 is not None:
+    mid_run = x0 is not None if mid_run is None else mid_run
+    if mid_run:
         candidate = _started_mid_run(candidate, train, x0)
     try:
         model = candidate.build(graph) if candidate is not None else graph

@@ -208,6 +208,19 @@ def test_a_two_level_input_clipped_on_both_levels_is_a_saturation(msd, rng):
     assert max(fit.holdout_nrmse.values()) < 1e-3
 
 
+def test_a_sensor_clipped_on_both_sides_is_a_sensor_range(msd):
+    """The position sensor reads only -0.2 .. 0.25 m of a motion that goes beyond both: the
+    starts at the recorded extremes clip both sides, and the fit recovers both ends."""
+    y = OutputSimulator(msd, Experiment(T, {"F": F}, {"x": T, "v": T}, UNITS))()
+    y["x"] = np.clip(y["x"], -0.2, 0.25)
+    train, hold = Experiment(T, {"F": F}, y, UNITS).split(0.3)
+    fit = fit_candidate(msd, _candidate(msd, Place("output", "x"), "saturation", train), train, hold)
+    assert fit.success, fit.message
+    assert (fit.values["y_min_x"], fit.values["y_max_x"]) == (pytest.approx(-0.2, abs=1e-3),
+                                                              pytest.approx(0.25, abs=1e-3))
+    assert max(fit.holdout_nrmse.values()) < 1e-3
+
+
 def test_a_soft_end_stop_is_recovered_with_its_stiffness(msd):
     """A rubber bumper engaging at x = 0.3 m, half as stiff as the spring: the fitted end stop has
     its position and its stiffness (a wall's fixed stiffness could not stand for it).  A rigid

@@ -120,7 +120,7 @@ def test_a_sensor_on_a_spring_reads_its_changed_law_as_the_library_graph_does(ma
     (k3 = m, linear value k - m alpha <q^2>, as a compliance where the element has one): the
     outputs agree.  (Until session 12 the truth added the oil volume's change as a flow at its
     0-junction, a different physics that no stiffness candidate could fit: seeds 6161, 7373 and
-    9191 each had one such case answered as a leak or a constant load.)"""
+    9191 each had one such case answered as another kind.)"""
     from diagnosis.benchmark.effects import make_effect
     from diagnosis.catalogue import candidates
     from diagnosis.place import Place

@@ -121,6 +121,9 @@ class TruthEffect(NoEffect):
         if door == "storage":
             self.storage = plant.storage(name)
             self.junction = self.storage.junction
+            # a storage's effort on a 0-junction is the junction's: a changed law is its own
+            # (``extra[<storage>]``, read by the plant's right-hand side), not a flow added there
+            self.law_is_effort = plant.junction(self.junction).kind == "0"
         elif door == "junction":
             self.junction = name
 
@@ -196,9 +199,7 @@ class TruthEffect(NoEffect):
                 # strong cubic on a weak spring would otherwise make it negative: bistable)
                 share = min(sh["alpha"] * sh["q2"], 0.9 * self.storage.stiffness / m) if m > 0 else 0.0
                 change = s * m * (q ** 3 - share * q)
-                if self.plant.junction(j).kind == "0":
-                    # at a 0-junction the storage's effort is the junction's: the law itself
-                    # changes (the plant's right-hand side reads it), not a flow added there
+                if self.law_is_effort:
                     return {self.storage.name: change}, np.zeros(0)
                 return {j: -change}, np.zeros(0)
             if k == "backlash":                 # the spring carries nothing inside +-m
@@ -248,8 +249,10 @@ class TruthEffect(NoEffect):
         if not self.changes_sensed_storage:
             return y
         y = dict(y)
-        name = self.storage.name
-        change = ext[name] if name in ext else -self.storage.sign * ext.get(self.junction, 0.0)
+        if self.law_is_effort:
+            change = ext.get(self.storage.name, 0.0)
+        else:
+            change = -self.storage.sign * ext.get(self.junction, 0.0)
         for name in self.storage.sensed:
             y[name] = y[name] + change
         return y

@@ -68,12 +68,11 @@ def resting_input(graph, u: str, recorded, x0=None) -> float:
     (refined between the best one's neighbours among them all), the one at which the initial
     state `x0` (dict state name -> value; default the model's) is closest to rest: the rates
     :math:`|f_i(x_0, u)|` (other inputs at their defaults) are normalised per state by their
-    largest value over the trials, summed, and the smallest sum wins (ties: in that order).
-    A valve that held a joint at
-    rest at 5 V before the record began rested at 5 V, whatever its first command.  The first
-    recorded value when the model cannot be evaluated, or when the rates do not depend on the
-    input at all (nothing says where it rested: the actuator is taken to have followed its first
-    command).
+    largest value over the trials, summed, and the smallest sum wins (ties: in that order).  A
+    valve that held a joint at rest at 5 V before the record began rested at 5 V, whatever its
+    first command.  The first recorded value when the model cannot be evaluated, or when the
+    rates do not depend on the input at all (nothing says where it rested: the actuator is taken
+    to have followed its first command).
     """
     from scipy.optimize import minimize_scalar
 

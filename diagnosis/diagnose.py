@@ -553,7 +553,9 @@ def _joint_refit(graph, effects, exp, train, held, judge, x0, reference, floor, 
     names = [p.name for e in effects for p in e.candidate.params
              if p.name not in values or not released(values[p.name].value)] + list(uncertain)
     part, part_x0 = _fit_window(train, None, x0)
-    fit = fit_candidate(graph, None, part, held, uncertain=names, x0=part_x0, through=train, judge=judge)
+    own = {p.name: (p.lower, p.upper) for e in effects for p in e.candidate.params}
+    fit = fit_candidate(graph, None, part, held, uncertain=names, x0=part_x0, through=train, judge=judge,
+                        within=own)
     out = JointRefit(fit, dict(reference), dict(reference))
     if not all(np.isfinite(v) for v in fit.values.values()) or not np.all(np.isfinite(
             list(fit.holdout_nrmse.values()))):

@@ -104,9 +104,11 @@ class CandidateFit:
         return self.candidate.kind if self.candidate is not None else "nominal"
 
 
-def _uncertain_specs(graph, uncertain) -> list[ParamSpec]:
-    """Nominal parameters marked uncertain, fitted within a factor 3 of their value."""
+def _uncertain_specs(graph, uncertain, within=None) -> list[ParamSpec]:
+    """Nominal parameters marked uncertain, fitted within a factor 3 of their value and, for
+    those in `within` (name -> (lower, upper)), within those bounds too."""
     params = graph.parameters()
+    within = within or {}
     specs = []
     for name in uncertain:
         if name not in params:
@@ -114,6 +116,9 @@ def _uncertain_specs(graph, uncertain) -> list[ParamSpec]:
                                  f"its parameters are {', '.join(params)}")
         v, unit = float(params[name].value), params[name].unit
         lo, hi = (v / 3, v * 3) if v > 0 else ((v * 3, v / 3) if v < 0 else (-1.0, 1.0))
+        if name in within:
+            lo, hi = max(lo, within[name][0]), min(hi, within[name][1])
+            lo, hi = min(lo, v), max(hi, v)       # the value itself stays admissible
         specs.append(ParamSpec(name, v, lo, hi, unit, f"nominal parameter {name} (uncertain)"))
     return specs
 
@@ -257,7 +262,7 @@ def _best_start(objective, candidate, theta0):
 
 def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, max_nfev: int = 40,
                   abandon_above: float | None = None, through=None, judge=None,
-                  mid_run: bool | None = None) -> CandidateFit:
+                  mid_run: bool | None = None, within=None) -> CandidateFit:
     """Fit a candidate's parameters (and uncertain nominal ones) by simulation-error least squares.
 
     Parameters
@@ -270,6 +275,10 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
         Training part and the held-out part that follows it (model units, absolute times, s).
     uncertain : iterable of str
         Nominal parameters fitted alongside (within a factor 3 of their value).
+    within : dict str -> (float, float), optional
+        Bounds some of the `uncertain` parameters may not leave either: an added effect's own,
+        when a joint refit (:func:`diagnosis.diagnose.diagnose`) fits it again as a parameter of
+        the improved graph.
     x0 : dict str -> float or array_like, optional
         Initial state of the nominal model at ``train.t[0]``.  Added states start at their own
         initial values (an actuator's where its input rested before the recording began); in a
@@ -316,7 +325,8 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     outputs = list(train.outputs)
     own = list(candidate.params) if candidate is not None else []
     # a candidate that refits a nominal parameter itself (a C's linear value) fits it once
-    specs = own + _uncertain_specs(graph, [u for u in dict.fromkeys(uncertain) if u not in {s.name for s in own}])
+    specs = own + _uncertain_specs(graph, [u for u in dict.fromkeys(uncertain) if u not in {s.name for s in own}],
+                                   within)
     label = str(candidate) if candidate is not None else f"refit of {graph.name}"
     failed = dict(values={s.name: s.guess for s in specs}, train_nrmse={o: np.nan for o in outputs},
                   holdout_nrmse={o: np.nan for o in outputs}, n_params=len(specs), success=False)

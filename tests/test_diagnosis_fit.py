@@ -131,6 +131,10 @@ def test_sensor_offset_and_uncertain_nominal_parameter(msd, rng):
     assert fit.n_params == 2
     assert fit.values["b"] == pytest.approx(0.6, rel=0.02)
     assert fit.values["Fc_v_mass"] == pytest.approx(0.3, rel=0.03)
+    # bounds of its own (an effect refitted jointly): b may not leave them for the truth's 0.6
+    bounded = fit_candidate(msd, _candidate(msd, Place("junction", "v_mass"), "coulomb_friction", train),
+                            train, hold, uncertain=("b",), within={"b": (0.3, 0.5)})
+    assert bounded.values["b"] == pytest.approx(0.5)
 
 
 def test_choose_prefers_the_simpler_of_two_equal_fits(msd):

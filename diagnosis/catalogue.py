@@ -40,7 +40,7 @@ import numpy as np
 
 from bondgraph import Param
 
-from .catalogue_common import ParamSpec
+from .catalogue_common import ParamSpec, priced
 from .catalogue_scales import Scales, experiment_times, junction_scales
 from .errors import DiagnosisError, UnknownNameError
 from .kinds import KINDS, REGISTRY, Site, kind_named
@@ -107,8 +107,8 @@ class Candidate:
 
     @property
     def n_params(self) -> int:
-        """Number of fitted parameters."""
-        return len(self.params)
+        """Number of fitted parameters the choice prices (:attr:`ParamSpec.priced`)."""
+        return priced(self.params)
 
     def guesses(self) -> dict[str, float]:
         """Starting values by parameter name."""

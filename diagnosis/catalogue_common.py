@@ -15,8 +15,8 @@ from bondgraph.params import DOMAINS
 
 from .errors import DiagnosisError
 
-__all__ = ["RELEASED", "released", "ParamSpec", "fresh_name", "junction_elements", "junction_domain", "junction_units",
-           "domain_units"]
+__all__ = ["RELEASED", "released", "ParamSpec", "priced", "fresh_name", "junction_elements", "junction_domain",
+           "junction_units", "domain_units"]
 
 
 #: The value of a limit with no evidence behind it (a saturation side no training sample
@@ -45,6 +45,10 @@ class ParamSpec:
         SI unit.
     description : str
         What it is, in words.
+    priced : bool
+        Whether the choice of a model prices it (:func:`diagnosis.fit.choose`): a shape that adds
+        no physics (the smoothing of a friction's sign, :mod:`diagnosis.kinds.friction_common`)
+        is fitted but not counted.
     """
 
     name: str
@@ -53,6 +57,7 @@ class ParamSpec:
     upper: float
     unit: str
     description: str
+    priced: bool = True
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name.isidentifier():
@@ -68,6 +73,11 @@ class ParamSpec:
     def clipped(self, value: float) -> float:
         """`value` within the bounds."""
         return float(min(max(value, self.lower), self.upper))
+
+
+def priced(specs) -> int:
+    """How many of the parameters `specs` the choice of a model prices (:attr:`ParamSpec.priced`)."""
+    return sum(1 for spec in specs if getattr(spec, "priced", True))
 
 
 def fresh_name(taken, base: str) -> str:

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .catalogue_common import RELEASED, ParamSpec
+from .catalogue_common import RELEASED, ParamSpec, priced
 from .errors import BondcosimError, DiagnosisError
 from .holdout_resolution import Z_RESOLVED, held_out_prediction, resolution
 
@@ -71,7 +71,8 @@ class CandidateFit:
     train_nrmse, holdout_nrmse : dict str -> float
         Per output (NaN when the fit failed).
     n_params : int
-        Number of fitted parameters.
+        Number of fitted parameters the choice prices (:attr:`ParamSpec.priced
+        <diagnosis.catalogue_common.ParamSpec>`).
     success : bool
     message : str
         The optimiser's message, or why the fit failed.
@@ -329,7 +330,7 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
                                    within)
     label = str(candidate) if candidate is not None else f"refit of {graph.name}"
     failed = dict(values={s.name: s.guess for s in specs}, train_nrmse={o: np.nan for o in outputs},
-                  holdout_nrmse={o: np.nan for o in outputs}, n_params=len(specs), success=False)
+                  holdout_nrmse={o: np.nan for o in outputs}, n_params=priced(specs), success=False)
     mid_run = x0 is not None if mid_run is None else mid_run
     if mid_run:
         candidate = _started_mid_run(candidate, train, x0)
@@ -397,7 +398,7 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
             return CandidateFit(candidate, message=f"{label}: the fitted model does not run: {exc}", graph=model,
                                 n_simulations=objective.n_runs, **failed)
         open_loop = dict(holdout_nrmse)
-    return CandidateFit(candidate, values, train_nrmse, holdout_nrmse, len(specs), converged,
+    return CandidateFit(candidate, values, train_nrmse, holdout_nrmse, priced(specs), converged,
                         message if converged else f"{label} did not converge: {message}", model,
                         objective.n_runs + 1,
                         {"train_cost": 0.5 * float(sum(v ** 2 for v in train_nrmse.values())),

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+from .catalogue_common import priced
 from .place import Place
 
 __all__ = ["CandidateGroup", "twin_places", "twin_groups"]
@@ -67,7 +68,7 @@ class CandidateGroup:
 
     @property
     def n_params(self) -> int:
-        return len(self.params)
+        return priced(self.params)
 
     def guesses(self) -> dict:
         return {p.name: p.guess for p in self.params}

@@ -92,7 +92,7 @@ def test_modulated_friction_recovers_an_mr_dampers_level_gain_and_lag(rng):
     coil = next(c for c in offered if c.regime == "V")
     fit = fit_candidate(rig, coil, train, hold)
     values = fit.values
-    level_at_mean = 20.0 + 15.0 * coil.constants[1][1]              # F0 is the level at the mean voltage
+    level_at_mean = 20.0 + 15.0 * coil.constants[0][1]              # F0 is the level at the mean voltage
     assert values["F0_piston_V"] == pytest.approx(level_at_mean, rel=0.05)
     assert values["k_mod_piston_V"] == pytest.approx(15.0, rel=0.05)
     assert values["tau_mod_piston_V"] == pytest.approx(0.08, rel=0.15)
@@ -119,7 +119,7 @@ def test_modulated_friction_starts_where_the_feature_regression_found_it(rng):
     start = started.starts[-1]
     assert start["tau_mod_piston_V"] == pytest.approx(0.1)
     assert start["k_mod_piston_V"] == pytest.approx(15.0, rel=0.3)
-    assert start["F0_piston_V"] == pytest.approx(20.0 + 15.0 * coil.constants[1][1], rel=0.3)
+    assert start["F0_piston_V"] == pytest.approx(20.0 + 15.0 * coil.constants[0][1], rel=0.3)
     sim = OutputSimulator(coil.build(rig), train)
 
     def cost(values):

@@ -58,7 +58,7 @@ def test_coulomb_named_at_the_mass_junction(coulomb):
     assert [m["kind"] for m in physics] == ["coulomb_friction"]
     assert physics[0]["attached_to"] == "junction v_mass"
     assert data["location"]["junction"] == "v_mass"
-    (level,) = physics[0]["parameters"].values()
+    level = physics[0]["parameters"]["Fc_v_mass"]
     assert level == pytest.approx(FC, rel=0.1)                      # the concealed 0.3 N
     assert f"{level:.3g} N whenever it moves" in physics[0]["explanation"]
     assert data["location"]["regime"].startswith("sign of v_m")   # friction follows the velocity sign
@@ -92,8 +92,8 @@ def test_report_saves_schema_plots_and_an_improved_graph(coulomb, tmp_path):
     for key in ("residual_time", "residual_regime", "holdout_fit"):
         assert open(paths[key], "rb").read(8) == b"\x89PNG\r\n\x1a\n"
     improved = load(paths["model"])
-    (name,) = coulomb.missing_physics[0]["parameters"]
-    assert improved.parameters()[name].value == pytest.approx(coulomb.missing_physics[0]["parameters"][name])
+    for name, value in coulomb.missing_physics[0]["parameters"].items():   # the level and the sign's smoothing
+        assert improved.parameters()[name].value == pytest.approx(value)
     assert improved.equations().n_states == 2
 
 
@@ -238,8 +238,7 @@ def test_max_effects_one_is_round_one_alone(two_effects_csv, two_effects, capsys
     data = json.loads(capsys.readouterr().out)
     first = two_effects.rounds[0]
     assert [m["kind"] for m in data["missing_physics"]] == ["coulomb_friction"]
-    assert data["missing_physics"][0]["parameters"] == pytest.approx(
-        {"Fc_v_mass": first.chosen.values["Fc_v_mass"]}, rel=1e-12)
+    assert data["missing_physics"][0]["parameters"] == pytest.approx(first.chosen.values, rel=1e-12)
     assert data["fit"]["improved"] == pytest.approx(first.improved, rel=1e-12)
     assert data["fit"]["improved"]["x"] > 2 * np.hypot(SIGMA, QUANTUM / np.sqrt(12)) / 0.7
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from .base import Kind, register
 from .feature_signals import FeatureGroup
-from .friction_common import friction_r, level, sign, smoothing_flow, with_level_starts
+from .friction_common import friction_r, level, sign, sharpened, smoothing, with_level_starts
 
 
 @register
@@ -12,14 +12,14 @@ class CoulombFriction(Kind):
     name = "coulomb_friction"
     doors = ("1",)
     feature_doors, feature_names, feature_price = "1", ("sign(v)",), 1
-    feature_params = 1
+    feature_params, feature_grid_params = 1, (1,)
 
     def features(self, s):
-        return [FeatureGroup(None, "", ["sign(v)"], s.sign[:, None])]
+        return sharpened(s, lambda sign: [FeatureGroup(None, "", ["sign(v)"], sign[:, None])])
 
     def propose(self, site):
-        return [with_level_starts([level(site, "Fc", f"Coulomb friction level at {site.name}")],
-                                  constants=(smoothing_flow(site),))]
+        return [with_level_starts([level(site, "Fc", f"Coulomb friction level at {site.name}"),
+                                   smoothing(site)])]
 
     def build(self, graph, cand, values):
         return friction_r(graph, cand, f"{cand.params[0].name}*{sign(cand)}")

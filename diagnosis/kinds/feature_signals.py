@@ -68,6 +68,10 @@ class FeatureSignals:
         """A nearly sharp sign of the flow (:data:`SIGN_FRACTION`)."""
         return np.tanh(self.v / (SIGN_FRACTION * self.v_rms))
 
+    def sign_at(self, fraction: float) -> np.ndarray:
+        """The sign of the flow smoothed over `fraction` of the RMS flow."""
+        return np.tanh(self.v / (fraction * self.v_rms))
+
     @cached_property
     def dt(self) -> float:
         return float(np.median(np.diff(self.t))) if self.t.size > 1 else 1.0

@@ -31,7 +31,7 @@ from bondgraph.editing_inputs import expression_fields, mentions
 from ..catalogue_common import ParamSpec, fresh_name, junction_domain, junction_elements, junction_units
 from .base import Kind, Proposal, hang, register
 from .feature_signals import FeatureGroup, lagged
-from .friction_common import smoothing_flow
+from .friction_common import sharpened, smoothing
 
 __all__ = ["ModulatedFriction", "modulating_signals"]
 
@@ -90,23 +90,24 @@ class ModulatedFriction(Kind):
     name = "modulated_friction"
     doors = ("1",)
     feature_doors, feature_names, feature_price = "1", ("sign(v)", "(lag(m) - m_mean) sign(v)"), 3
-    nests = {"coulomb_friction": {0: 0}}
+    nests = {"coulomb_friction": {0: 0, 3: 1}}
     # F0, k from the coefficients; the lag from the grid.  Guessed, a slope of the wrong size or a
     # lag decades off left the fit ten times above a pressure-dependent friction that needs neither,
     # and it was given up (diagnosis.fit_in_turn) while the features had found this law
-    feature_params, feature_grid_params = 2, (2,)
+    feature_params, feature_grid_params = 2, (2, 3)
 
     def features(self, s):
         """Sign, and the sign times each modulating signal through a lag of 2, 20 and 200
         sample intervals (at most a fifth of the record)."""
-        out = []
+        lags = []
         for expr, m in s.labelled("signal").items():
             for n in FEATURE_LAG_STEPS:
                 tau = min(max(n * s.dt, s.dt / 2), max(s.span / 5, s.dt))
-                lag = lagged(m, s.t, tau)
-                out.append(FeatureGroup(expr, f"lag {tau:.3g} s", ["sign(v)", "(lag(m) - m_mean) sign(v)"],
-                                        np.stack([s.sign, (lag - lag.mean()) * s.sign], axis=1), (float(tau),)))
-        return out
+                lags.append((expr, tau, lagged(m, s.t, tau)))
+        return sharpened(s, lambda sign: [
+            FeatureGroup(expr, f"lag {tau:.3g} s", ["sign(v)", "(lag(m) - m_mean) sign(v)"],
+                         np.stack([sign, (lag - lag.mean()) * sign], axis=1), (float(tau),))
+            for expr, tau, lag in lags])
 
     def propose(self, site):
         """One candidate per modulating signal that varies in the nominal simulation
@@ -115,7 +116,6 @@ class ModulatedFriction(Kind):
         e_unit, _ = junction_units(site.graph, j)
         E = scales.effort
         units = {d.name: d.unit for d in site.graph.inputs()}
-        v_eps = smoothing_flow(site)
         out = []
         for label, expr in modulating_signals(site.graph, j).items():   # those simulated: site.signals
             s = site.values.get(f"signal:{label}")
@@ -133,12 +133,13 @@ class ModulatedFriction(Kind):
             taus = [min(max(n * scales.dt, tau_lo), tau_hi) for n in _LAG_STARTS]
             out.append(Proposal(
                 regime=expr,
-                constants=(v_eps, (name("s_ref"), s_ref, s_unit, f"reference value of {label} for the friction at {j}"),
+                constants=((name("s_ref"), s_ref, s_unit, f"reference value of {label} for the friction at {j}"),
                            (name("s_0"), float(s[0]), s_unit, f"initial lagged value of {label} at {j}")),
                 params=(ParamSpec(f0, 0.1 * E, 0.0, 10 * E, e_unit, f"friction level at {j} at the mean {label}"),
                         ParamSpec(k, 0.0, -10 * E / s_scale, 10 * E / s_scale, k_unit,
                                   f"change of the friction level at {j} per unit of {label}"),
-                        ParamSpec(tau, taus[1], tau_lo, tau_hi, "s", f"lag of {label} reaching the friction at {j}")),
+                        ParamSpec(tau, taus[1], tau_lo, tau_hi, "s", f"lag of {label} reaching the friction at {j}"),
+                        smoothing(site)),
                 starts=tuple({f0: 0.1 * E * g, k: sign * 0.3 * E / s_scale, tau: t}
                              for t in taus for sign in (1.0, -1.0) for g in (0.1, 1.0))))
         return out
@@ -146,21 +147,21 @@ class ModulatedFriction(Kind):
     def build(self, graph, cand, values):
         """An equation element owning the lag state, on the 1-junction."""
         j = cand.place.name
-        f0, k, tau = (spec.name for spec in cand.params)
-        (v_eps, *_), (s_ref, *_), (_, start, *_) = cand.constants
+        f0, k, tau, v_eps = (spec.name for spec in cand.params)
+        (s_ref, *_), (_, start, *_) = cand.constants
         name = fresh_name(set(graph.elements), f"modulated_friction_{j}")
         state = f"s_lag_{name}"
         element = EquationElement(
             name, ports={"m": "in"}, outputs={"e_m": f"({f0} + {k}*({state} - {s_ref}))*tanh(f_m/{v_eps})"},
             states={state: f"(({cand.regime}) - {state})/{tau}"}, initial={state: start},
-            units={state: cand.constants[1][2]},
+            units={state: cand.constants[0][2]},
             description=f"friction at {j} with its level set by {cand.regime} through a lag")
         return hang(graph, element, j)
 
     def explain(self, cand, values, show):
         j = cand.place.name
-        f0, k, tau = (spec.name for spec in cand.params)
-        s_ref = cand.constants[1][1]
+        f0, k, tau = (spec.name for spec in cand.params[:3])
+        s_ref = cand.constants[0][1]
         slope = values.get(k, 0.0)
         trend = (f"{'more' if slope > 0 else 'less'} at higher {cand.regime} ({show(k)})" if slope
                  else f"whatever {cand.regime}")

@@ -12,7 +12,7 @@ from ..catalogue_common import ParamSpec, junction_units
 from ..catalogue_scales import pressure_variables
 from .base import Kind, register
 from .feature_signals import FeatureGroup
-from .friction_common import friction_r, level, namer, sign, smoothing_flow, with_level_starts
+from .friction_common import friction_r, level, namer, sharpened, sign, smoothing, with_level_starts
 
 
 @register
@@ -20,14 +20,14 @@ class PressureDependentFriction(Kind):
     name = "pressure_dependent_friction"
     doors = ("1",)
     feature_doors, feature_names, feature_price = "1", ("sign(v)", "(P - P_mean) sign(v)"), 2
-    feature_params = 2
-    nests = {"coulomb_friction": {0: 0}}
+    feature_params, feature_grid_params = 2, (2,)
+    nests = {"coulomb_friction": {0: 0, 2: 1}}
 
     def features(self, s):
         """Sign, and the sign times each moving pressure's deviation from its mean."""
-        return [FeatureGroup(expr, "", ["sign(v)", "(P - P_mean) sign(v)"],
-                             np.stack([s.sign, (p - p.mean()) * s.sign], axis=1))
-                for expr, p in s.labelled("pressure").items()]
+        return sharpened(s, lambda sign: [
+            FeatureGroup(expr, "", ["sign(v)", "(P - P_mean) sign(v)"], np.stack([sign, (p - p.mean()) * sign], axis=1))
+            for expr, p in s.labelled("pressure").items()])
 
     def propose(self, site):
         j, E = site.name, site.scales.effort
@@ -41,22 +41,23 @@ class PressureDependentFriction(Kind):
             out.append(with_level_starts(
                 [level(site, "c0", f"Coulomb friction level at {j} at the reference pressure"),
                  ParamSpec(name("c1"), 0.0, -10 * E / p_scale, 10 * E / p_scale, f"{e_unit}/Pa",
-                           f"change of the friction level at {j} per Pa of {label}")],
-                regime=expr, constants=(smoothing_flow(site),
-                                        (name("p_ref"), p_ref, "Pa", f"reference pressure of the friction law at {j}"))))
+                           f"change of the friction level at {j} per Pa of {label}"),
+                 smoothing(site)],
+                regime=expr,
+                constants=((name("p_ref"), p_ref, "Pa", f"reference pressure of the friction law at {j}"),)))
         return out   # those among the located regime variables come first (catalogue.candidates)
 
     def build(self, graph, cand, values):
-        c0, c1 = (p.name for p in cand.params)
-        p_ref = cand.constants[1][0]
+        c0, c1 = (p.name for p in cand.params[:2])
+        p_ref = cand.constants[0][0]
         return friction_r(graph, cand, f"({c0} + {c1}*(({cand.regime}) - {p_ref}))*{sign(cand)}")
 
     def explain(self, cand, values, show):
         j = cand.place.name
-        c0, c1 = (p.name for p in cand.params)
+        c0, c1 = (p.name for p in cand.params[:2])
         slope = values.get(c1, 0.0)
         trend = (f"{'more' if slope > 0 else 'less'} at higher {cand.regime} ({show(c1)})" if slope
                  else f"whatever {cand.regime}")
-        p_ref = cand.constants[1][1]
+        p_ref = cand.constants[0][1]
         return (f"the motion at {j} loses about {show(c0)} whenever it moves (at {cand.regime} = "
                 f"{p_ref:.4g} Pa), {trend}: pressure-dependent Coulomb friction at the {j} 1-junction")

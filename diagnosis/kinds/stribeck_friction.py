@@ -8,7 +8,7 @@ import numpy as np
 from ..catalogue_common import ParamSpec, junction_units
 from .base import Kind, register
 from .feature_signals import FeatureGroup
-from .friction_common import friction_r, level, namer, sign, smoothing_flow, with_level_starts
+from .friction_common import friction_r, level, namer, sharpened, sign, smoothing, with_level_starts
 
 
 #: the Stribeck velocities the features try, as fractions of the RMS flow
@@ -20,15 +20,15 @@ class StribeckFriction(Kind):
     name = "stribeck_friction"
     doors = ("1",)
     feature_doors, feature_names, feature_price = "1", ("sign(v)", "exp(-(v/v_s)^2) sign(v)"), 3
-    feature_params, feature_grid_params = 2, (2,)    # Fc, dFs from the coefficients; v_s from the grid
-    nests = {"coulomb_friction": {0: 0}}
+    feature_params, feature_grid_params = 2, (2, 3)    # Fc, dFs from the coefficients; v_s, v_eps from the grid
+    nests = {"coulomb_friction": {0: 0, 3: 1}}
 
     def features(self, s):
         """Sign and Stribeck decay, the decay velocity on a grid of the RMS flow."""
-        return [FeatureGroup(None, f"v_s = {f * s.v_rms:.3g}", ["sign(v)", "exp(-(v/v_s)^2) sign(v)"],
-                             np.stack([s.sign, np.exp(-(s.v / (f * s.v_rms)) ** 2) * s.sign], axis=1),
-                             (float(f * s.v_rms),))
-                for f in FEATURE_GRID]
+        return sharpened(s, lambda sign: [
+            FeatureGroup(None, f"v_s = {f * s.v_rms:.3g}", ["sign(v)", "exp(-(v/v_s)^2) sign(v)"],
+                         np.stack([sign, np.exp(-(s.v / (f * s.v_rms)) ** 2) * sign], axis=1), (float(f * s.v_rms),))
+            for f in FEATURE_GRID])
 
     def propose(self, site):
         j, V = site.name, site.scales.flow
@@ -36,15 +36,15 @@ class StribeckFriction(Kind):
         return [with_level_starts([
             level(site, "Fc", f"Coulomb friction level at {j}"),
             level(site, "dFs", f"static friction in excess of the Coulomb level at {j}"),
-            ParamSpec(namer(site)("v_s"), 0.2 * V, 0.005 * V, 10 * V, f_unit, f"Stribeck velocity at {j}")],
-            constants=(smoothing_flow(site),))]
+            ParamSpec(namer(site)("v_s"), 0.2 * V, 0.005 * V, 10 * V, f_unit, f"Stribeck velocity at {j}"),
+            smoothing(site)])]
 
     def build(self, graph, cand, values):
-        fc, dfs, vs = (p.name for p in cand.params)
+        fc, dfs, vs = (p.name for p in cand.params[:3])
         return friction_r(graph, cand, f"({fc} + {dfs}*exp(-(f/{vs})**2))*{sign(cand)}")
 
     def explain(self, cand, values, show):
         j = cand.place.name
-        fc, dfs, vs = (p.name for p in cand.params)
+        fc, dfs, vs = (p.name for p in cand.params[:3])
         return (f"the motion at {j} loses {show(fc)} when sliding and up to {show(dfs)} more near "
                 f"standstill (fading above about {show(vs)}): Stribeck friction at {j}")

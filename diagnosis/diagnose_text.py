@@ -202,8 +202,8 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
             lines.append(_judged_on_training(chosen))
         if chosen.extra.get("resolved_over"):
             other, z = chosen.extra["resolved_over"]
-            lines.append(f"Held-out error nearly tied it with {other}, which has fewer parameters; the held-out "
-                         f"part resolves the difference (z = {z:.1f}, diagnosis.holdout_resolution).")
+            lines.append(f"{other}, with fewer parameters, tied it or won on the parameters' price; the "
+                         f"held-out part resolves this fit's lower error (z = {z:.1f}, diagnosis.holdout_resolution).")
         if chosen.extra.get("preferred_over"):
             lines.append(f"Held-out error nearly tied it with {chosen.extra['preferred_over']}; the feature "
                          f"regression decided.")

@@ -43,6 +43,11 @@ MIN_SHARE = 0.30
 #: outputs that need explaining) it must reach: near the noise floor the excess is small
 #: and noisy, and a few per cent of NRMSE is within what the held-out part can resolve
 MIN_GAIN = 0.05
+#: a richer fit overturns the parameter price (:func:`choose`) only when its held-out NRMSE on the
+#: outputs that need explaining (root sum of squares) is within this factor of their noise floor:
+#: where no fit reaches the noise, something else is missing too, and a richer law absorbs part
+#: of it
+NEAR_FLOOR = 2.0
 #: nominal excess NRMSE^2 below which an output counts as explained (noise-free data)
 _EXPLAINED = 1e-6
 _FD_STEP = 1e-3  # forward-difference step on the scaled parameters
@@ -460,7 +465,13 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
        when the held-out part resolves the leader's lower error
        (:func:`~diagnosis.holdout_resolution.resolution`, :math:`z \\ge 3` against the noise the
        leader's own residual shows), the two are not tied; the simpler fit so set aside, with its
-       z, is recorded on the leader as ``extra["resolved_over"]``.  Among
+       z, is recorded on the leader as ``extra["resolved_over"]``.  The price does not outweigh
+       the samples either: a fit with more parameters than the best-scored one whose lower
+       held-out error (unpriced) they resolve at :math:`z \\ge 3` leads instead (the one with the
+       largest z), and the simpler fits it resolves are set aside in the same way, provided it
+       explains the held-out part to about the noise (NRMSE within :data:`NEAR_FLOOR` times the
+       floor): with a second effect still missing, every fit is wrong, and a richer law absorbs
+       part of the other effect (a Coulomb friction under a sensor offset read as Stribeck).  Among
        tied fits: fewer parameters, then a junction before a law place acting on it through a
        lever arm or a gear (:mod:`diagnosis.law_places`), then the smaller training error (where the
        start of the record may tell them apart; within 2 % again a tie), then
@@ -531,17 +542,34 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
         value = sum(v ** 2 for v in f.train_nrmse.values()) if f.train_nrmse else np.inf
         return value if np.isfinite(value) else np.inf
 
-    def raw_score(f):     # on the outputs that need explaining: the others only add their noise
-        return sum(f.holdout_nrmse[o] ** 2 for o in significant) * (1 + PARAMETER_PRICE) ** f.n_params
+    def unpriced_raw(f):  # on the outputs that need explaining: the others only add their noise
+        return sum(f.holdout_nrmse[o] ** 2 for o in significant)
+
+    def raw_score(f):
+        return unpriced_raw(f) * (1 + PARAMETER_PRICE) ** f.n_params
 
     def predicted(f):
         return f.extra.get("holdout_y")
 
     leader = min(usable, key=score)
+    # the price is a prior and the held-out samples are evidence: a richer fit whose lower error
+    # they resolve takes the lead the price gave a simpler one (diagnosis.holdout_resolution)
+    near_floor = NEAR_FLOOR ** 2 * sum(floor.get(o, 0.0) ** 2 for o in significant)
+    richer = [(resolution(measured, predicted(f), predicted(leader), significant), f) for f in usable
+              if f.n_params > leader.n_params and unpriced_raw(f) < min(unpriced_raw(leader), near_floor)]
+    richer = [(z, f) for z, f in richer if z >= Z_RESOLVED]
+    promoted = bool(richer)
+    if promoted:
+        leader = max(richer, key=lambda item: item[0])[1]
     # near the floor the priced held-out errors may tie where the excess does not, unless the
     # held-out part resolves the leader's lower error (diagnosis.holdout_resolution)
     tied, resolved_over = [], []
     for f in usable:
+        if promoted and f.n_params < leader.n_params:
+            z = resolution(measured, predicted(leader), predicted(f), significant)
+            if z >= Z_RESOLVED:
+                resolved_over.append((str(f.candidate), z))
+                continue
         if score(f) <= score(leader) * (1 + TIE):
             tied.append(f)
         elif raw_score(f) <= raw_score(leader) * (1 + TIE) ** 2:

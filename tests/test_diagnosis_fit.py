@@ -392,6 +392,38 @@ def test_a_near_tie_the_held_out_part_resolves_goes_to_the_better_fit(rng):
             assert 3.0 <= richer.extra["resolved_over"][1] < 7.0
 
 
+def test_a_richer_fit_the_held_out_part_resolves_is_not_priced_out(rng):
+    """A simpler fit 4 % worse on the held-out part than a richer one two parameters dearer (21 %)
+    wins on price alone; where the held-out samples resolve the difference (z >= 3), the richer one
+    does (seed 2468: a Stribeck friction, held-out F 0.0424 against Coulomb's 0.0441, z = 7.2)."""
+    from types import SimpleNamespace
+    t = np.linspace(0.0, 50.0, 20000)
+    truth, sigma = np.sin(t), 0.1
+    held = {"x": truth + sigma * rng.standard_normal(t.size)}
+    floor = {"x": sigma / np.std(held["x"])}
+
+    def fit(kind, n_params, y):
+        return CandidateFit(SimpleNamespace(kind=kind), {}, {"x": 0.0}, {"x": nrmse(held["x"], y)}, n_params,
+                            True, "", extra={"holdout_y": {"x": y}})
+
+    shared = 0.05 * np.sin(3 * t)                   # what neither explains: both above the floor
+    reversals = np.sign(np.sin(40 * t))             # what only the richer one explains
+    for bump, resolvable in ((0.012 * reversals, True), (0.001 * reversals, False)):   # z about 10 and 1
+        richer, simpler = fit("stribeck_friction", 3, truth + shared), fit("coulomb_friction", 1, truth + shared + bump)
+        assert choose({"x": 0.5}, [richer, simpler], noise=floor) is simpler       # the price alone
+        chosen = choose({"x": 0.5}, [richer, simpler], noise=floor, measured=held)
+        assert chosen is (richer if resolvable else simpler)
+        assert ("resolved_over" in richer.extra) is resolvable
+        if resolvable:
+            assert richer.extra["resolved_over"][0] == str(simpler.candidate)
+            assert richer.extra["resolved_over"][1] >= 3.0
+    # with a second effect that neither explains (NRMSE about 3 times the floor), the samples still
+    # resolve the bump, but the price decides: the richer law may be absorbing the other effect
+    other = 0.4 * np.sin(3 * t)
+    richer, simpler = fit("stribeck_friction", 3, truth + other), fit("coulomb_friction", 1, truth + other + 0.012 * reversals)
+    assert choose({"x": 0.9}, [richer, simpler], noise=floor, measured=held) is simpler
+
+
 def test_a_diverging_nominal_is_beaten_only_by_a_fit_better_than_the_mean():
     from types import SimpleNamespace
 

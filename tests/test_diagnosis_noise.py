@@ -30,6 +30,26 @@ def test_a_fast_signal_is_not_taken_for_noise():
     assert noise_sigma(y, y - clean) == pytest.approx(truth, rel=0.05)
 
 
+@pytest.mark.parametrize("q", [0.25, 0.5, 1.2, 3.0])
+def test_noise_as_coarse_as_the_resolution_is_measured(q):
+    # Gaussian noise of 1 read through a resolution q: second differences are whole multiples of
+    # q, and so was the median absolute deviation the estimate once was (at q = 1.2 it read 0.69
+    # of the noise; a pure-noise output then seemed to hold model error, seed 3131, case 054)
+    t = np.arange(20000) / 1000.0
+    clean = 20.0 * np.sin(2 * np.pi * 0.3 * t)
+    y = np.round((clean + np.random.default_rng(3).normal(0.0, 1.0, t.size)) / q) * q
+    truth = np.sqrt(1.0 + q ** 2 / 12)                        # noise and rounding, uncorrelated
+    assert noise_sigma(y) == pytest.approx(truth, rel=0.03)
+    assert noise_sigma(y, y - clean) == pytest.approx(truth, rel=0.03)
+
+
+def test_steps_do_not_count_as_noise():
+    t = np.arange(20000) / 1000.0
+    clean = 30.0 * np.repeat(np.random.default_rng(4).integers(0, 2, 40), 500) + 5.0 * t
+    y = clean + np.random.default_rng(5).normal(0.0, 1.0, t.size)
+    assert noise_sigma(y) == pytest.approx(1.0, rel=0.03)     # the 20 steps are trimmed
+
+
 def test_quantisation_floor_is_kept_for_slow_quantised_signals():
     t = np.linspace(0.0, 1.0, 5001)
     y = np.round(0.01 * t / 1e-3) * 1e-3                      # moves 10 counts in 5000 samples

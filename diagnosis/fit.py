@@ -147,6 +147,11 @@ def _state_dict(graph, x0):
     return dict(zip(names, x0))
 
 
+#: weighted residual of one sample (its output error over the output's spread, over sqrt(samples))
+#: beyond which a run counts as one the model cannot make, and the value such runs return
+_WALL = 1e3
+
+
 class _Abandoned(Exception):
     """A fit stopped early: its training cost stays above the caller's threshold."""
 
@@ -172,6 +177,14 @@ class _Objective:
     def _vector(self, outputs) -> np.ndarray:
         return np.concatenate([(outputs[o] - self.measured[o]) * self.weight[o] for o in self.outputs])
 
+    def _walled(self, r):
+        """`r`, or a wall of :data:`_WALL` everywhere where the parameter set cannot run (`r` None),
+        leaves the finite numbers, or runs off beyond the wall (a simulation at 1e186 that had not
+        yet overflowed made the optimiser's own linear algebra overflow: seed 5353, case 053)."""
+        if r is None or not np.isfinite(r).all() or np.abs(r).max() > _WALL:
+            return np.full(sum(len(y) for y in self.measured.values()), _WALL)
+        return r
+
     def __call__(self, theta):
         theta = np.array(theta, dtype=float)
         if self._last[0] is not None and np.array_equal(self._last[0], theta):
@@ -184,8 +197,7 @@ class _Objective:
                 r = self._vector(self.sim(self.params(theta), self.x0))
             except BondcosimError:
                 r = None
-            if r is None or not np.isfinite(r).all():  # a parameter set the model cannot run: a wall
-                r = np.full(sum(len(y) for y in self.measured.values()), 1e3)
+            r = self._walled(r)
             self._last = (theta, r)
         self.evaluations += 1
         self.best_cost = min(self.best_cost, 0.5 * float(r @ r))
@@ -204,7 +216,7 @@ class _Objective:
         self.n_runs += len(trials)
         try:
             runs = self.sim.run_batch([self.params(th) for th in trials], self.x0)
-            columns = [self._vector(run.outputs) for run in runs]
+            columns = [self._walled(self._vector(run.outputs)) for run in runs]
         except BondcosimError:
             columns = [self(th) for th in trials]
         J = np.column_stack([(c - r0) / s for c, s in zip(columns, steps)])

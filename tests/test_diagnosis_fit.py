@@ -10,7 +10,7 @@ import plants.library as library
 from plants.library.textbook import mass_spring_damper
 from bondgraph import BondGraph, C, EquationElement, I, One, R, Se
 from diagnosis.catalogue import candidates
-from diagnosis.catalogue_common import RELEASED
+from diagnosis.catalogue_common import RELEASED, ParamSpec
 from diagnosis.errors import DiagnosisError
 from diagnosis.fit import CandidateFit, choose, fit_candidate, noise_floor
 from diagnosis.place import Place
@@ -445,3 +445,31 @@ def test_a_few_per_cent_of_held_out_nrmse_near_the_floor_is_not_an_effect():
     assert choose({"x": 0.004046}, [viscous], noise={"x": 0.00368}) is None
     clear = CandidateFit(SimpleNamespace(kind="viscous_friction"), {}, {"x": 0.00808}, {"x": 0.0037}, 1, True, "")
     assert choose({"x": 0.0045}, [clear], noise={"x": 0.00368}) is clear          # 18 % lower
+
+
+def test_a_run_far_beyond_the_data_is_a_wall_not_an_overflow():
+    """A parameter set whose simulation reaches 1e186 without overflowing returns the wall, in the
+    residual and in the Jacobian's runs: squared by the optimiser, such numbers overflowed inside
+    its SVD (seed 5353, case 053: "array must not contain infs or NaNs")."""
+    from types import SimpleNamespace
+    from diagnosis.fit import _WALL, _Objective
+    from diagnosis.recording import Experiment
+
+    t = np.linspace(0.0, 1.0, 101)
+    train = Experiment(t, {}, {"x": np.sin(t)})
+
+    class Runaway:
+        output_names = ("x",)
+
+        def __call__(self, params, x0=None):
+            return {"x": np.sin(t) * (1.0 if params["a"] < 2.0 else 1e186)}
+
+        def run_batch(self, params_list, x0=None):
+            return [SimpleNamespace(outputs=self(p, x0)) for p in params_list]
+
+    spec = ParamSpec("a", 1.0, 0.0, 10.0, "1", "a factor")
+    objective = _Objective(Runaway(), train, [spec], None)
+    assert np.abs(objective(np.array([1.0]))).max() == 0.0
+    assert np.all(objective(np.array([3.0])) == _WALL)
+    J = objective.jacobian(np.array([1.9999999]), np.array([0.0]), np.array([10.0]))
+    assert np.isfinite(J).all() and np.abs(J).max() < 1e12

@@ -18,8 +18,9 @@ import numpy as np
 __all__ = ["FeatureSignals", "FeatureGroup", "dahl_state", "lagged", "rms", "SIGN_FRACTION"]
 
 #: width of the smoothed sign of the friction features, as a fraction of the RMS flow: a nearly
-#: sharp sign (the catalogue's elements smooth at 5 % so that an integrator can step over the
-#: reversal; a feature column has no integrator to protect)
+#: sharp sign (a feature column has no integrator to protect; the friction kinds' feature groups
+#: also try 1/3, 3 and 10 times it, and their elements fit their own smoothing,
+#: :mod:`diagnosis.kinds.friction_common`)
 SIGN_FRACTION = 0.01
 
 

@@ -366,19 +366,26 @@ def test_held_out_ties_are_broken_by_the_training_error():
     assert choose({"x": 0.0152}, [better, worse], noise=floor) is better
 
 
-def test_a_near_tie_the_held_out_part_resolves_goes_to_the_better_fit(rng):
-    """A richer fit at the noise floor and a simpler one off by a constant: their priced held-out
-    errors are within 2 %, a tie that goes to fewer parameters, unless the held-out samples
-    resolve the difference (z >= 3 against the noise the leader's residual shows)."""
+def _sine_held_out(rng, t, sigma=0.1):
+    """A held-out sine with white noise `sigma`, its noise floor, and ``fit(kind, n_params, y)``: a
+    successful fit of that kind whose held-out prediction is `y`."""
     from types import SimpleNamespace
-    t = np.linspace(0.0, 10.0, 1000)
-    truth, sigma = np.sin(t), 0.1
+    truth = np.sin(t)
     held = {"x": truth + sigma * rng.standard_normal(t.size)}
     floor = {"x": sigma / np.std(held["x"])}
 
     def fit(kind, n_params, y):
         return CandidateFit(SimpleNamespace(kind=kind), {}, {"x": 0.0}, {"x": nrmse(held["x"], y)}, n_params,
                             True, "", extra={"holdout_y": {"x": y}})
+    return truth, held, floor, fit
+
+
+def test_a_near_tie_the_held_out_part_resolves_goes_to_the_better_fit(rng):
+    """A richer fit at the noise floor and a simpler one off by a constant: their priced held-out
+    errors are within 2 %, a tie that goes to fewer parameters, unless the held-out samples
+    resolve the difference (z >= 3 against the noise the leader's residual shows)."""
+    t = np.linspace(0.0, 10.0, 1000)
+    truth, held, floor, fit = _sine_held_out(rng, t)
 
     for offset, resolvable in ((0.03, True), (0.005, False)):   # z about 4.7 and 0.8
         richer, simpler = fit("modulated_friction", 3, truth), fit("pressure_dependent_friction", 2, truth + offset)
@@ -396,15 +403,8 @@ def test_a_richer_fit_the_held_out_part_resolves_is_not_priced_out(rng):
     """A simpler fit 4 % worse on the held-out part than a richer one two parameters dearer (21 %)
     wins on price alone; where the held-out samples resolve the difference (z >= 3), the richer one
     does (seed 2468: a Stribeck friction, held-out F 0.0424 against Coulomb's 0.0441, z = 7.2)."""
-    from types import SimpleNamespace
     t = np.linspace(0.0, 50.0, 20000)
-    truth, sigma = np.sin(t), 0.1
-    held = {"x": truth + sigma * rng.standard_normal(t.size)}
-    floor = {"x": sigma / np.std(held["x"])}
-
-    def fit(kind, n_params, y):
-        return CandidateFit(SimpleNamespace(kind=kind), {}, {"x": 0.0}, {"x": nrmse(held["x"], y)}, n_params,
-                            True, "", extra={"holdout_y": {"x": y}})
+    truth, held, floor, fit = _sine_held_out(rng, t)
 
     shared = 0.05 * np.sin(3 * t)                   # what neither explains: both above the floor
     reversals = np.sign(np.sin(40 * t))             # what only the richer one explains

@@ -67,7 +67,7 @@ class FeatureSignals:
     @cached_property
     def sign(self) -> np.ndarray:
         """A nearly sharp sign of the flow (:data:`SIGN_FRACTION`)."""
-        return np.tanh(self.v / (SIGN_FRACTION * self.v_rms))
+        return self.sign_at(SIGN_FRACTION)
 
     def sign_at(self, fraction: float) -> np.ndarray:
         """The sign of the flow smoothed over `fraction` of the RMS flow."""

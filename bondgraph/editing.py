@@ -34,6 +34,7 @@ from collections.abc import Mapping
 
 import sympy as sp
 
+from .editing_delays import delay_input, with_delays_realised
 from .editing_inputs import mentions, rebuilt, route_input
 from .elements import Element
 from .errors import GraphError, PortError, UnknownNameError
@@ -252,6 +253,24 @@ class GraphEditing:
         :mod:`bondgraph.editing_inputs` does the work on the elements' descriptions.
         """
         return route_input(self, u, replacement, states=states, initial=initial, units=units)[0]
+
+    def delay_input(self, u: str, time: str, value: float, *, before: float | None = None,
+                    name: str | None = None):
+        """A copy in which every element reading input `u` reads it `value` seconds late.
+
+        The elements read a new delayed input `name` (default ``<u>_late``),
+        ``u(t - time)``, with `time` a new parameter (s, >= 0); `u` stays the input a run binds.
+        Simulators realise the delay exactly on the recorded samples
+        (:mod:`bondgraph.numerics.input_delays`); :meth:`with_delays_realised` turns it into
+        states for an FMU.  `before`: the value while ``t - time`` precedes the run (default
+        `u`'s value at the start of the run).  :mod:`bondgraph.editing_delays` does the work.
+        """
+        return delay_input(self, u, time, value, before=before, name=name)
+
+    def with_delays_realised(self):
+        """A copy in which every delayed input (:meth:`delay_input`) is three Pade [2/3] states
+        (:mod:`bondgraph.editing_delays`): what an FMU, which cannot delay a signal, exports."""
+        return with_delays_realised(self)
 
     def remove(self, name: str):
         """A copy without element `name` and its bonds, or without bond `name`."""

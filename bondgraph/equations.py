@@ -119,6 +119,7 @@ def derive(graph: BondGraph) -> StateEquations:
         if i.function is not None:
             table = {"t": TIME, **{p: names[p] for p in params}}
             input_functions[i.name] = as_expression(i.function, table, owner=f"input {i.name} (function of t)")
+    input_delays = _input_delays(graph, inputs, params)
     guards = _derived_guards(graph, names, resolver, allowed - set(algebraic))
     steps = [e.fixed_step for e in graph.elements.values() if e.fixed_step is not None]
     op = graph.operating_point
@@ -139,11 +140,34 @@ def derive(graph: BondGraph) -> StateEquations:
         input_defaults={i.name: op.get(i.name, i.default) for i in inputs},
         held_initial={d.symbol.name: op.get(d.symbol.name, d.initial) for d in held_decls},
         units=units, descriptions=descriptions, owners=owners, input_functions=input_functions,
+        input_delays=input_delays,
         report=report, assignments=readable.assignments, f_short=readable.f, h_short=readable.h,
         held_update_short=readable.held_update, guards=guards,
         param_bounds={p.name: (p.min, p.max) for p in params.values()
                       if p.min is not None or p.max is not None},
     )
+
+
+def _input_delays(graph, inputs, params) -> dict:
+    """Name -> :class:`~bondgraph.elements.base.InputDelay` of the delayed inputs, each checked:
+    its source an input that is not itself delayed, its delay a parameter of the graph."""
+    by_name = {i.name: i for i in inputs}
+    delays = {}
+    for i in inputs:
+        if i.delay is None:
+            continue
+        source, time = i.delay.source, i.delay.time
+        if source not in by_name:
+            raise DerivationError(f"input {i.name!r} delays input {source!r}, which model {graph.name!r} does "
+                                  f"not have; its inputs are {', '.join(sorted(by_name))}")
+        if by_name[source].delay is not None:
+            raise DerivationError(f"input {i.name!r} delays input {source!r}, itself a delayed input: delay "
+                                  f"{by_name[source].delay.source!r} by the sum instead")
+        if time not in params:
+            raise DerivationError(f"input {i.name!r}: its delay {time!r} is not a parameter of model "
+                                  f"{graph.name!r} (declare it with add_parameter)")
+        delays[i.name] = i.delay
+    return delays
 
 
 def _derived_guards(graph, names, resolver, allowed) -> tuple:

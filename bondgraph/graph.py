@@ -12,7 +12,7 @@ import sympy as sp
 
 from .editing import GraphEditing
 from .elements import Element
-from .elements.base import InputDecl
+from .elements.base import InputDecl, InputDelay
 from .errors import DuplicateNameError, ExpressionError, GraphError, JunctionError, PortError
 from .guards import Guard
 from .params import Param
@@ -112,14 +112,32 @@ class BondGraph(GraphEditing):
         self._changed()
         return element
 
-    def add_input(self, name: str, *, default: float = 0.0, unit: str = "", description: str = ""):
-        """Declare an input used by modulated elements (sources declare their own)."""
+    def add_input(self, name: str, *, default: float = 0.0, unit: str = "", description: str = "",
+                  delay_of: str | None = None, delay: str | None = None, before: float | None = None):
+        """Declare an input used by modulated elements (sources declare their own).
+
+        With `delay_of` (another input's name) and `delay` (a parameter's name, s), the input is
+        that input late, ``delay_of(t - delay)``, and `before` while ``t - delay`` precedes the
+        run (default: the source's value at the start) (:class:`~bondgraph.elements.base.InputDelay`; both names are checked when the
+        equations are derived, :meth:`equations`).  A run binds only the source: simulators
+        delay its values themselves.
+        """
         if not isinstance(name, str) or not name.isidentifier():
             raise GraphError(f"input name {name!r} is not a valid identifier")
         if name in self.extra_inputs:
             raise DuplicateNameError(name, "input declared twice")
+        if (delay_of is None) != (delay is None):
+            raise GraphError(f"input {name!r}: a delayed input needs both delay_of (the input it "
+                             f"delays) and delay (the parameter naming the delay); found "
+                             f"delay_of={delay_of!r}, delay={delay!r}")
         default = Param(name, default).value  # a finite number, or a ParameterError naming the input
-        self.extra_inputs[name] = InputDecl(name, unit, default, None, description, (self.name, "input"))
+        late = None
+        if delay_of is not None:
+            for label, value in (("delay_of", delay_of), ("delay", delay)):
+                if not isinstance(value, str) or not value.isidentifier():
+                    raise GraphError(f"input {name!r}: {label} {value!r} is not a valid identifier")
+            late = InputDelay(delay_of, delay, None if before is None else Param(name, before).value)
+        self.extra_inputs[name] = InputDecl(name, unit, default, None, description, (self.name, "input"), late)
         self._changed()
 
     def add_parameter(self, param: Param):

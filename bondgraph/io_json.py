@@ -94,7 +94,8 @@ _TOP = {"format": None, "version": None, "name": "id", "description": "str", "el
 _TOP_REQUIRED = ["format", "version", "name", "elements", "bonds"]
 _PARAM_KEYS = {"name": "id", "value": "num", "unit": "str", "description": "str", "min": "num", "max": "num"}
 _GUARD_KEYS = {"expression": "expr", "min": "num", "max": "num", "unit": "str", "description": "str"}
-_INPUT_KEYS = {"name": "id", "default": "num", "unit": "str", "description": "str"}
+_INPUT_KEYS = {"name": "id", "default": "num", "unit": "str", "description": "str", "delay_of": "id",
+               "delay": "id", "before": "num"}
 _OUTPUT_KEYS = {"name": "id", "expression": "expr", "unit": "str", "description": "str"}
 _BOND_KEYS = {"name": "id", "tail": "end", "head": "end"}
 

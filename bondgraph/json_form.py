@@ -40,8 +40,7 @@ def graph_to_dict(graph: BondGraph) -> dict:
         "elements": [element.to_dict() for element in graph.elements.values()],
         "bonds": [{"name": b.name, "tail": [b.tail.element, b.tail.port], "head": [b.head.element, b.head.port]}
                   for b in graph.bonds.values()],
-        "inputs": [{"name": d.name, "default": d.default, "unit": d.unit, "description": d.description}
-                   for d in graph.extra_inputs.values()],
+        "inputs": [_input_entry(d) for d in graph.extra_inputs.values()],
         "parameters": [p.to_dict() for p in graph.extra_params.values()],
         "outputs": [{"name": o.name, "expression": str(o.expression), "unit": o.unit,
                      "description": o.description} for o in graph.outputs.values()],
@@ -49,6 +48,15 @@ def graph_to_dict(graph: BondGraph) -> dict:
         **({"guards": {g.name: g.to_dict() for g in graph.extra_guards.values()}}
            if graph.extra_guards else {}),
     }
+
+
+def _input_entry(decl) -> dict:
+    entry = {"name": decl.name, "default": decl.default, "unit": decl.unit, "description": decl.description}
+    if decl.delay is not None:
+        entry.update(delay_of=decl.delay.source, delay=decl.delay.time)
+        if decl.delay.before is not None:
+            entry["before"] = decl.delay.before
+    return entry
 
 
 def _plain_number(value):

@@ -115,6 +115,10 @@ class StateEquations:
     input_functions : mapping str -> sympy.Expr
         Inputs that are given functions of time (``t``); these are still in
         ``inputs`` so a user may override them.
+    input_delays : mapping str -> InputDelay
+        Inputs that are another input late (:class:`~bondgraph.elements.base.InputDelay`):
+        still in ``inputs``; simulators fill them from their source's values
+        (:mod:`bondgraph.numerics.input_delays`).
     report : CausalityReport
         Derivative causality and algebraic loops found.
     assignments : tuple of (sympy.Symbol, sympy.Expr)
@@ -156,6 +160,7 @@ class StateEquations:
     descriptions: Mapping = field(default_factory=dict)
     owners: Mapping = field(default_factory=dict)
     input_functions: Mapping = field(default_factory=dict)
+    input_delays: Mapping = field(default_factory=dict)
     report: CausalityReport = field(default_factory=CausalityReport)
     assignments: tuple = ()
     f_short: tuple = ()
@@ -175,7 +180,7 @@ class StateEquations:
                 raise ArgumentError(f"{len(value)} {name} expressions for {len(getattr(self, flat))} {flat}")
             object.__setattr__(self, name, value)
         for name in ("param_values", "initial_state", "input_defaults", "held_initial",
-                     "units", "descriptions", "owners", "input_functions", "param_bounds"):
+                     "units", "descriptions", "owners", "input_functions", "input_delays", "param_bounds"):
             object.__setattr__(self, name, _frozen(getattr(self, name)))
         if len(self.f) != len(self.states):
             raise ArgumentError(f"{len(self.f)} right-hand sides for {len(self.states)} states")

@@ -224,9 +224,9 @@ class _Objective:
 
 
 def _started_mid_run(candidate, train, x0):
-    """With a given start state (a window cut from a longer run), an added actuator state starts
-    at the command recorded then (the actuator had followed it), not where the input rested before
-    the experiment; the Pade states' derivatives start at 0."""
+    """With a given start state (a window cut from a longer run), an added actuator state, and a
+    delayed input before the window, start at the command recorded then (the actuator had
+    followed it), not where the input rested before the experiment."""
     if hasattr(candidate, "members"):        # a group of twins: each member on its own
         return candidate.with_members(lambda m: _started_mid_run(m, train, x0))
     if candidate is None or x0 is None or not candidate.initial or candidate.place.name not in train.inputs:

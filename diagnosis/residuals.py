@@ -67,7 +67,7 @@ class SimRun:
     substeps: int
 
 
-def input_matrix(eqs, t, inputs: dict) -> np.ndarray:
+def input_matrix(eqs, t, inputs: dict, params: dict | None = None) -> np.ndarray:
     """Input values at times `t`, shape (n, n_inputs), in the model's input order.
 
     Parameters
@@ -78,17 +78,31 @@ def input_matrix(eqs, t, inputs: dict) -> np.ndarray:
     inputs : dict str -> ndarray, shape (n,)
         Recorded inputs by name; others take ``input_functions`` (of ``t``) or
         ``input_defaults``.
+    params : dict str -> float, optional
+        Parameter values for the delays of delayed inputs (``eqs.input_delays``, filled from
+        their sources: :mod:`bondgraph.numerics.input_delays`); default the model's.
 
     Raises
     ------
     UnknownNameError
         An input name the model does not have.
+    DiagnosisError
+        A recorded value given for a delayed input (its source is what is recorded).
     """
+    from bondgraph.numerics.input_delays import delay_values, fill_delayed_inputs
     from diagnosis.errors import UnknownNameError
 
     for name in inputs:
         if name not in eqs.input_names:
             raise UnknownNameError("input", name, eqs.input_names, eqs.name)
+        if name in eqs.input_delays:
+            raise DiagnosisError(f"input {name!r} of model {eqs.name!r} is input "
+                                 f"{eqs.input_delays[name].source!r} delayed: give that one's record")
+    U = _undelayed_matrix(eqs, t, inputs)
+    return fill_delayed_inputs(eqs, t, U, delay_values(eqs, params))
+
+
+def _undelayed_matrix(eqs, t, inputs: dict) -> np.ndarray:
     U = np.empty((t.size, len(eqs.input_names)))
     for j, name in enumerate(eqs.input_names):
         if name in inputs:
@@ -244,44 +258,75 @@ class OutputSimulator:
         list of SimRun
             One per entry of `params_list`, in order.
         """
-        from diagnosis.errors import SimulationError
-
         m = self.model
         P = np.ascontiguousarray(np.vstack([m.param_vector(q) for q in params_list]))
         n = P.shape[0]
         x_init = self.initial_state(x0)
-        x = np.ascontiguousarray(np.tile(x_init, (n, 1)))
-        d = np.ascontiguousarray(np.tile(m.default_held, (n, 1)))
         h_max = min(self._sub_step(x_init, P[i:i + 1]) for i in range(n))
         subs = np.maximum(1, np.ceil(self._dt / h_max - 1e-9)).astype(int)
+        runs = [None] * n
+        # runs whose delayed inputs are late by the same times share their input matrix
+        for U, members in self._inputs_by_delay(P).items():
+            U = self._delayed_U(U)
+            rows = np.asarray(members)
+            X, D, most = self._integrate(U, subs, h_max, x_init, P[rows])
+            for k, i in enumerate(members):
+                runs[i] = self._run(X[:, k], D[:, k], U, P[i:i + 1], most)
+        return runs
+
+    def _inputs_by_delay(self, P) -> dict:
+        """Delays (one tuple per distinct set) -> the rows of `P` simulated with them."""
+        delays = self.equations.input_delays
+        index = self.model.param_index
+        groups = {}
+        for i in range(P.shape[0]):
+            key = tuple(float(P[i, index[d.time]]) for d in delays.values())
+            groups.setdefault(key, []).append(i)
+        return groups
+
+    def _delayed_U(self, key) -> np.ndarray:
+        from bondgraph.numerics.input_delays import fill_delayed_inputs
+        if not key:
+            return self.U
+        return fill_delayed_inputs(self.equations, self.t, self.U, dict(zip(self.equations.input_delays, key)))
+
+    def _integrate(self, U, subs, h_max, x_init, P):
+        from diagnosis.errors import SimulationError
+
+        m, n = self.model, P.shape[0]
+        x = np.ascontiguousarray(np.tile(x_init, (n, 1)))
+        d = np.ascontiguousarray(np.tile(m.default_held, (n, 1)))
+        P = np.ascontiguousarray(P)
         if subs.max() <= _STIFF_SUBSTEPS:
-            X, D = m.rk4_samples(self.t, self.U, subs, x, d, P)
-            most = int(subs.max())
-        elif self.equations.is_smooth:
+            X, D = m.rk4_samples(self.t, U, subs, x, d, P)
+            return X, D, int(subs.max())
+        if self.equations.is_smooth:
             # a fast mode RK4 would have to resolve (a smoothed Coulomb friction at rest, a
             # damper across a stiff gear): the L-stable linearly implicit ROS2 steps over it
             from bondgraph.numerics.evaluate_stiff import ros2_samples
-            X, D, most = ros2_samples(m, self.t, self.U, x, d, P)
-        else:
-            raise SimulationError(f"model {self.equations.name!r}: {subs.max()} RK4 sub-steps of "
-                                  f"{h_max:.3g} s per sample interval needed (stiff model with held "
-                                  "variables, or sparse samples); resample the recording",
-                                  time=float(self.t[0]))
-        runs = []
-        for i in range(n):
-            Xi, Di = np.ascontiguousarray(X[:, i]), np.ascontiguousarray(D[:, i])
-            bad = ~np.isfinite(Xi).all(axis=1)
-            if bad.any():
-                k = int(np.argmax(bad))
-                names = [nm for nm, v in zip(m.state_names, Xi[k]) if not np.isfinite(v)]
-                raise SimulationError(f"model {self.equations.name!r}: non-finite state(s) "
-                                      f"{', '.join(names)} at t = {self.t[k]:.6g} s",
-                                      time=float(self.t[k]))
-            Y = (m.h(Xi, self.U, t=self.t, p=P[i:i + 1], d=Di) if m.output_names
-                 else np.empty((self.t.size, 0)))
-            outputs = {nm: Y[:, j].copy() for nm, j in zip(self.output_names, self._out_idx)}
-            runs.append(SimRun(self.t, Xi, self.U, outputs, m.state_names, m.input_names, most))
-        return runs
+            return ros2_samples(m, self.t, U, x, d, P)
+        raise SimulationError(f"model {self.equations.name!r}: {subs.max()} RK4 sub-steps of "
+                              f"{h_max:.3g} s per sample interval needed (stiff model with held "
+                              "variables, or sparse samples); resample the recording",
+                              time=float(self.t[0]))
+
+    def _run(self, X, D, U, p, most) -> SimRun:
+        """One run's outputs (and a named error where its states left the finite numbers)."""
+        from diagnosis.errors import SimulationError
+
+        m = self.model
+        Xi, Di = np.ascontiguousarray(X), np.ascontiguousarray(D)
+        bad = ~np.isfinite(Xi).all(axis=1)
+        if bad.any():
+            k = int(np.argmax(bad))
+            names = [nm for nm, v in zip(m.state_names, Xi[k]) if not np.isfinite(v)]
+            raise SimulationError(f"model {self.equations.name!r}: non-finite state(s) "
+                                  f"{', '.join(names)} at t = {self.t[k]:.6g} s",
+                                  time=float(self.t[k]))
+        Y = (m.h(Xi, U, t=self.t, p=p, d=Di) if m.output_names
+             else np.empty((self.t.size, 0)))
+        outputs = {nm: Y[:, j].copy() for nm, j in zip(self.output_names, self._out_idx)}
+        return SimRun(self.t, Xi, U, outputs, m.state_names, m.input_names, most)
 
     def __call__(self, params=None, x0=None) -> dict:
         """The selected outputs, dict name -> ndarray shape (n,), model units (see :meth:`run`)."""

@@ -193,8 +193,14 @@ def _switch_text(g, switch) -> str:
 
 def _equations_of(model):
     if hasattr(model, "equations") and callable(model.equations):
-        return model.equations()
+        # FMI has no delay primitive: a delayed input becomes Pade states (bondgraph.editing_delays)
+        realised = getattr(model, "with_delays_realised", None)
+        return (realised() if realised is not None else model).equations()
     if hasattr(model, "states") and hasattr(model, "f"):
+        if model.input_delays:
+            raise FMUModelTypeError(f"model {model.name!r} has delayed inputs ({', '.join(model.input_delays)}), "
+                                    "which an FMU cannot hold: export the bond graph (its delays become "
+                                    "Pade states, BondGraph.with_delays_realised)")
         return model
     raise FMUModelTypeError(f"export needs a BondGraph or StateEquations, got {type(model).__name__}")
 

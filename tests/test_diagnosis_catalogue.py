@@ -208,11 +208,22 @@ def test_input_kinds_route_the_input_through_the_effect():
     _differs_by(sat, msd, "p_m", sp.Min(sp.Max(F, S("u_min_F")), S("u_max_F")) - F)
 
 
-def test_transport_delay_is_the_pade_2_3_approximant():
+def test_transport_delay_is_a_delayed_input_the_elements_read():
     msd = library.build("mass-spring-damper")
-    built = _one(msd, Place("input", "F"), "transport_delay").build(msd)
+    built = _one(msd, Place("input", "F"), "transport_delay").build(msd, {"T_delay_F": 0.07})
+    eqs = built.equations()
+    assert eqs.input_names == ("F", "F_late") and eqs.state_names == msd.equations().state_names
+    assert (eqs.input_delays["F_late"].source, eqs.input_delays["F_late"].time) == ("F", "T_delay_F")
+    assert eqs.param_values["T_delay_F"] == 0.07
+    _differs_by(built, msd, "p_m", S("F_late") - S("F"))    # the mass feels the late force
+
+
+def test_an_exported_transport_delay_is_the_pade_2_3_approximant():
+    msd = library.build("mass-spring-damper")
+    built = _one(msd, Place("input", "F"), "transport_delay").build(msd).with_delays_realised()
+    assert [d.name for d in built.inputs()] == ["F"]
     rates = _rates(built)
-    z = [S(f"z{i}_delay_F") for i in (1, 2, 3)]
+    z = [S(f"z{i}_F_late") for i in (1, 2, 3)]
     F, T, s = S("F"), S("T_delay_F"), S("s")
     A = sp.Matrix(3, 3, lambda i, j: sp.diff(rates[z[i].name], z[j]))
     B = sp.Matrix([sp.diff(rates[zi.name], F) for zi in z])

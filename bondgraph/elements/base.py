@@ -96,6 +96,22 @@ class HeldDecl:
 
 
 @dataclass(frozen=True)
+class InputDelay:
+    """An input that is another input, late: :math:`u_d(t) = u(t - T)`.
+
+    `source` is the input delayed, `time` the name of the graph parameter :math:`T` (s), and
+    `before` the value :math:`u_d` takes while :math:`t - T` lies before the start of the run
+    (where the source rested; None: the source's value at the start).  Simulators realise it exactly on the source's samples;
+    an FMU, which has no delay primitive, as Pade states
+    (:meth:`bondgraph.editing.GraphEditing.with_delays_realised`).
+    """
+
+    source: str
+    time: str
+    before: float | None = None
+
+
+@dataclass(frozen=True)
 class InputDecl:
     name: str
     unit: str
@@ -103,6 +119,7 @@ class InputDecl:
     function: object | None  # str or sympy expression in t, or None
     description: str
     owner: tuple
+    delay: InputDelay | None = None
 
 
 @dataclass

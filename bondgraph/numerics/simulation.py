@@ -59,6 +59,7 @@ from ..errors import ArgumentError, DomainError, ExpressionError, SimulationErro
 from .memory import check_result_size
 from .progress import Progress
 from .evaluate import compile_model
+from .input_delays import delay_values
 from ..guards import check_param_bounds, guard_function, guard_values, raise_violation
 from .results import SimulationResult
 from ..symbols import as_expression
@@ -157,9 +158,9 @@ def simulate(system, t_span, *, inputs=None, x0=None, params=None, method="auto"
         n_signals = 1 + len(eqs.states) + len(eqs.inputs) + len(eqs.outputs) + len(eqs.held)
         check_result_size(t1 - t0, output_interval, n_signals, what=f"simulation of {eqs.name!r}")
     model = compile_model(eqs, backend=backend)
-    plan = _InputPlan(eqs, inputs, t0)
     x_init = _initial_state(model, x0)
     p = model.param_vector(params)
+    plan = _InputPlan(eqs, inputs, t0, delays=delay_values(eqs, dict(zip(model.param_names, p[0]))))
     check_param_bounds(eqs, p)
     d0 = _initial_held(model, held0).reshape(1, -1)
     fixed = (not eqs.is_smooth) or method == "RK4"
@@ -251,14 +252,19 @@ def _initial_held(model, held0):
 
 
 class _InputPlan:
-    """Input vector u(t) from constants, functions of t and zero-order-hold tables."""
+    """Input vector u(t) from constants, functions of t and zero-order-hold tables; a delayed
+    input (``eqs.input_delays``, its delay in `delays`, s) is its source at ``t - T``, and its
+    ``before`` value while ``t - T < t0``: exact on tables, whose steps it moves by ``T``."""
 
-    def __init__(self, eqs, inputs, t0):
+    def __init__(self, eqs, inputs, t0, delays=None):
         names = eqs.input_names
         given = dict(inputs or {})
         for name in given:
             if name not in names:
                 raise UnknownNameError("input", name, names, eqs.name)
+            if name in eqs.input_delays:
+                raise ArgumentError(f"input {name!r} of model {eqs.name!r} is input "
+                                    f"{eqs.input_delays[name].source!r} delayed: give that one", name=name)
         self._t = eqs.t
         self.base = np.array([float(eqs.input_defaults.get(n, 0.0)) for n in names])
         self.funcs, self.tables = [], []
@@ -268,7 +274,18 @@ class _InputPlan:
             else:
                 spec = eqs.input_functions.get(name, eqs.input_defaults.get(name, 0.0))
             self._add(i, name, spec, t0)
-        self.breakpoints = sorted({float(b) for _, tt, _ in self.tables for b in tt[1:]})
+        delays = delays or {}
+        self.t0 = t0
+        self.late = []      # (column, source column, T, before, the source's table moved by T)
+        for n, d in eqs.input_delays.items():
+            j, T = names.index(d.source), float(delays[n])
+            table = next(((tt + T, values) for i, tt, values in self.tables if i == j), None)
+            before = float(self._undelayed(t0)[j]) if d.before is None else d.before
+            self.late.append((names.index(n), j, T, before, table))
+        steps = {float(b) for _, tt, _ in self.tables for b in tt[1:]}
+        for _, _, T, _, table in self.late:    # a delayed table steps T after its source
+            steps |= {t0 + T} | ({float(b) for b in table[0][1:]} if table else set())
+        self.breakpoints = _merged(sorted(steps))
 
     def _add(self, i, name, spec, t0):
         owner = f"input {name!r}"
@@ -307,22 +324,48 @@ class _InputPlan:
 
     def vector(self, t, hold_from=None):
         """u at time t, shape (1, n_inputs); tables evaluated at `hold_from` if given."""
+        u = self._undelayed(t, hold_from)
+        tt = t if hold_from is None else hold_from
+        for i, j, T, before, table in self.late:
+            if tt < self.t0 + T:
+                u[i] = before
+            elif table is not None:
+                u[i] = table[1][max(0, np.searchsorted(table[0], tt, side="right") - 1)]
+            else:
+                u[i] = self._undelayed(t - T)[j]
+        return u.reshape(1, -1)
+
+    def _undelayed(self, t, hold_from=None):
         u = self.base.copy()
         for i, fn, _, _ in self.funcs:
             u[i] = fn(t)
         tt = t if hold_from is None else hold_from
         for i, times, values in self.tables:
             u[i] = values[max(0, np.searchsorted(times, tt, side="right") - 1)]
-        return u.reshape(1, -1)
+        return u
 
     def matrix(self, times):
         """u at each time, shape (n_times, n_inputs)."""
+        if self.late:
+            return np.vstack([self.vector(t) for t in times])
         U = np.repeat(self.base.reshape(1, -1), times.size, axis=0)
         for i, fn, _, _ in self.funcs:
             U[:, i] = [fn(t) for t in times]
         for i, tt, values in self.tables:
             U[:, i] = values[np.maximum(0, np.searchsorted(tt, times, side="right") - 1)]
         return U
+
+
+def _merged(points: list) -> list:
+    """Sorted `points` without those a rounding error away from the one before (a delayed table's
+    step ``b + T`` that meets another step would otherwise leave an interval of 1e-16 s)."""
+    merged = []
+    for b in points:
+        if merged and b - merged[-1] <= 1e-12 * max(1.0, abs(b)):
+            merged[-1] = b      # the later one: a table held from there has stepped in both
+        else:
+            merged.append(b)
+    return merged
 
 
 def _table(name, spec):
@@ -436,7 +479,7 @@ def _integrate_smooth(model, plan, x0, p, d, times, method, dt, rtol, atol, bar,
             _check_guards(model.equations, plan, np.array([te]), xe,
                           np.asarray(d).reshape(1, -1), p, events=True)
         if sol.status < 0 or sol.y.shape[1] != t_eval.size:
-            tf = float(sol.t[-1]) if sol.t.size else a
+            tf = float(sol.t[-1]) if np.size(sol.t) else a
             raise SimulationError(f"model {model.equations.name!r}: {info['method']} failed at "
                                   f"t = {tf:.9g} s: {sol.message}", time=tf)
         X[mask] = sol.y.T[:mask.sum()]

@@ -1,0 +1,103 @@
+"""Delayed inputs (bondgraph.editing_delays, bondgraph.numerics.input_delays): a graph whose elements
+read an input late is simulated exactly on the recorded samples, saved and loaded, refused where
+it is wrong, and exported to an FMU as Pade states."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from fmpy import simulate_fmu
+from fmpy.validation import validate_fmu
+
+from bondgraph.io_json import load, save
+import plants.library as library
+from bondgraph.errors import ArgumentError, DerivationError, GraphError
+from bondgraph.numerics import simulate
+from bondgraph.numerics.input_delays import delayed_samples
+from diagnosis.recording import Experiment
+from diagnosis.residuals import OutputSimulator
+from fmus import export
+
+DT = 0.01
+T = np.arange(0.0, 4.0 + DT / 2, DT)
+#: a force switched on at 0.5 s and reversed at 2 s, the record a zero-order hold
+F = np.where(T < 0.5, 0.0, np.where(T < 2.0, 1.0, -0.5))
+
+
+@pytest.fixture
+def msd():
+    return library.build("mass-spring-damper")
+
+
+def test_a_whole_sample_delay_is_the_record_shifted(msd):
+    late = msd.delay_input("F", "T_F", 0.25)
+    k = 25
+    for method in ("RK4", "auto"):
+        now = simulate(msd, (0.0, T[-1]), inputs={"F": (T, F)}, output_interval=DT, method=method)
+        then = simulate(late, (0.0, T[-1]), inputs={"F": (T, F)}, output_interval=DT, method=method)
+        # the same RK4 steps on the same held values: to rounding; solve_ivp within its tolerance
+        tol = 1e-12 if method == "RK4" else 1e-7
+        assert np.abs(then["x"][k:] - now["x"][:-k]).max() < tol
+        assert np.all(then["x"][:k + 1] == 0.0)            # nothing arrives before 0.5 + 0.25 s
+
+
+def test_a_function_of_time_arrives_late_and_before_it_the_given_value(msd):
+    late = msd.delay_input("F", "T_F", 0.1, before=0.0)
+    then = simulate(late, (0.0, 3.0), inputs={"F": "cos(2*t)"}, output_interval=DT, method="RK4", dt=1e-3)
+    # the force cos(2 (t - 0.1)) from t = 0.1 s, 0 before: the undelayed model on that force
+    shifted = simulate(msd, (0.0, 3.0), inputs={"F": "Piecewise((0, t < 0.1), (cos(2*(t - 0.1)), True))"},
+                       output_interval=DT, method="RK4", dt=1e-3)
+    assert np.abs(then["x"] - shifted["x"]).max() < 1e-9
+
+
+def test_diagnosis_simulator_delays_each_run_of_a_batch_by_its_own_delay(msd):
+    late = msd.delay_input("F", "T_F", 0.0)
+    exp = Experiment(T, {"F": F}, {"x": np.zeros_like(T)}, {"F": "N", "x": "m"})
+    sim = OutputSimulator(late, exp)
+    runs = sim.run_batch([{"T_F": 0.0}, {"T_F": 0.3}, {"T_F": 0.05}])
+    nominal = OutputSimulator(msd, exp)()["x"]
+    assert np.abs(runs[0].outputs["x"] - nominal).max() < 1e-15
+    assert np.abs(runs[1].outputs["x"][30:] - nominal[:-30]).max() < 1e-12
+    # half a sample: the force blends neighbouring samples, half way between the two shifts
+    half = OutputSimulator(msd, Experiment(T, {"F": delayed_samples(T, F, 0.05)}, {}, {"F": "N"}))()["x"]
+    assert np.abs(runs[2].outputs["x"] - half).max() < 1e-15
+    assert np.allclose(delayed_samples(T, F, 0.005)[50:52], [0.5, 1.0])
+
+
+def test_saved_and_loaded_the_delay_is_still_there(msd, tmp_path):
+    late = msd.delay_input("F", "T_F", 0.2, before=-1.0)
+    path = tmp_path / "late.json"
+    save(late, path)
+    again = load(path).equations()
+    assert again.input_delays == late.equations().input_delays
+    assert again.input_delays["F_late"].before == -1.0 and again.param_values["T_F"] == 0.2
+
+
+def test_wrong_delays_are_refused_with_their_names(msd):
+    with pytest.raises(GraphError, match="delay_of .* and delay"):
+        msd.copy().add_input("G", delay_of="F")
+    g = msd.copy()
+    g.add_input("G", delay_of="Fx", delay="T_F")
+    with pytest.raises(DerivationError, match="'Fx'.*its inputs are F"):
+        g.equations()
+    g = msd.copy()
+    g.add_input("G", delay_of="F", delay="T_missing")
+    with pytest.raises(DerivationError, match="'T_missing' is not a parameter"):
+        g.equations()
+    late = msd.delay_input("F", "T_F", 0.2)
+    with pytest.raises(GraphError, match="already input 'F' delayed"):
+        late.delay_input("F_late", "T_2", 0.1)
+    with pytest.raises(ArgumentError, match="'F_late' .* is input 'F' delayed"):
+        simulate(late, (0.0, 1.0), inputs={"F_late": 1.0})
+
+
+def test_an_exported_delay_is_pade_states_and_follows_the_exact_delay(msd, tmp_path):
+    late = msd.delay_input("F", "T_F", 0.2, before=0.0)   # Pade states start at rest at 0 N
+    path = export(late, tmp_path / "late.fmu")
+    assert validate_fmu(str(path)) == []
+    # steps for fmpy: a time given twice (before and after the step)
+    signal = np.array([(0.0, 0.0), (0.5, 0.0), (0.5, 1.0), (2.0, 1.0), (2.0, -0.5), (4.0, -0.5)],
+                      dtype=[("time", float), ("F", float)])
+    out = simulate_fmu(str(path), stop_time=4.0, output_interval=DT, input=signal)
+    exact = simulate(late, (0.0, 4.0), inputs={"F": ([0.0, 0.5, 2.0], [0.0, 1.0, -0.5])}, output_interval=DT)
+    # Pade [2/3]: error O((sT)^6); the mass-spring (w_n = 2 rad/s) sees the steps smoothed
+    assert np.abs(out["x"] - np.interp(out["time"], exact.t, exact["x"])).max() < 1e-3 * np.ptp(exact["x"])

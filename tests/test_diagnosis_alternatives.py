@@ -5,13 +5,16 @@ while the velocity never reverses: on a recording of one-way motion the report m
 other reading fits as well; where the motion reverses, the held-out part resolves the two and it
 must not.  The recordings come from a HAND-WRITTEN truth graph (a friction element of its own), an
 overdamped mass-spring-damper (b = 5 N s/m: a ramp force moves it one way from the first sample)."""
+import json
+
 import numpy as np
 import pytest
 
 from plants.library.textbook import mass_spring_damper
 from bondgraph import R
-from diagnosis.alternatives import MAX_ALTERNATIVES, indistinguishable
+from diagnosis.alternatives import MAX_ALTERNATIVES, Alternative, indistinguishable
 from diagnosis.catalogue import candidates
+from diagnosis.diagnose import diagnose
 from diagnosis.fit import CandidateFit, choose, fit_candidate, noise_floor
 from diagnosis.holdout_resolution import Z_RESOLVED, resolution
 from diagnosis.place import Place
@@ -141,3 +144,25 @@ def test_alternatives_are_other_kinds_one_each_best_first_at_most_three(rng):
     assert next(a for a in found if a.kind == "constant_load").holdout_nrmse == load.holdout_nrmse
     assert indistinguishable(None, others, {"x": 0.5}, noise=floor, measured=held) == []
 
+
+def test_the_report_names_the_reading_it_cannot_tell_apart(tmp_path):
+    """End to end on the one-way recording (position only, in mm): the JSON lists the constant load
+    under the Coulomb friction, the text says so in one sentence, the round carries it."""
+    exp = _recording(ONE_WAY)
+    path = tmp_path / "one_way.csv"
+    path.write_text("t,F,x_mm\n" + "\n".join(f"{a:.6f},{f:.9g},{1e3 * x:.9g}"
+                                               for a, f, x in zip(T, ONE_WAY, exp.outputs["x"])) + "\n")
+    report = diagnose(mass_spring_damper(b=B), str(path), inputs=["F=F:N"], outputs=["x=x_mm:mm"], time="t:s",
+                      max_effects=1)
+    data = json.loads(json.dumps(report.to_json()))
+    physics = data["missing_physics"][0]
+    assert physics["kind"] == "coulomb_friction"
+    (alt,) = physics["indistinguishable"]
+    assert (alt["kind"], alt["place"], alt["n_params"]) == ("constant_load", "junction v_mass", 1)
+    assert alt["holdout_nrmse"]["x"] == pytest.approx(data["fit"]["improved"]["x"], rel=1e-3)
+    assert 0.0 <= alt["z"] < Z_RESOLVED and alt["difference"] < 0.05
+    assert isinstance(report.rounds[0].indistinguishable[0], Alternative)
+    sentence = next(line for line in report.text.splitlines() if line.startswith("Not told apart"))
+    assert sentence.startswith("Not told apart by this recording: constant_load at junction v_mass (held-out "
+                               f"NRMSE x {alt['holdout_nrmse']['x']:.3g} vs {data['fit']['improved']['x']:.3g}; "
+                               f"z = {alt['z']:.1f}; ")

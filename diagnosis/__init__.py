@@ -22,7 +22,8 @@ Pipeline (:func:`diagnosis.diagnose.diagnose`)
    output transformation for sensor and actuator effects), with parameters,
    guesses and bounds; ``fit``: simulation-error least squares on the training
    part, NRMSE on the held-out part, parsimony, ``none`` when nothing explains
-   a significant share.
+   a significant share; ``alternatives``: the fits of other kinds the held-out
+   part cannot tell apart from the answer.
 5. ``report``: :class:`DiagnosisReport` - JSON (issue schema), plain-language
    explanation, plots, improved graph as JSON.
 

@@ -20,7 +20,8 @@
    nominal state that may have drifted) (:func:`diagnosis.fit.fit_candidate`), and a refit of the ``uncertain``
    nominal parameters alone when any are given; the choice by held-out error
    and parsimony (:func:`diagnosis.fit.choose`), ``none`` when nothing
-   explains a significant share;
+   explains a significant share; the fits of other kinds the held-out part cannot tell apart from
+   the answer (:func:`diagnosis.alternatives.indistinguishable`);
 5. the improved graph, its held-out NRMSE (same simulation as the nominal
    one), the regime of the chosen place's correction, the explanation;
 6. up to ``max_effects - 1`` further rounds: steps 3-5 again on the improved
@@ -353,7 +354,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         fits.append(fit_candidate(graph, None, fit_part, held, uncertain=uncertain, x0=fit_x0,
                                   through=train, judge=judge))
     say("choosing")
-    chosen = _choose(nominal, fits, floor, evidence, res, exp, train, held, diverged or judge.kind != "open-loop")
+    chosen, alternatives = _choose(nominal, fits, floor, evidence, res, exp, train, held,
+                                   diverged or judge.kind != "open-loop")
 
     say("improved model")
     improved_judged = nominal_judged
@@ -367,7 +369,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         improved, y_imp, improved_judged = _holdout_nrmse(OutputSimulator(improved_graph, exp), None, x0, judge)
     rounds = [Round(chosen, fits, dict(nominal), dict(improved), seconds=_time.perf_counter() - say.start,
                     diverged=diverged, window=[float(fit_part.t[0]), float(fit_part.t[-1])], floor=floor,
-                    start=start, features=list(evidence.values()), pruned=pruned)]
+                    start=start, features=list(evidence.values()), pruned=pruned,
+                    indistinguishable=alternatives)]
 
     if chosen is not None and chosen.candidate is not None:
         while len(rounds) < int(max_effects):
@@ -414,24 +417,30 @@ def _choose(reference, fits, floor, evidence, res, exp, train, held, not_open_lo
     """:func:`~diagnosis.fit.choose` on the held-out part; when it answers "none" and the
     held-out part is judged open-loop (`not_open_loop` False: the nominal neither diverges nor
     drifts), the training part's answer among the fits the held-out part cannot judge
-    (:mod:`diagnosis.training_judge`: fits whose held-out prediction is the reference's)."""
+    (:mod:`diagnosis.training_judge`: fits whose held-out prediction is the reference's).
+
+    Returns ``(chosen, alternatives)``: the fits of other kinds the held-out part cannot tell
+    apart from a held-out choice (:func:`diagnosis.alternatives.indistinguishable`; none for an
+    answer of the training part, which the held-out part cannot judge at all)."""
+    from .alternatives import indistinguishable
     from .fit import choose, noise_floor
     from .residuals import nrmse
     from .training_judge import choose_on_training, mark_silent
     if not fits:
-        return None
+        return None, []
     n = train.t.size
     if not not_open_loop:
         mark_silent(fits, res.simulated, exp.outputs, res.noise, n)
     for f in fits:
         f.y = None
     chosen = choose(reference, fits, noise=floor, evidence=_lookup(evidence), measured=held.outputs)
+    alternatives = indistinguishable(chosen, fits, reference, noise=floor, measured=held.outputs)
     for f in fits:
         f.extra.pop("holdout_y", None)     # read by the choice only
     if chosen is not None or not_open_loop:
-        return chosen
+        return chosen, alternatives
     nominal_train = {o: nrmse(train.outputs[o], res.simulated[o][:n]) for o in exp.outputs}
-    return choose_on_training(nominal_train, fits, floor=noise_floor(train, res.noise), n_train=n)
+    return choose_on_training(nominal_train, fits, floor=noise_floor(train, res.noise), n_train=n), []
 
 
 def _lookup(evidence):
@@ -524,9 +533,9 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
                             best, x0)
     fits += _twin_fits(graph, fits, train, rv, fit_one, say, f"{label}: fitting", best, x0, len(places))
     say(f"{label}: choosing")
-    chosen = _choose(reference, fits, floor, evidence, res, exp, train, held, judge.kind != "open-loop")
+    chosen, alternatives = _choose(reference, fits, floor, evidence, res, exp, train, held, judge.kind != "open-loop")
     out = Round(chosen, fits, dict(reference), dict(reference), scores=scores,
-                features=list(evidence.values()), pruned=pruned)
+                features=list(evidence.values()), pruned=pruned, indistinguishable=alternatives)
     if chosen is not None:
         names = {p.name for p in chosen.candidate.params}
         better = chosen.candidate.build(graph, {k: v for k, v in chosen.values.items() if k in names})

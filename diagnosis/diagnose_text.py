@@ -44,18 +44,40 @@ def _regime(chosen, scores, res, n_train, rv, locate_regime, units):
     return finding, values, signal, label
 
 
-def _effects(fit, refit=None) -> list[dict]:
+def _effects(fit, refit=None, alternatives=None) -> list[dict]:
     """The ``missing_physics`` entries of an accepted candidate fit, one per place (a group of
     twins gives one per member; values of a kept joint refit, dict name -> value, replace the
-    round's)."""
+    round's); each with its round's `alternatives` (:class:`~diagnosis.alternatives.Alternative`)
+    as ``indistinguishable``."""
     values = {**fit.values, **(refit or {})}
     out = []
     for cand in getattr(fit.candidate, "members", (fit.candidate,)):
         names = {p.name for p in cand.params}
         params = {k: float(v) for k, v in values.items() if k in names}
         out.append({"kind": cand.kind, "attached_to": str(cand.place), "parameters": params,
-                    "explanation": cand.explain(params), "judged_on": fit.extra.get("judge", "held-out")})
+                    "explanation": cand.explain(params), "judged_on": fit.extra.get("judge", "held-out"),
+                    "indistinguishable": [a.to_json() for a in alternatives or ()]})
     return out
+
+
+def _indistinguishable_text(winner, alternatives) -> list[str]:
+    """One sentence naming the readings the recording cannot tell apart from `winner`
+    (:mod:`diagnosis.alternatives`), with their held-out NRMSE against the winner's, z and the
+    largest difference of the two held-out predictions in noise standard deviations."""
+    if not alternatives:
+        return []
+
+    def one(a):
+        where = f" at {a.place}" if a.place else " (the nominal parameters refitted alone)"
+        errors = ", ".join(f"{o} {v:.3g} vs {winner.holdout_nrmse[o]:.3g}" for o, v in a.holdout_nrmse.items()
+                           if o in winner.holdout_nrmse)
+        z = f"z = {a.z:.1f}" if np.isfinite(a.z) else "z not computable"
+        gap = (f"; the held-out predictions differ by at most {a.difference:.2g} noise standard deviations"
+               if np.isfinite(a.difference) else "")
+        return f"{a.kind}{where} (held-out NRMSE {errors}; {z}{gap})"
+    return [f"Not told apart by this recording: {'; '.join(one(a) for a in alternatives)}. A recording in "
+            f"which their predictions differ by more than the noise would tell them apart "
+            f"(diagnosis.alternatives)."]
 
 
 def _judged_on_training(fit) -> str:
@@ -83,8 +105,9 @@ def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, r
         attached = place.name if place.kind == "junction" else str(place)
         joint = next((r.joint for r in rounds if r.joint is not None), None)
         refit = joint.fit.values if joint is not None and joint.kept else None
-        physics = _effects(chosen, refit)
-        physics += [e for r in list(rounds)[1:] if r.chosen is not None for e in _effects(r.chosen, refit)]
+        physics = _effects(chosen, refit, rounds[0].indistinguishable if rounds else None)
+        physics += [e for r in list(rounds)[1:] if r.chosen is not None
+                    for e in _effects(r.chosen, refit, r.indistinguishable)]
         location = {"junction": attached, "bond": place.bond or "",
                     "windows": windows, "regime": finding.description if finding else ""}
     else:
@@ -207,6 +230,7 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
         if chosen.extra.get("preferred_over"):
             lines.append(f"Held-out error nearly tied it with {chosen.extra['preferred_over']}; the feature "
                          f"regression decided.")
+        lines += _indistinguishable_text(chosen, rounds[0].indistinguishable if rounds else None)
         if finding is not None and finding.variable is not None:
             share = ("" if finding.explained < _MIN_REGIME_SHARE
                      else f" (explains {100 * finding.explained:.0f} % of it)")
@@ -251,6 +275,7 @@ def _further_text(rounds, outputs):
                      f"{'; '.join(m['explanation'] for m in found)} (held-out NRMSE {gain}).")
         if c.extra.get("judge") == "training":
             lines.append(_judged_on_training(c))
+        lines += _indistinguishable_text(c, r.indistinguishable)
     joint = next((r.joint for r in rounds if r.joint is not None), None)
     if joint is not None:
         gain = ", ".join(f"{o} {joint.reference[o]:.3g} -> {joint.improved[o]:.3g}" for o in outputs)

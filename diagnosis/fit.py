@@ -31,7 +31,7 @@ from .holdout_resolution import Z_RESOLVED, held_out_prediction, resolution
 
 __all__ = ["CandidateFit", "fit_candidate", "choose", "noise_floor", "needs_explaining", "usable_fits",
            "single_fits_by_holdout",
-           "acceptance", "PARAMETER_PRICE", "MIN_SHARE", "MIN_GAIN", "TIE"]
+           "acceptance", "within_tie", "PARAMETER_PRICE", "MIN_SHARE", "MIN_GAIN", "TIE"]
 
 #: relative reduction of the held-out excess error each extra parameter must buy
 PARAMETER_PRICE = 0.10
@@ -545,7 +545,7 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
         return None
 
     def score(f):
-        return (excess_error(f.holdout_nrmse, floor, names) + 1e-4 * e0) * (1 + PARAMETER_PRICE) ** f.n_params
+        return _score(f, floor, names, e0)
 
     def order(f):
         return KINDS.index(f.candidate.kind) if f.candidate is not None else -1
@@ -555,10 +555,10 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
         return value if np.isfinite(value) else np.inf
 
     def unpriced_raw(f):  # on the outputs that need explaining: the others only add their noise
-        return sum(f.holdout_nrmse[o] ** 2 for o in significant)
+        return _unpriced_raw(f, significant)
 
     def raw_score(f):
-        return unpriced_raw(f) * (1 + PARAMETER_PRICE) ** f.n_params
+        return _raw_score(f, significant)
 
     def predicted(f):
         return f.extra.get("holdout_y")
@@ -614,6 +614,41 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
         best.extra["resolved_over"] = max(resolved_over, key=lambda item: item[1])
     share, gain = acceptance(nominal_holdout, best, floor)
     return best if share >= MIN_SHARE and gain >= MIN_GAIN else None
+
+
+def _score(fit, floor: dict, names, e0: float) -> float:
+    """Score :math:`S` of rule 2 of :func:`choose`: the held-out excess error over all `names`
+    (plus :math:`10^{-4} E_0`), priced per fitted parameter."""
+    return (excess_error(fit.holdout_nrmse, floor, names) + 1e-4 * e0) * (1 + PARAMETER_PRICE) ** fit.n_params
+
+
+def _unpriced_raw(fit, significant) -> float:
+    """Held-out sum of squared NRMSEs on the outputs that need explaining (the others only add
+    their noise), before the parameter price."""
+    return sum(fit.holdout_nrmse[o] ** 2 for o in significant)
+
+
+def _raw_score(fit, significant) -> float:
+    """:func:`_unpriced_raw` priced per fitted parameter (the second tie of :func:`choose`)."""
+    return _unpriced_raw(fit, significant) * (1 + PARAMETER_PRICE) ** fit.n_params
+
+
+def within_tie(fit, reference, nominal_holdout: dict, floor: dict | None = None) -> bool:
+    """Whether `fit`'s held-out error is within the margin at which :func:`choose` lets it tie
+    `reference` (rule 2): its priced score within :data:`TIE` of `reference`'s, or its priced
+    held-out sum of squared NRMSEs on the outputs that need explaining within :data:`TIE` (squared).
+    A fit better than `reference` is within the margin.  :func:`choose` lets the second tie stand
+    only where the held-out part does not resolve the two
+    (:func:`~diagnosis.holdout_resolution.resolution`); testing that is the caller's part.
+    False when no output needs explaining (nothing is chosen then)."""
+    floor = dict(floor or {})
+    names = list(nominal_holdout)
+    significant = needs_explaining(nominal_holdout, floor)
+    if not significant:
+        return False
+    e0 = _reference_excess(nominal_holdout, floor, significant)
+    return bool(_score(fit, floor, names, e0) <= _score(reference, floor, names, e0) * (1 + TIE)
+                or _raw_score(fit, significant) <= _raw_score(reference, significant) * (1 + TIE) ** 2)
 
 
 def _at_law(candidate) -> bool:

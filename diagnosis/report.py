@@ -4,7 +4,10 @@ Schema of :meth:`DiagnosisReport.to_json` (issue 6, section 2e)::
 
     {"location": {"junction": str, "bond": str, "windows": [[t0, t1], ...], "regime": str},
      "missing_physics": [{"kind": str, "attached_to": str, "parameters": {name: value},
-                          "explanation": str, "judged_on": "held-out" | "training"}],
+                          "explanation": str, "judged_on": "held-out" | "training",
+                          "indistinguishable": [{"kind": str, "place": str,
+                                                 "holdout_nrmse": {output: nrmse}, "z": float,
+                                                 "difference": float, "n_params": int}]}],
      "fit": {"holdout": [t0, t1], "nominal": {output: nrmse}, "improved": {output: nrmse},
              "window": [t0, t1], "start": str,
              "judge": "open-loop" | "segments", "judge_reason": str,
@@ -19,6 +22,11 @@ effects; ``""`` for none); ``bond`` is ``""`` when there is none;
 ``improved_model`` is ``null`` until :meth:`DiagnosisReport.save`;
 ``judged_on`` is ``"training"`` for an effect the held-out part cannot judge
 (:mod:`diagnosis.training_judge`), else ``"held-out"``;
+``indistinguishable`` lists, lowest held-out error first, the fits of other kinds in the effect's
+round that the held-out part cannot tell apart from it (:mod:`diagnosis.alternatives`): their held-out
+NRMSE, ``z`` of the lower error over the other's (below 3; ``null`` where it cannot be computed) and
+``difference``, the largest difference of the two held-out predictions in noise standard deviations;
+``[]`` when there are none;
 ``fit.window`` is the part of the training samples the candidates were fitted on
 and ``fit.start`` the state their simulations started from.  ``fit.judge`` says how the
 held-out errors ``nominal`` and ``improved`` were measured (:mod:`diagnosis.segments`):
@@ -104,7 +112,8 @@ class DiagnosisReport:
     missing_physics : list of dict
         ``kind``, ``attached_to``, ``parameters`` (name -> SI value), ``explanation``,
         ``judged_on`` (``"held-out"``, or ``"training"`` when the held-out part never reaches
-        the effect's regime: :mod:`diagnosis.training_judge`).
+        the effect's regime: :mod:`diagnosis.training_judge`), ``indistinguishable`` (the other
+        readings the recording cannot tell apart: :mod:`diagnosis.alternatives`).
     fit : dict
         ``holdout`` [t0, t1] (s), ``nominal`` and ``improved`` held-out NRMSE per output.
     text : str
@@ -160,7 +169,9 @@ class DiagnosisReport:
             "missing_physics": [{"kind": m["kind"], "attached_to": m["attached_to"],
                                  "parameters": {k: _finite(v) for k, v in m["parameters"].items()},
                                  "explanation": m["explanation"],
-                                 "judged_on": m.get("judged_on", "held-out")} for m in self.missing_physics],
+                                 "judged_on": m.get("judged_on", "held-out"),
+                                 **({"indistinguishable": list(m["indistinguishable"])}
+                                    if "indistinguishable" in m else {})} for m in self.missing_physics],
             "fit": {"holdout": [_finite(v) for v in self.fit["holdout"]],
                     "nominal": {k: _finite(v) for k, v in self.fit["nominal"].items()},
                     "improved": {k: _finite(v) for k, v in self.fit["improved"].items()},

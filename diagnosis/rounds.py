@@ -97,6 +97,10 @@ class Round(_ReadByKey):
         The feature regression at each located junction (:mod:`diagnosis.features`).
     pruned : list of str, optional
         Candidates not fitted by simulation, their kind's features explaining far less than the best's.
+    indistinguishable : list of Alternative, optional
+        The fits of other kinds the held-out part cannot tell apart from ``chosen``
+        (:func:`diagnosis.alternatives.indistinguishable`), lowest held-out error first; empty when
+        nothing was chosen or the training part chose.
     """
 
     chosen: object
@@ -116,3 +120,4 @@ class Round(_ReadByKey):
     start: str | None = None
     features: list | None = None
     pruned: list | None = None
+    indistinguishable: list | None = None

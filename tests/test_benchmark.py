@@ -138,6 +138,35 @@ def test_summary_counts():
     assert "| leak | 1 | 0 % |" in markdown(s, seed=0)
 
 
+def test_kind_right_or_indistinguishable_is_a_measure_apart_from_kind_right():
+    """A concealed kind the answer lists as indistinguishable (diagnosis.alternatives) counts in the
+    separate measure, never in kind right; case files scored before the measure are left out of it."""
+    from types import SimpleNamespace
+    from diagnosis.benchmark.run import score_case
+    spec = CaseSpec(0, 5, "msd", "constant_load", "junction", "v_mass", target_change=0.1, ratio=10.0)
+    rec = SimpleNamespace(spec=spec, plant=SimpleNamespace(model="mass-spring-damper", drifts=False), change=0.1,
+                          nominal_drifts=False, affected="x",
+                          effect=SimpleNamespace(place="v_mass", accepted_places=lambda: ["junction v_mass"]))
+    answer = {"missing_physics": [{"kind": "coulomb_friction", "attached_to": "junction v_mass", "parameters": {},
+                                   "indistinguishable": [{"kind": "constant_load", "place": "junction v_mass"}]}],
+              "fit": {"nominal": {"x": 0.2}, "improved": {"x": 0.03}}}
+    s = score_case(rec, answer)
+    assert (s.kind_ok, s.kind_or_indistinguishable_ok, s.indistinguishable) == (False, True, ["constant_load"])
+    answer["missing_physics"][0]["indistinguishable"] = []
+    assert not score_case(rec, answer).kind_or_indistinguishable_ok
+    base = dict(seconds_diagnose=1.0, place_ok=True, answer_place="", plant="msd", improvement=0.9)
+    results = [dict(base, label="a", kind="constant_load", answer_kind="coulomb_friction", kind_ok=False,
+                    kind_or_indistinguishable_ok=True),
+               dict(base, label="b", kind="leak", answer_kind="leak", kind_ok=True, kind_or_indistinguishable_ok=True),
+               dict(base, label="c", kind="backlash", answer_kind="hysteresis", kind_ok=False,
+                    kind_or_indistinguishable_ok=False),
+               dict(base, label="d", kind="leak", answer_kind="none", kind_ok=False)]     # an older case file
+    h = summarise(results)["headline"]
+    assert h["kind_right"] == 0.25 and h["kind_right_or_indistinguishable"] == pytest.approx(2 / 3)
+    assert "| kind right or among the stated indistinguishable alternatives (effect cases) | 67 % | |" in markdown(
+        summarise(results), seed=0)
+
+
 def test_two_seeded_cases_end_to_end(tmp_path):
     coulomb = CaseSpec(0, 21, "msd", "coulomb_friction", "junction", "v_mass", target_change=0.15, ratio=15.0)
     null = CaseSpec(1, 22, "msd", "none", noise_share=0.01)

@@ -81,8 +81,11 @@ def test_report_saves_schema_plots_and_an_improved_graph(coulomb, tmp_path):
     data = json.loads(open(paths["json"]).read())
     assert set(data) == {"location", "missing_physics", "fit", "improved_model", "features"}   # features: a junction was located
     assert set(data["location"]) == {"junction", "bond", "windows", "regime"}
-    assert set(data["missing_physics"][0]) == {"kind", "attached_to", "parameters", "explanation", "judged_on"}
+    assert set(data["missing_physics"][0]) == {"kind", "attached_to", "parameters", "explanation", "judged_on",
+                                               "indistinguishable"}
     assert data["missing_physics"][0]["judged_on"] == "held-out"
+    # the mass moves both ways: nothing else fits the held-out part as well (diagnosis.alternatives)
+    assert data["missing_physics"][0]["indistinguishable"] == []
     assert set(data["fit"]) == {"holdout", "nominal", "improved", "window", "start", "judge", "judge_reason",
                                 "open_loop"}
     assert data["fit"]["judge"] == "open-loop"        # a stable msd: open-loop stays the judge
@@ -208,6 +211,14 @@ def test_two_effects_friction_then_sensor_offset(two_effects):
     assert report.fit["improved"]["x"] < 3 * np.hypot(SIGMA, QUANTUM / np.sqrt(12)) / 0.7
     assert "Also missing (round 2): sensor_offset at output x" in report.text
     assert set(report.improved_graph.parameters()) >= {"Fc_v_mass", "offset_x"}
+    # on the linear spring a constant load at the mass is the offset's twin once its transient is over:
+    # round 2 says the recording cannot tell them apart (diagnosis.alternatives); round 1 is resolved
+    assert physics[0]["indistinguishable"] == []
+    (load,) = physics[1]["indistinguishable"]
+    assert (load["kind"], load["place"]) == ("constant_load", "junction v_mass")
+    assert load["holdout_nrmse"]["x"] == pytest.approx(second.improved["x"], rel=0.05)
+    assert 0.0 <= load["z"] < 3.0 and load["difference"] < 1.0
+    assert "Not told apart by this recording: constant_load at junction v_mass (held-out NRMSE x " in report.text
 
 
 def test_failed_further_location_keeps_the_first_effect(two_effects_csv, monkeypatch):

@@ -27,6 +27,10 @@ class Score:
     answer_place: str = ""
     kind_ok: bool = False
     place_ok: bool = False
+    # the kinds the recording cannot tell apart from the answer's first (diagnosis.alternatives), and
+    # whether the concealed kind is the answer's or one of them: a measure apart from kind_ok
+    indistinguishable: list = field(default_factory=list)
+    kind_or_indistinguishable_ok: bool = False
     affected: str = ""
     nominal_nrmse: float = float("nan")
     improved_nrmse: float = float("nan")
@@ -78,11 +82,13 @@ def score_case(rec: Realised, report) -> Score:
     s.answer_kind = found[0]["kind"] if found else "none"
     s.answer_place = found[0]["attached_to"] if found else ""
     s.parameters = found[0].get("parameters", {}) if found else {}
+    s.indistinguishable = [a["kind"] for a in found[0].get("indistinguishable", [])] if found else []
     if eff is None:
-        s.kind_ok = s.place_ok = not found
+        s.kind_ok = s.place_ok = s.kind_or_indistinguishable_ok = not found
         s.affected = ""
         return s
     s.kind_ok = s.answer_kind == spec.kind
+    s.kind_or_indistinguishable_ok = s.kind_ok or spec.kind in s.indistinguishable
     s.place_ok = s.answer_place in eff.accepted_places()
     s.affected = rec.affected
     nom, imp = data["fit"]["nominal"].get(rec.affected), data["fit"]["improved"].get(rec.affected)
@@ -112,7 +118,7 @@ def run_case(spec: CaseSpec, plants: dict, workdir: Path, *, max_effects: int = 
         score = score_case(rec, report)
     except Exception as exc:
         score = score_case(rec, {"missing_physics": [], "fit": {"nominal": {}, "improved": {}}})
-        score.kind_ok = score.place_ok = False
+        score.kind_ok = score.place_ok = score.kind_or_indistinguishable_ok = False
         score.answer_kind = "error"
         score.error = f"{type(exc).__name__}: {exc}"
         score.error += "\n" + traceback.format_exc(limit=3) if not hasattr(exc, "args") else ""

@@ -1,0 +1,165 @@
+"""The readings a recording cannot tell apart from a round's answer.
+
+Some kinds are the same effect on a given recording: a Coulomb friction :math:`F_c\\,\\mathrm{sign}(v)`
+and a constant load at the same 1-junction where the velocity never reverses, a sensor offset and a
+constant load on a linear spring.  :func:`diagnosis.fit.choose` names one of them (its tie-breakers:
+fewer parameters, the plainer place, the training error, the catalogue order); this module says which
+fits of other kinds fitted the recording as well:
+
+* successful, with a finite held-out error, and accepted on their own by rule 3 of
+  :func:`~diagnosis.fit.choose` (they explain at least :data:`~diagnosis.fit.MIN_SHARE` of the
+  nominal excess error and lower its NRMSE by :data:`~diagnosis.fit.MIN_GAIN`);
+* within :func:`~diagnosis.fit.choose`'s tie margin of the winner (:func:`~diagnosis.fit.within_tie`:
+  priced score, or priced NRMSE on the outputs that need explaining, within
+  :data:`~diagnosis.fit.TIE`);
+* and the held-out samples do not resolve the lower error of either over the other's
+  (:func:`~diagnosis.holdout_resolution.resolution`, :math:`z <`
+  :data:`~diagnosis.holdout_resolution.Z_RESOLVED`; a :math:`z` that cannot be computed, such as
+  for identical predictions, resolves nothing).
+
+One per kind (its lowest held-out error that passes), at most :data:`MAX_ALTERNATIVES`, lowest held-out error
+first.  Each carries the largest difference of its held-out prediction from the winner's in noise
+standard deviations: a recording that excites that difference beyond the noise would tell them apart.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .fit import MIN_GAIN, MIN_SHARE, acceptance, needs_explaining, usable_fits, within_tie
+from .holdout_resolution import Z_RESOLVED, resolution
+
+__all__ = ["Alternative", "indistinguishable", "MAX_ALTERNATIVES"]
+
+#: most alternatives reported per round
+MAX_ALTERNATIVES = 3
+
+
+@dataclass
+class Alternative:
+    """A fit of another kind that the recording cannot tell apart from a round's winner.
+
+    Attributes
+    ----------
+    kind : str
+        Its kind (``"nominal"`` for a refit of the uncertain nominal parameters alone).
+    place : str
+        Where it acts, as ``attached_to`` reads (``"junction v_mass"``; twins joined by ``", "``;
+        ``""`` for a nominal refit).
+    holdout_nrmse : dict str -> float
+        Its held-out NRMSE per output.
+    z : float
+        :func:`~diagnosis.holdout_resolution.resolution` of the lower held-out error (the winner's or
+        this fit's) over the other's, on the outputs that need explaining; below
+        :data:`~diagnosis.holdout_resolution.Z_RESOLVED`; NaN where it cannot be computed.
+    difference : float
+        Largest absolute difference of the two held-out predictions over the noise standard
+        deviation (the floor's), on the outputs that need explaining; NaN without predictions.
+    n_params : int
+        Its number of priced parameters.
+    """
+
+    kind: str
+    place: str
+    holdout_nrmse: dict
+    z: float
+    difference: float
+    n_params: int
+
+    def to_json(self) -> dict:
+        """``{"kind", "place", "holdout_nrmse": {output: nrmse}, "z", "difference", "n_params"}``;
+        NaN as ``None``."""
+        finite = lambda x: float(x) if np.isfinite(x) else None   # noqa: E731
+        return {"kind": self.kind, "place": self.place,
+                "holdout_nrmse": {o: finite(v) for o, v in self.holdout_nrmse.items()},
+                "z": finite(self.z), "difference": finite(self.difference), "n_params": int(self.n_params)}
+
+
+def indistinguishable(winner, fits, nominal_holdout: dict, *, noise: dict | None = None,
+                      measured: dict | None = None, limit: int = MAX_ALTERNATIVES) -> list[Alternative]:
+    """The fits of other kinds than `winner`'s that the held-out part cannot tell apart from it
+    (module docstring), lowest held-out error first, one per kind, at most `limit`.
+
+    Parameters
+    ----------
+    winner : CandidateFit
+        The round's choice (:func:`diagnosis.fit.choose`).
+    fits : iterable of CandidateFit
+        Every fit of the round, with their held-out predictions (``extra["holdout_y"]``).
+    nominal_holdout : dict str -> float
+        Held-out NRMSE per output of the model the round started from.
+    noise : dict str -> float, optional
+        Noise floor per output as an NRMSE (:func:`diagnosis.fit.noise_floor`); default 0.
+    measured : dict str -> ndarray, optional
+        The recorded held-out outputs; without them nothing is resolved (z NaN).
+    limit : int
+        Most alternatives returned.
+
+    Returns
+    -------
+    list of Alternative
+    """
+    floor = dict(noise or {})
+    significant = needs_explaining(nominal_holdout, floor)
+    if winner is None or not significant:
+        return []
+    found = {}
+    for fit in sorted(usable_fits(fits, list(nominal_holdout)), key=lambda f: _held_out_error(f, significant)):
+        if fit.kind == winner.kind or fit.kind in found or len(found) >= limit:
+            continue
+        if not (_accepted(nominal_holdout, fit, floor) and within_tie(fit, winner, nominal_holdout, floor)):
+            continue
+        z = _resolution_either_way(measured, winner, fit, significant)
+        if not z >= Z_RESOLVED:
+            found[fit.kind] = Alternative(fit.kind, _place_of(fit), dict(fit.holdout_nrmse), z,
+                                          _largest_difference(measured, winner, fit, significant, floor),
+                                          fit.n_params)
+    return list(found.values())
+
+
+def _held_out_error(fit, significant) -> float:
+    """Sum of squared held-out NRMSEs on the outputs that need explaining."""
+    return float(sum(fit.holdout_nrmse[o] ** 2 for o in significant))
+
+
+def _accepted(nominal_holdout, fit, floor) -> bool:
+    """Whether `fit` passes rule 3 of :func:`~diagnosis.fit.choose` on its own."""
+    share, gain = acceptance(nominal_holdout, fit, floor)
+    return share >= MIN_SHARE and gain >= MIN_GAIN
+
+
+def _prediction(fit):
+    return fit.extra.get("holdout_y")
+
+
+def _resolution_either_way(measured, a, b, significant) -> float:
+    """z of the lower held-out error of `a` and `b` over the other's (NaN when untestable)."""
+    lower, higher = (a, b) if _held_out_error(a, significant) <= _held_out_error(b, significant) else (b, a)
+    return float(resolution(measured, _prediction(lower), _prediction(higher), significant))
+
+
+def _largest_difference(measured, a, b, significant, floor) -> float:
+    """Largest ``|prediction_a - prediction_b|`` over the held-out samples, in noise standard
+    deviations (the floor's NRMSE times the measured output's spread), over `significant`."""
+    pa, pb = _prediction(a), _prediction(b)
+    if measured is None or pa is None or pb is None:
+        return float("nan")
+    largest = float("nan")
+    for o in significant:
+        if o not in pa or o not in pb or o not in measured:
+            return float("nan")
+        y = np.asarray(measured[o], dtype=float)
+        sigma = floor.get(o, 0.0) * float(np.nanstd(y))
+        gap = np.abs(np.asarray(pa[o], dtype=float) - np.asarray(pb[o], dtype=float))
+        if sigma > 0 and np.isfinite(gap).any():
+            largest = float(np.nanmax([largest, np.nanmax(gap) / sigma]))
+    return largest
+
+
+def _place_of(fit) -> str:
+    """Where `fit`'s candidate acts, as the report's ``attached_to`` reads."""
+    if fit.candidate is None:
+        return ""
+    places = getattr(fit.candidate, "places", None) or (fit.candidate.place,)
+    return ", ".join(str(p) for p in places)

@@ -75,9 +75,9 @@ def _indistinguishable_text(winner, alternatives) -> list[str]:
         gap = (f"; the held-out predictions differ by at most {a.difference:.2g} noise standard deviations"
                if np.isfinite(a.difference) else "")
         return f"{a.kind}{where} (held-out NRMSE {errors}; {z}{gap})"
-    return [f"Not told apart by this recording: {'; '.join(one(a) for a in alternatives)}. A recording in "
-            f"which their predictions differ by more than the noise would tell them apart "
-            f"(diagnosis.alternatives)."]
+    return [f"Not told apart by this recording: {'; '.join(one(a) for a in alternatives)}. The answer above has "
+            f"the lower priced held-out error or won the choice rule's ties (fewer parameters, the plainer place, "
+            f"the training error, the catalogue's order)."]
 
 
 def _judged_on_training(fit) -> str:

@@ -118,9 +118,10 @@ class BondGraph(GraphEditing):
 
         With `delay_of` (another input's name) and `delay` (a parameter's name, s), the input is
         that input late, ``delay_of(t - delay)``, and `before` while ``t - delay`` precedes the
-        run (default: the source's value at the start) (:class:`~bondgraph.elements.base.InputDelay`; both names are checked when the
-        equations are derived, :meth:`equations`).  A run binds only the source: simulators
-        delay its values themselves.
+        run, by default the source's value at the start
+        (:class:`~bondgraph.elements.base.InputDelay`; both names are checked when the equations
+        are derived, :meth:`equations`).  A run binds only the source: simulators delay its
+        values themselves.
         """
         if not isinstance(name, str) or not name.isidentifier():
             raise GraphError(f"input name {name!r} is not a valid identifier")

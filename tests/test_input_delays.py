@@ -10,7 +10,8 @@ from fmpy.validation import validate_fmu
 
 from bondgraph.io_json import load, save
 import plants.library as library
-from bondgraph.errors import ArgumentError, DerivationError, GraphError
+from bondgraph.errors import ArgumentError, DerivationError, GraphError, ParameterError
+from bondgraph.params import Param
 from bondgraph.numerics import simulate
 from bondgraph.numerics.input_delays import delayed_samples
 from diagnosis.recording import Experiment
@@ -88,6 +89,13 @@ def test_wrong_delays_are_refused_with_their_names(msd):
         late.delay_input("F_late", "T_2", 0.1)
     with pytest.raises(ArgumentError, match="'F_late' .* is input 'F' delayed"):
         simulate(late, (0.0, 1.0), inputs={"F_late": 1.0})
+    with pytest.raises(ParameterError, match="T_F"):                  # declared with min 0
+        simulate(late, (0.0, 1.0), params={"T_F": -0.1})
+    g = msd.copy()
+    g.add_parameter(Param("T_free", -0.1, "s"))
+    g.add_input("G", delay_of="F", delay="T_free")
+    with pytest.raises(ArgumentError, match="'T_free' is -0.1 s"):
+        simulate(g, (0.0, 1.0))
 
 
 def test_an_exported_delay_is_pade_states_and_follows_the_exact_delay(msd, tmp_path):

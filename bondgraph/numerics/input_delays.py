@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import ArgumentError
+
 __all__ = ["delayed_samples", "fill_delayed_inputs", "delay_values"]
 
 
@@ -47,8 +49,8 @@ def delayed_samples(t, values, delay: float, before: float | None = None) -> np.
     t = np.asarray(t, dtype=float)
     values = np.asarray(values, dtype=float)
     before = float(values[0]) if before is None else float(before)
-    if delay < 0 or not np.isfinite(delay):
-        raise ValueError(f"a delay must be a finite number of seconds >= 0; found {delay!r}")
+    if not delay >= 0 or not np.isfinite(delay):
+        raise ArgumentError(f"a delay must be a finite number of seconds >= 0; found {delay!r}")
     if t.size < 2:
         return np.full(t.shape, before) if delay > 0 else values.copy()
     grid = np.concatenate([[t[0] - (t[1] - t[0])], t])
@@ -56,9 +58,16 @@ def delayed_samples(t, values, delay: float, before: float | None = None) -> np.
 
 
 def delay_values(eqs, params: dict | None = None) -> dict:
-    """Delayed input name -> its delay (s) under `params` (name -> value; others at their defaults)."""
+    """Delayed input name -> its delay (s) under `params` (name -> value; others at their defaults);
+    a negative or non-finite delay is an :class:`~bondgraph.errors.ArgumentError` naming it."""
     params = params or {}
-    return {name: float(params.get(d.time, eqs.param_values[d.time])) for name, d in eqs.input_delays.items()}
+    delays = {name: float(params.get(d.time, eqs.param_values[d.time])) for name, d in eqs.input_delays.items()}
+    for name, value in delays.items():
+        if not (np.isfinite(value) and value >= 0):
+            raise ArgumentError(f"input {name!r} of model {eqs.name!r}: its delay {eqs.input_delays[name].time!r} "
+                                f"is {value!r} s; a delay is a finite number of seconds >= 0",
+                                name=eqs.input_delays[name].time)
+    return delays
 
 
 def fill_delayed_inputs(eqs, t, U, delays: dict) -> np.ndarray:

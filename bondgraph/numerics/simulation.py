@@ -160,8 +160,8 @@ def simulate(system, t_span, *, inputs=None, x0=None, params=None, method="auto"
     model = compile_model(eqs, backend=backend)
     x_init = _initial_state(model, x0)
     p = model.param_vector(params)
-    plan = _InputPlan(eqs, inputs, t0, delays=delay_values(eqs, dict(zip(model.param_names, p[0]))))
     check_param_bounds(eqs, p)
+    plan = _InputPlan(eqs, inputs, t0, delays=delay_values(eqs, dict(zip(model.param_names, p[0]))))
     d0 = _initial_held(model, held0).reshape(1, -1)
     fixed = (not eqs.is_smooth) or method == "RK4"
     if not eqs.is_smooth and method not in ("auto", "RK4"):

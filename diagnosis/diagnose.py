@@ -270,7 +270,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     from .initial_state import estimate_initial_state
     from .locate import locate_regime, regime_variables, significant_windows
     from .recording import bind
-    from .residuals import OutputSimulator
+    from .residuals import OutputSimulator, settle_substeps
     from .segments import choose_judge
 
     if int(top) < 1:
@@ -300,6 +300,14 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
             x0 = est.values
             res, diverged = _nominal_residuals(sim, graph, exp, x0)
             res.noise.update(_noise_overrides(noise, exp))
+    exp, rule = settle_substeps(sim, x0, res.noise)
+    if exp.substeps > rule:
+        say("integration", f"{exp.substeps} RK4 sub-steps per sample, not {rule}: halving the step moved the "
+                           "nominal's outputs by more than a tenth of their noise")
+        train, held = exp.split(holdout)
+        sim = sim.on(exp)
+        res, diverged = _nominal_residuals(sim, graph, exp, x0)
+        res.noise.update(_noise_overrides(noise, exp))
     floor = noise_floor(held, res.noise)
     say("held-out judge")
     judge, nominal_judged = choose_judge(sim, exp, held, res, diverged, floor, x0)

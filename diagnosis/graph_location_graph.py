@@ -92,7 +92,7 @@ def with_inputs(experiment, extra: dict, units: dict):
     from .recording import Experiment
 
     return Experiment(experiment.t, {**experiment.inputs, **extra}, dict(experiment.outputs),
-                      {**experiment.units, **units}, experiment.source)
+                      {**experiment.units, **units}, experiment.source, experiment.substeps)
 
 
 def junction_unit(graph, junction: str) -> str:

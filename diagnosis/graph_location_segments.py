@@ -28,17 +28,11 @@ WINDOWS = 5
 _MIN_SAMPLES = 40
 
 
-def _slice(exp, a, b):
-    from .recording import Experiment
-    return Experiment(exp.t[a:b], {k: v[a:b] for k, v in exp.inputs.items()},
-                      {k: v[a:b] for k, v in exp.outputs.items()}, dict(exp.units), exp.source)
-
-
 def _finite_window(sim, train, a, b, noise):
     """``(stop, state, energy)`` of the window starting at sample `a`: its state fitted to its first
     quarter, its end cut where the nominal stays finite from there; None when too short."""
     from .initial_state import fit_state
-    head = _slice(train, a, a + max(10, (b - a) // 4))
+    head = train.samples(a, a + max(10, (b - a) // 4))
     prior = sim.initial_state(None)
     scale = np.where(np.abs(prior) > 0, np.abs(prior), 1.0)
     x = fit_state(sim.on(head), {o: np.asarray(v, float) for o, v in head.outputs.items()}, noise, prior, scale)
@@ -47,7 +41,7 @@ def _finite_window(sim, train, a, b, noise):
     for _ in range(8):
         if b - a < _MIN_SAMPLES:
             return None
-        win = _slice(train, a, b)
+        win = train.samples(a, b)
         try:
             out = sim.on(win)(None, x)
         except BondcosimError as exc:
@@ -95,7 +89,7 @@ def locate_on_segments(model, train, noise: dict, *, progress=False) -> list:
             continue
         b, x, e0 = found
         try:
-            scores = locate_on_graph(model, _slice(train, a, b), progress=progress,
+            scores = locate_on_graph(model, train.samples(a, b), progress=progress,
                                      x0=dict(zip(sim.model.state_names, map(float, x))))
         except (BondcosimError, np.linalg.LinAlgError, FloatingPointError):
             continue

@@ -237,6 +237,10 @@ class Experiment:
         The model's unit of each input and output.
     source : str
         The recording's source.
+    substeps : int
+        Fewest RK4 sub-steps per sample interval a simulation on this recording takes
+        (:func:`diagnosis.residuals.settle_substeps` raises it where the model's own step rule
+        leaves an integration error above the noise); parts of the experiment keep it.
     """
 
     t: np.ndarray
@@ -244,6 +248,7 @@ class Experiment:
     outputs: dict
     units: dict = field(default_factory=dict)
     source: str = "arrays"
+    substeps: int = 1
 
     @property
     def span(self) -> tuple[float, float]:
@@ -256,7 +261,13 @@ class Experiment:
                                  "samples", source=self.source)
         return Experiment(self.t[mask], {k: v[mask] for k, v in self.inputs.items()},
                           {k: v[mask] for k, v in self.outputs.items()}, dict(self.units),
-                          self.source)
+                          self.source, self.substeps)
+
+    def samples(self, a: int, b: int) -> "Experiment":
+        """The samples ``a`` to ``b - 1`` (indices, as a Python slice)."""
+        return Experiment(self.t[a:b], {k: v[a:b] for k, v in self.inputs.items()},
+                          {k: v[a:b] for k, v in self.outputs.items()}, dict(self.units), self.source,
+                          self.substeps)
 
     def window(self, t0: float, t1: float) -> "Experiment":
         """The samples with ``t0 <= t <= t1`` (times in s)."""

@@ -175,6 +175,7 @@ class DiagnosisReport:
             "fit": {"holdout": [_finite(v) for v in self.fit["holdout"]],
                     "nominal": {k: _finite(v) for k, v in self.fit["nominal"].items()},
                     "improved": {k: _finite(v) for k, v in self.fit["improved"].items()},
+                    "substeps": int(self.fit.get("substeps", 1)),
                     **({"window": [_finite(v) for v in self.fit["window"]], "start": str(self.fit["start"])}
                        if "window" in self.fit else {}),
                     **({"judge": self.fit["judge"], "judge_reason": self.fit.get("judge_reason", "")}

@@ -151,12 +151,6 @@ class Judged:
     floor: dict | None = None
 
 
-def _slice(exp, a, b):
-    from .recording import Experiment
-    return Experiment(exp.t[a:b], {k: v[a:b] for k, v in exp.inputs.items()},
-                      {k: v[a:b] for k, v in exp.outputs.items()}, dict(exp.units), exp.source)
-
-
 def _nrmse(y, yhat):
     spread = float(np.std(y)) or 1.0
     return float(np.sqrt(np.mean((y - yhat) ** 2)) / spread)
@@ -235,10 +229,10 @@ class Judge:
             start = prior[a] if prior is not None and np.isfinite(prior[a]).all() else default
             scale = np.maximum(np.maximum(np.abs(start), spread), 1e-9)
             scale = np.where(scale > 1e-9, scale, 1.0)
-            win = _slice(held, a, e)
+            win = held.samples(a, e)
             x, cov = fit_state(sim.on(win), {o: np.asarray(win.outputs[o], float) for o in outputs}, self.noise,
                                start, scale, params=params, covariance=True)
-            seg_sim = sim.on(_slice(held, a, b))
+            seg_sim = sim.on(held.samples(a, b))
             try:
                 if x is None:
                     raise BondcosimError("no state fits the segment's first samples")

@@ -86,8 +86,9 @@ def test_report_saves_schema_plots_and_an_improved_graph(coulomb, tmp_path):
     assert data["missing_physics"][0]["judged_on"] == "held-out"
     # the mass moves both ways: nothing else fits the held-out part as well (diagnosis.alternatives)
     assert data["missing_physics"][0]["indistinguishable"] == []
-    assert set(data["fit"]) == {"holdout", "nominal", "improved", "window", "start", "judge", "judge_reason",
-                                "open_loop"}
+    assert set(data["fit"]) == {"holdout", "nominal", "improved", "substeps", "window", "start", "judge",
+                                "judge_reason", "open_loop"}
+    assert data["fit"]["substeps"] == 1              # at 50 Hz the step rule is accurate enough
     assert data["fit"]["judge"] == "open-loop"        # a stable msd: open-loop stays the judge
     assert data["fit"]["open_loop"]["improved"] == data["fit"]["improved"]
     assert data["fit"]["window"][0] == 0.0 and data["fit"]["start"] == "the model's initial state"
@@ -320,3 +321,21 @@ def test_rounds_are_dataclasses_that_still_read_by_key():
     assert "graph" not in r and r.get("window") is None and "window" not in r.keys()
     with pytest.raises(KeyError, match="no field 'graph' set; set are fits, reference"):
         r["graph"]
+
+
+def test_a_coarsely_sampled_nominal_is_integrated_finely_enough_to_answer_none(tmp_path):
+    """At 4 Hz the step rule takes one RK4 sub-step per sample (h |lambda| = 0.5), whose error is
+    several times a fine sensor's noise: the diagnosis halves the step first, and says so."""
+    rng = np.random.default_rng(5)
+    t = np.arange(0.0, 60.0, 0.25)
+    force = np.where(np.sin(2 * np.pi * t / 10.0) >= 0.0, 1.0, -1.0)     # 1 N square wave, 10 s
+    sigma = 2e-5
+    x = msd_positions(t, force, lambda x, v: 0.0, substeps=200) + rng.normal(0.0, sigma, t.size)
+    path = tmp_path / "msd_4Hz.csv"
+    path.write_text("time_s,force_N,position_m\n" + "\n".join(f"{a:.6f},{f:.9g},{p:.9g}"
+                                                                for a, f, p in zip(t, force, x)) + "\n")
+    report = diagnose("mass-spring-damper", str(path), inputs=["F=force_N:N"], outputs=["x=position_m:m"],
+                      noise={"x": sigma})
+    data = report.to_json()
+    assert data["fit"]["substeps"] > 1 and "Integration: at least" in report.text
+    assert [m["kind"] for m in data["missing_physics"]] == ["none"]

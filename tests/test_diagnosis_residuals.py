@@ -7,7 +7,7 @@ from bondgraph.numerics import simulate
 from bondgraph.errors import ParameterError, UnknownNameError
 from diagnosis.errors import DiagnosisError
 from diagnosis.recording import Experiment
-from diagnosis.residuals import OutputSimulator, noise_sigma, nrmse, residuals, simulate_outputs
+from diagnosis.residuals import OutputSimulator, noise_sigma, nrmse, residuals, settle_substeps, simulate_outputs
 
 
 def _msd_step(t, m=1.0, b=0.4, k=4.0):
@@ -149,3 +149,33 @@ def test_simulator_on_another_experiment_reuses_the_compiled_model():
     np.testing.assert_allclose(y, _msd_step(t2), atol=1e-6)
     np.testing.assert_array_equal(y, OutputSimulator(library.build("mass-spring-damper"), exp2)()["x"])
     assert sim()["x"].shape == t1.shape          # the original keeps its own grid
+
+
+def _coarse_step(sigma, dt=0.25, T=60.0):
+    """The msd's step response sampled at 4 Hz (h |lambda| = 0.5: one RK4 sub-step by the step
+    rule), with the truth analytic."""
+    t = np.arange(0.0, T + dt / 2, dt)
+    exp = Experiment(t, {"F": np.ones_like(t)}, {"x": _msd_step(t)}, {"F": "N", "x": "m"})
+    return OutputSimulator(library.build("mass-spring-damper"), exp), {"x": sigma}
+
+
+def test_the_step_is_halved_until_the_integration_error_is_well_under_the_noise():
+    sigma = 2e-5                                             # m: a fine position sensor
+    sim, noise = _coarse_step(sigma)
+    t = sim.experiment.t
+    coarse = sim()["x"]
+    assert sim.run().substeps == 1
+    assert np.sqrt(np.mean((coarse - _msd_step(t)) ** 2)) > 3 * sigma     # the step rule's error
+    exp, rule = settle_substeps(sim, None, noise)
+    assert rule == 1 and exp.substeps > 1
+    settled = sim.on(exp)()["x"]
+    assert np.sqrt(np.mean((settled - _msd_step(t)) ** 2)) < 0.2 * sigma
+    # the parts of the experiment keep it, and so does every simulator on them
+    train, held = exp.split(0.3)
+    assert train.substeps == held.substeps == exp.substeps == sim.on(held).run().substeps
+
+
+def test_a_noisy_recording_keeps_the_step_rule():
+    sim, noise = _coarse_step(sigma=0.01)                    # the step rule's error is under 0.1 sigma
+    exp, rule = settle_substeps(sim, None, noise)
+    assert exp is sim.experiment and exp.substeps == 1 and rule == 1

@@ -25,22 +25,41 @@ MIN_PLACE_SHARE = 0.02
 def actuator_places(graph, places, experiment) -> list:
     """The recorded inputs that drive a located junction directly, as input places not yet in
     `places`: a source named after the input, or an element bonded to the junction whose law
-    reads it (a valve's command).  An actuator's lag, delay or limit there changes the junction's
-    flow or effort exactly as a correction at the junction does, so graph location cannot rank
-    the input above the junction: its candidates are fitted with the junction's."""
+    reads it (a valve's command), or a source that sets the common variable of a neighbouring
+    junction (a flow source on a 1-junction bonded to a located 0-junction sets the flow of their
+    bond: a human's imposed joint speed behind a located torque node).  An actuator's lag, delay or
+    limit there changes the junction's flow or effort exactly as a correction at the junction does,
+    so graph location cannot rank the input above the junction: its candidates are fitted with the
+    junction's."""
     recorded = [d.name for d in graph.inputs() if d.name in experiment.inputs]
     have = {(p.kind, p.name) for p in places}
     out = []
     for p in places:
         if p.kind != "junction":
             continue
-        for element, _ in junction_elements(graph, p.name):
+        for element in _driving_elements(graph, p.name):
             entry = element.to_dict()
             for u in recorded:
                 reads = element.name == u or any(mentions(c[k], u) for c, k in expression_fields(entry))
                 if reads and ("input", u) not in have:
                     have.add(("input", u))
                     out.append(Place("input", u))
+    return out
+
+
+#: the source kinds that set a junction's common variable: the flow of a 1-, the effort of a 0-junction
+_SETS_COMMON = {"1": ("Sf", "MSf"), "0": ("Se", "MSe")}
+
+
+def _driving_elements(graph, junction: str) -> list:
+    """The elements bonded to `junction`, and the sources on its neighbouring junctions that set
+    the neighbour's common variable (:data:`_SETS_COMMON`), which the bond between them carries."""
+    out = []
+    for element, _ in junction_elements(graph, junction):
+        out.append(element)
+        if element.ports is None:                          # a neighbouring junction
+            out += [e for e, _ in junction_elements(graph, element.name)
+                    if e.kind in _SETS_COMMON.get(element.kind, ())]
     return out
 
 

@@ -102,3 +102,16 @@ def test_the_inputs_that_drive_a_located_junction_join_it():
     assert actuator_places(hydraulic, [Place("junction", "p1")], SimpleNamespace(inputs={"Q_p": None})) == \
         [Place("input", "Q_p")]
     assert actuator_places(hydraulic, [Place("junction", "p2")], SimpleNamespace(inputs={"Q_p": None})) == []
+
+
+def test_a_source_that_sets_a_neighbouring_junctions_common_variable_drives_the_located_one():
+    """The exoskeleton's human speed w_h is a flow source on the 1-junction w_h_j, bonded to the
+    torque node tau_eh: it sets that bond's flow, so a delay of w_h looks like a flow at tau_eh
+    (seed 6464, case 017, had answered none with w_h never fitted).  The motor torque, an effort
+    source on the 1-junction w_m, sets no common variable there and joins only where it is bonded."""
+    exo = library.build("exoskeleton")
+    recorded = SimpleNamespace(inputs={"tau_m": None, "w_h": None})
+    assert actuator_places(exo, [Place("junction", "tau_eh")], recorded) == [Place("input", "w_h")]
+    assert actuator_places(exo, [Place("junction", "tau_s_j")], recorded) == []
+    assert actuator_places(exo, [Place("junction", "w_g")], recorded) == []
+    assert actuator_places(exo, [Place("junction", "w_m")], recorded) == [Place("input", "tau_m")]

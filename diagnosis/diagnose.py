@@ -363,7 +363,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                                   through=train, judge=judge))
     say("choosing")
     chosen, alternatives = _choose(nominal, fits, floor, evidence, res, exp, train, held,
-                                   diverged or judge.kind != "open-loop")
+                                   diverged or judge.kind != "open-loop", sim)
 
     say("improved model")
     improved_judged = nominal_judged
@@ -421,11 +421,12 @@ def _features(graph, scores, places, train, x0, rv, cands, say, label):
     return evidence, with_feature_starts(kept, evidence), [str(c) for c in pruned]
 
 
-def _choose(reference, fits, floor, evidence, res, exp, train, held, not_open_loop):
+def _choose(reference, fits, floor, evidence, res, exp, train, held, not_open_loop, sim=None):
     """:func:`~diagnosis.fit.choose` on the held-out part; when it answers "none" and the
     held-out part is judged open-loop (`not_open_loop` False: the nominal neither diverges nor
     drifts), the training part's answer among the fits the held-out part cannot judge
-    (:mod:`diagnosis.training_judge`: fits whose held-out prediction is the reference's).
+    (:mod:`diagnosis.training_judge`: fits whose held-out prediction is the reference's; `sim`,
+    the reference model's OutputSimulator, tells an effect at the start from a wrong start state).
 
     Returns ``(chosen, alternatives)``: the fits of other kinds the held-out part cannot tell
     apart from a held-out choice (:func:`diagnosis.alternatives.indistinguishable`; none for an
@@ -433,7 +434,7 @@ def _choose(reference, fits, floor, evidence, res, exp, train, held, not_open_lo
     from .alternatives import indistinguishable
     from .fit import choose, noise_floor
     from .residuals import nrmse
-    from .training_judge import choose_on_training, mark_silent
+    from .training_judge import choose_on_training, mark_silent, restart_evidence
     if not fits:
         return None, []
     n = train.t.size
@@ -448,7 +449,12 @@ def _choose(reference, fits, floor, evidence, res, exp, train, held, not_open_lo
     if chosen is not None or not_open_loop:
         return chosen, alternatives
     nominal_train = {o: nrmse(train.outputs[o], res.simulated[o][:n]) for o in exp.outputs}
-    return choose_on_training(nominal_train, fits, floor=noise_floor(train, res.noise), n_train=n), []
+
+    def restart():
+        return restart_evidence(sim, train, {o: res.simulated[o][:n] for o in exp.outputs}, res.noise)
+
+    return choose_on_training(nominal_train, fits, floor=noise_floor(train, res.noise), n_train=n,
+                              restart=restart if sim is not None else None), []
 
 
 def _lookup(evidence):
@@ -509,8 +515,9 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     from .errors import SimulationError
 
     say(f"{label}: residual of the improved model")
+    sim = OutputSimulator(graph, exp)
     try:
-        res = residuals(graph, exp, simulator=OutputSimulator(graph, exp), x0=x0)
+        res = residuals(graph, exp, simulator=sim, x0=x0)
     except SimulationError as exc:      # judged by segments, the improved model may still diverge
         return Round(None, [], dict(reference), dict(reference), scores=[],
                      note=f"the improved model diverges open-loop ({exc}): no run to locate along")
@@ -541,7 +548,8 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
                             best, x0)
     fits += _twin_fits(graph, fits, train, rv, fit_one, say, f"{label}: fitting", best, x0, len(places))
     say(f"{label}: choosing")
-    chosen, alternatives = _choose(reference, fits, floor, evidence, res, exp, train, held, judge.kind != "open-loop")
+    chosen, alternatives = _choose(reference, fits, floor, evidence, res, exp, train, held, judge.kind != "open-loop",
+                                   sim)
     out = Round(chosen, fits, dict(reference), dict(reference), scores=scores,
                 features=list(evidence.values()), pruned=pruned, indistinguishable=alternatives)
     if chosen is not None:

@@ -32,8 +32,8 @@ import sympy as sp
 
 from .errors import DiagnosisError
 
-__all__ = ["OutputSimulator", "SimRun", "input_matrix", "settle_substeps", "simulate_outputs", "nrmse", "noise_sigma",
-           "Residuals", "residuals"]
+__all__ = ["OutputSimulator", "SimRun", "input_matrix", "settle_substeps", "simulate_outputs", "nrmse",
+           "noise_sigma", "Residuals", "residuals"]
 
 _RK4_ACCURACY = 0.5       # h * |lambda_max| per sub-step for smooth models
 #: RK4 sub-steps per sample interval beyond which a smooth model is integrated by the
@@ -266,8 +266,8 @@ class OutputSimulator:
         subs = np.maximum(getattr(self.experiment, "substeps", 1), np.ceil(self._dt / h_max - 1e-9)).astype(int)
         runs = [None] * n
         # runs whose delayed inputs are late by the same times share their input matrix
-        for U, members in self._inputs_by_delay(P).items():
-            U = self._delayed_U(U)
+        for delays, members in self._inputs_by_delay(P).items():
+            U = self._delayed_U(delays)
             rows = np.asarray(members)
             X, D, most = self._integrate(U, subs, h_max, x_init, P[rows])
             for k, i in enumerate(members):
@@ -284,11 +284,12 @@ class OutputSimulator:
             groups.setdefault(key, []).append(i)
         return groups
 
-    def _delayed_U(self, key) -> np.ndarray:
+    def _delayed_U(self, delays: tuple) -> np.ndarray:
+        """The input matrix with the delayed inputs late by `delays` (s, in ``input_delays`` order)."""
         from bondgraph.numerics.input_delays import fill_delayed_inputs
-        if not key:
+        if not delays:
             return self.U
-        return fill_delayed_inputs(self.equations, self.t, self.U, dict(zip(self.equations.input_delays, key)))
+        return fill_delayed_inputs(self.equations, self.t, self.U, dict(zip(self.equations.input_delays, delays)))
 
     def _integrate(self, U, subs, h_max, x_init, P):
         from diagnosis.errors import SimulationError

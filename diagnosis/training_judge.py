@@ -22,8 +22,13 @@ training part) is accepted when
 * the drop of its training sum of squares, in noise variances, is at least
   :data:`EVIDENCE_PER_PARAMETER` (Bayesian information criterion's ``ln n``, at least 10) per
   fitted parameter: chance fits of noise do not pass;
-* at most half of that drop lies in the first :data:`START_SHARE` (5 %) of the training part:
-  an effect seen only at the start is as likely a wrong initial state as missing physics.
+* where more than half of that drop lies in the first :data:`START_SHARE` (5 %) of the training
+  part, an effect seen only at the start may as well be a wrong initial state: the fit's drop
+  there must then exceed, by the same :data:`EVIDENCE_PER_PARAMETER` per parameter, the drop the
+  nominal model gains there from a start state re-estimated on those samples
+  (:func:`restart_evidence`; without that comparison such a fit is not accepted).  A sensor that
+  clipped for the first seconds while the model's level rose is not a different start: no start
+  state keeps the model flat there.
 
 The report says when the training part judged (:attr:`CandidateFit.extra` ``"judge"``).
 """
@@ -31,8 +36,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["holdout_change", "mark_silent", "choose_on_training", "MIN_TRAIN_SHARE",
-           "EVIDENCE_PER_PARAMETER", "START_SHARE"]
+__all__ = ["holdout_change", "mark_silent", "choose_on_training", "evidence_drop", "restart_evidence",
+           "start_samples", "MIN_TRAIN_SHARE", "EVIDENCE_PER_PARAMETER", "START_SHARE"]
 
 #: Share of the nominal training excess error a training-judged fit must explain.
 MIN_TRAIN_SHARE = 0.5
@@ -57,6 +62,44 @@ def holdout_change(y_fit: dict, y_nominal: dict, sigma: dict) -> float:
     return worst
 
 
+def start_samples(n_train: int) -> int:
+    """The samples at the start of a training part of `n_train` samples (:data:`START_SHARE`)."""
+    return max(1, int(START_SHARE * n_train))
+
+
+def evidence_drop(y: dict, nominal_y: dict, measured: dict, sigma: dict, n: int) -> np.ndarray:
+    """Per sample of the first `n`, the drop of the noise-weighted squared error of prediction `y`
+    against the nominal prediction, summed over the outputs with a noise estimate."""
+    drop = np.zeros(n)
+    for o, ref in nominal_y.items():
+        if sigma.get(o, 0.0) <= 0:
+            continue
+        m = np.asarray(measured[o][:n], float)
+        drop += ((m - np.asarray(ref[:n], float)) ** 2 - (m - np.asarray(y[o][:n], float)) ** 2) / sigma[o] ** 2
+    return drop
+
+
+def restart_evidence(sim, train, nominal_y: dict, sigma: dict) -> float:
+    """The drop of the noise-weighted squared error over the first :func:`start_samples` samples of
+    `train` that the nominal model (`sim`, an OutputSimulator) gains from a start state fitted to
+    them (:func:`~diagnosis.initial_state.estimate_initial_state`): what a wrong initial state
+    would explain there.  0 when no start state does better (or a restart does not run)."""
+    from .errors import BondcosimError
+    from .initial_state import estimate_initial_state
+    n = start_samples(train.t.size)
+    head = train.samples(0, max(n, 2))
+    try:
+        est = estimate_initial_state(sim.on(head), head, sigma)
+        if not est.samples:
+            return 0.0
+        y = sim.on(head)(None, est.values)
+    except BondcosimError:
+        return 0.0
+    drop = evidence_drop(y, {o: v[:n] for o, v in nominal_y.items()}, head.outputs, sigma, n)
+    total = float(np.sum(drop))
+    return max(total, 0.0) if np.isfinite(total) else 0.0
+
+
 def mark_silent(fits, nominal_y: dict, measured: dict, sigma: dict, n_train: int) -> None:
     """Record, on each fit with a prediction (``fit.y``, training then held-out samples), its
     held-out change against the nominal prediction `nominal_y` (same samples) in noise
@@ -64,26 +107,21 @@ def mark_silent(fits, nominal_y: dict, measured: dict, sigma: dict, n_train: int
     the noise-weighted sum of squares against the nominal (``extra["train_evidence"]``) and
     the share of it in the first :data:`START_SHARE` of the part (``extra["start_share"]``).
     The prediction is then dropped (it is large and used nowhere else)."""
-    n_start = max(1, int(START_SHARE * n_train))
+    n_start = start_samples(n_train)
     for fit in fits:
         y = getattr(fit, "y", None)
         if not y:
             continue
         held = {o: y[o][n_train:] for o in nominal_y}
         fit.extra["holdout_change"] = holdout_change(held, {o: v[n_train:] for o, v in nominal_y.items()}, sigma)
-        drop = np.zeros(n_train)
-        for o, ref in nominal_y.items():
-            m = np.asarray(measured[o][:n_train], float)
-            if sigma.get(o, 0.0) <= 0:
-                continue
-            drop += ((m - ref[:n_train]) ** 2 - (m - np.asarray(y[o][:n_train], float)) ** 2) / sigma[o] ** 2
+        drop = evidence_drop(y, nominal_y, measured, sigma, n_train)
         total = float(np.sum(drop)) if np.all(np.isfinite(drop)) else float("-inf")
         fit.extra["train_evidence"] = total
         fit.extra["start_share"] = float(np.sum(drop[:n_start]) / total) if total > 0 else 1.0
         fit.y = None
 
 
-def choose_on_training(nominal_train: dict, fits, *, floor: dict, n_train: int):
+def choose_on_training(nominal_train: dict, fits, *, floor: dict, n_train: int, restart=None):
     """The training part's answer among the fits silent on the held-out part, or None.
 
     Parameters
@@ -96,6 +134,9 @@ def choose_on_training(nominal_train: dict, fits, *, floor: dict, n_train: int):
         The training part's noise floor per output (NRMSE), :func:`diagnosis.fit.noise_floor`.
     n_train : int
         Training samples (the information criterion's ``n``).
+    restart : callable, optional
+        ``restart() -> float``, :func:`restart_evidence` of the nominal model, asked for only when
+        the best fit's evidence lies mostly at the start; without it such a fit is not accepted.
 
     Returns
     -------
@@ -122,9 +163,18 @@ def choose_on_training(nominal_train: dict, fits, *, floor: dict, n_train: int):
         return None
     best = min(silent, key=score)   # only the best may answer: a worse fit is not preferred for passing
     share = 1.0 - excess_error(best.train_nrmse, floor, significant) / e0
-    if (share < MIN_TRAIN_SHARE or best.extra.get("train_evidence", 0.0) < per_parameter * max(best.n_params, 1)
-            or best.extra.get("start_share", 1.0) > 0.5):
+    needed = per_parameter * max(best.n_params, 1)
+    evidence = best.extra.get("train_evidence", 0.0)
+    if share < MIN_TRAIN_SHARE or evidence < needed:
         return None
+    at_start = best.extra.get("start_share", 1.0)
+    if at_start > 0.5:
+        if restart is None:
+            return None
+        beyond = evidence * at_start - restart()
+        best.extra["beyond_restart"] = float(beyond)
+        if beyond < needed:
+            return None
     best.extra["judge"] = "training"
     best.extra["train_share"] = float(share)
     return best

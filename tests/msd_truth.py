@@ -8,10 +8,11 @@ independent reference.
 import numpy as np
 
 
-def rk4_states(rate, t, force, *, substeps):
-    """States of x' = rate(x, F) (two states) at the sample times, from rest, F held over each
-    interval; classic RK4 written out here, not bondgraph's integrator."""
-    state, out = np.zeros(2), np.zeros((t.size, 2))
+def rk4_states(rate, t, force, *, substeps, x0=(0.0, 0.0)):
+    """States of x' = rate(x, F) (two states) at the sample times, from `x0` (default rest), F held
+    over each interval; classic RK4 written out here, not bondgraph's integrator."""
+    state, out = np.array(x0, dtype=float), np.zeros((t.size, 2))
+    out[0] = state
     for i in range(t.size - 1):
         h = (t[i + 1] - t[i]) / substeps
         for _ in range(substeps):
@@ -24,10 +25,11 @@ def rk4_states(rate, t, force, *, substeps):
     return out
 
 
-def msd_positions(t, force, extra=None, *, m=1.0, b=0.4, k=4.0, substeps=20):
-    """Positions x(t) (m) from rest, `extra(x, v)` the concealed force (N) taken from the mass."""
+def msd_positions(t, force, extra=None, *, m=1.0, b=0.4, k=4.0, substeps=20, x0=(0.0, 0.0)):
+    """Positions x(t) (m) from `x0` (position m, velocity m/s; default rest), `extra(x, v)` the
+    concealed force (N) taken from the mass."""
     def rate(s, f):
         e = extra(s[0], s[1]) if extra is not None else 0.0
         return np.array([s[1], (f - b * s[1] - k * s[0] - e) / m])
 
-    return rk4_states(rate, t, force, substeps=substeps)[:, 0]
+    return rk4_states(rate, t, force, substeps=substeps, x0=x0)[:, 0]

@@ -82,3 +82,64 @@ def test_holdout_change_in_noise_units():
     assert holdout_change({"x": y + 0.02}, {"x": y}, {"x": 0.01}) == pytest.approx(2.0)
     assert holdout_change({"x": y}, {"x": y}, {"x": 0.01}) == 0.0
     assert holdout_change({}, {"x": y}, {"x": 0.01}) == np.inf
+
+
+def test_evidence_mostly_at_the_start_must_beat_a_restart():
+    floor = {"x": 0.01}
+    at_start = _fit(0.02, 0.5, start_share=0.8, evidence=1e4)
+    # a start state re-estimated there explains more of it than the fit: a wrong start, not physics
+    assert choose_on_training({"x": 0.2}, [at_start], floor=floor, n_train=1000, restart=lambda: 9e3) is None
+    # it explains little of it: the fit stands, by how much beyond the restart recorded
+    chosen = choose_on_training({"x": 0.2}, [at_start], floor=floor, n_train=1000, restart=lambda: 100.0)
+    assert chosen is at_start and chosen.extra["beyond_restart"] == pytest.approx(0.8e4 - 100.0)
+    assert _fit(0.02, 0.5).extra["start_share"] == 0.0     # evidence spread out: no restart asked for
+    asked = []
+    choose_on_training({"x": 0.2}, [_fit(0.02, 0.5)], floor=floor, n_train=1000,
+                       restart=lambda: asked.append(1) or 0.0)
+    assert asked == []
+
+
+# -- a wrong start, or a sensor that clipped at the start ----------------------------------------
+
+T_START = np.arange(0.0, SPAN, 1.0 / FS)
+F_START = 1.0 + 0.3 * np.sin(2 * np.pi * 0.1 * T_START)     # N: the mass settles about 0.25 m, below resonance
+
+
+def _start_case(x0_truth=0.0, clip_below=None, seed=3):
+    """Truth positions from a start `x0_truth` m (at rest), read by a sensor with nothing below
+    `clip_below` m; the model starts at rest at 0 either way."""
+    rng = np.random.default_rng(seed)
+    x = msd_positions(T_START, F_START, x0=(x0_truth, 0.0))
+    if clip_below is not None:
+        x = np.maximum(x, clip_below)
+    return x + rng.normal(0.0, SIGMA, T_START.size)
+
+
+def _restart_share(measured):
+    """The restart's drop over the start window, as a share of the nominal's squared error there."""
+    from plants import library
+    from diagnosis.recording import Experiment
+    from diagnosis.residuals import OutputSimulator
+    from diagnosis.training_judge import restart_evidence, start_samples
+    train = Experiment(T_START, {"F": F_START}, {"x": measured}, {"F": "N", "x": "m"})
+    sim = OutputSimulator(library.build("mass-spring-damper"), train)
+    nominal = sim()
+    n = start_samples(T_START.size)
+    error = float(np.sum((measured[:n] - nominal["x"][:n]) ** 2)) / SIGMA ** 2
+    return restart_evidence(sim, train, nominal, {"x": SIGMA}) / error
+
+
+def test_a_restart_explains_a_wrong_start_but_not_a_clipped_sensor():
+    assert _restart_share(_start_case(x0_truth=0.15)) > 0.9
+    assert _restart_share(_start_case(clip_below=0.08)) < 0.5
+
+
+def test_a_sensor_that_clipped_only_at_the_start_is_named(tmp_path):
+    x = _start_case(clip_below=0.08)
+    path = tmp_path / "msd_start_clip.csv"
+    path.write_text("t,F,x\n" + "\n".join(f"{a:.6f},{f:.9g},{p:.6g}" for a, f, p in zip(T_START, F_START, x)) + "\n")
+    report = diagnose("mass-spring-damper", str(path), inputs=["F=F:N"], outputs=["x=x:m"], max_effects=1,
+                      x0={"p_m": 0.0, "q_k": 0.0})
+    (effect,) = report.to_json()["missing_physics"]
+    assert (effect["kind"], effect["attached_to"], effect["judged_on"]) == ("saturation", "output x", "training")
+    assert effect["parameters"]["y_min_x"] == pytest.approx(0.08, abs=2 * SIGMA)

@@ -101,8 +101,8 @@ class InputDelay:
 
     `source` is the input delayed, `time` the name of the graph parameter :math:`T` (s), and
     `before` the value :math:`u_d` takes while :math:`t - T` lies before the start of the run
-    (where the source rested; None: the source's value at the start).  Simulators realise it exactly on the source's samples;
-    an FMU, which has no delay primitive, as Pade states
+    (where the source rested; None: the source's value at the start).  Simulators realise it
+    exactly on the source's samples; an FMU, which has no delay primitive, as Pade states
     (:meth:`bondgraph.editing.GraphEditing.with_delays_realised`).
     """
 

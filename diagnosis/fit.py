@@ -577,10 +577,13 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
     # held-out part resolves the leader's lower error (diagnosis.holdout_resolution)
     tied, resolved_over = [], []
     for f in usable:
-        if promoted and f.n_params < leader.n_params:
+        if promoted and f is not leader:
+            # the samples rank a promoted leader: what they resolve it over does not tie with it,
+            # however flat the priced scores (all below an overestimated floor: seed 7777, case 028)
             z = resolution(measured, predicted(leader), predicted(f), significant)
             if z >= Z_RESOLVED:
-                resolved_over.append((str(f.candidate), z))
+                if f.n_params < leader.n_params:
+                    resolved_over.append((str(f.candidate), z))
                 continue
         if score(f) <= score(leader) * (1 + TIE):
             tied.append(f)

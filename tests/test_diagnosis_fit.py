@@ -9,7 +9,7 @@ import pytest
 import plants.library as library
 from plants.library.textbook import mass_spring_damper
 from bondgraph import BondGraph, C, EquationElement, I, One, R, Se
-from diagnosis.catalogue import candidates
+from diagnosis.catalogue import KINDS, candidates
 from diagnosis.catalogue_common import RELEASED, ParamSpec
 from diagnosis.errors import DiagnosisError
 from diagnosis.fit import CandidateFit, choose, fit_candidate, noise_floor
@@ -473,3 +473,20 @@ def test_a_run_far_beyond_the_data_is_a_wall_not_an_overflow():
     assert np.all(objective(np.array([3.0])) == _WALL)
     J = objective.jacobian(np.array([1.9999999]), np.array([0.0]), np.array([10.0]))
     assert np.isfinite(J).all() and np.abs(J).max() < 1e12
+
+
+def test_what_the_samples_resolve_a_promoted_fit_over_does_not_tie_with_it(rng):
+    """Every fit below an overestimated noise floor has no excess error, so the priced scores are
+    flat; the samples still resolve a Coulomb + viscous law over a Coulomb friction and over a
+    Dahl element that predicts as the Coulomb one does.  The Dahl element, as dear as the leader
+    and earlier in the catalogue, used to tie with it and win on order (seed 7777, case 028)."""
+    t = np.linspace(0.0, 50.0, 20000)
+    truth, held, floor, fit = _sine_held_out(rng, t)
+    floor = {"x": 1.5 * floor["x"]}                      # the floor overestimated by half
+    reversals = 0.012 * np.sign(np.sin(40 * t))          # what only the richer law explains
+    both = fit("coulomb_viscous_friction", 2, truth)
+    coulomb = fit("coulomb_friction", 1, truth + reversals)
+    dahl = fit("hysteresis", 2, truth + reversals)
+    assert KINDS.index("hysteresis") < KINDS.index("coulomb_viscous_friction")
+    chosen = choose({"x": 0.5}, [coulomb, dahl, both], noise=floor, measured=held)
+    assert chosen is both and chosen.extra["resolved_over"][0] == str(coulomb.candidate)

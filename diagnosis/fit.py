@@ -480,7 +480,9 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
        z, is recorded on the leader as ``extra["resolved_over"]``.  The price does not outweigh
        the samples either: a fit with more parameters than the best-scored one whose lower
        held-out error (unpriced) they resolve at :math:`z \\ge 3` leads instead (the one with the
-       largest z), and the simpler fits it resolves are set aside in the same way, provided it
+       largest z), and every other fit it resolves is set aside (the simpler ones recorded in the
+       same way; one as dear does not tie with it either, however flat the priced scores below an
+       overestimated floor), provided it
        explains the held-out part to about the noise (NRMSE within :data:`NEAR_FLOOR` times the
        floor): with a second effect still missing, every fit is wrong, and a richer law absorbs
        part of the other effect (a Coulomb friction under a sensor offset read as Stribeck).  Among

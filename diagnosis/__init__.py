@@ -9,8 +9,9 @@ Pipeline (:func:`diagnosis.diagnose.diagnose`)
    columns to model inputs/outputs with unit conversion -> :class:`Experiment`
    (all arrays in the model's units, time in s); split off a held-out tail.
 2. ``residuals``: simulate the nominal model on the recorded inputs (inputs as
-   zero-order-hold tables); residual = measured - simulated per output;
-   measurement-noise level; NRMSE.
+   zero-order-hold tables, delayed inputs shifted on their samples); residual = measured -
+   simulated per output; measurement-noise level; NRMSE; the RK4 sub-steps the recording needs
+   (``settle_substeps``).
 3. ``locate``: where the residual is significant in time (windows), in which
    operating regime (sign of a velocity, pressure level, amplitude ...), and
    ``graph_location``: at which junction an extra effort (1-junction) or flow

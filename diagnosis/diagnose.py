@@ -6,7 +6,8 @@
    split off the held-out tail;
 2. simulate the nominal model on the whole recording (the held-out part
    continues from where the training part leaves the states), residuals,
-   noise level per output; the held-out judge (:func:`diagnosis.segments.choose_judge`:
+   noise level per output; as many RK4 sub-steps per sample as keep the integration error
+   under a tenth of the noise (:func:`diagnosis.residuals.settle_substeps`); the held-out judge (:func:`diagnosis.segments.choose_judge`:
    open-loop, or the segment simulation error where the nominal diverges or drifts),
    by which the nominal and every later model get their held-out NRMSE;
 3. significant time windows (:func:`diagnosis.locate.significant_windows`),

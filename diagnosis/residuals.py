@@ -89,7 +89,7 @@ def input_matrix(eqs, t, inputs: dict, params: dict | None = None) -> np.ndarray
     DiagnosisError
         A recorded value given for a delayed input (its source is what is recorded).
     """
-    from bondgraph.numerics.input_delays import delay_values, fill_delayed_inputs
+    from bondgraph.numerics.input_delays import delay_values, inputs_on_grid
     from diagnosis.errors import UnknownNameError
 
     for name in inputs:
@@ -99,7 +99,8 @@ def input_matrix(eqs, t, inputs: dict, params: dict | None = None) -> np.ndarray
             raise DiagnosisError(f"input {name!r} of model {eqs.name!r} is input "
                                  f"{eqs.input_delays[name].source!r} delayed: give that one's record")
     U = _undelayed_matrix(eqs, t, inputs)
-    return fill_delayed_inputs(eqs, t, U, delay_values(eqs, params))
+    _, U_grid, at = inputs_on_grid(eqs, t, U, delay_values(eqs, params))
+    return np.ascontiguousarray(U_grid[at])
 
 
 def _undelayed_matrix(eqs, t, inputs: dict) -> np.ndarray:
@@ -265,13 +266,13 @@ class OutputSimulator:
         h_max = min(self._sub_step(x_init, P[i:i + 1]) for i in range(n))
         subs = np.maximum(getattr(self.experiment, "substeps", 1), np.ceil(self._dt / h_max - 1e-9)).astype(int)
         runs = [None] * n
-        # runs whose delayed inputs are late by the same times share their input matrix
+        # runs whose delayed inputs are late by the same times share their grid and inputs
         for delays, members in self._inputs_by_delay(P).items():
-            U = self._delayed_U(delays)
+            grid, U, at = self._delayed_inputs(delays)
             rows = np.asarray(members)
-            X, D, most = self._integrate(U, subs, h_max, x_init, P[rows])
+            X, D, most = self._integrate(grid, U, self._grid_substeps(grid, subs), h_max, x_init, P[rows])
             for k, i in enumerate(members):
-                runs[i] = self._run(X[:, k], D[:, k], U, P[i:i + 1], most)
+                runs[i] = self._run(X[at, k], D[at, k], U[at], P[i:i + 1], most)
         return runs
 
     def _inputs_by_delay(self, P) -> dict:
@@ -284,14 +285,26 @@ class OutputSimulator:
             groups.setdefault(key, []).append(i)
         return groups
 
-    def _delayed_U(self, delays: tuple) -> np.ndarray:
-        """The input matrix with the delayed inputs late by `delays` (s, in ``input_delays`` order)."""
-        from bondgraph.numerics.input_delays import fill_delayed_inputs
+    def _delayed_inputs(self, delays: tuple):
+        """``(grid, U, at)`` of :func:`bondgraph.numerics.input_delays.inputs_on_grid` for the
+        delayed inputs late by `delays` (s, in ``input_delays`` order): the samples and the steps
+        of a delayed command between them, the inputs held over each interval, and where the
+        samples are."""
+        from bondgraph.numerics.input_delays import inputs_on_grid
         if not delays:
-            return self.U
-        return fill_delayed_inputs(self.equations, self.t, self.U, dict(zip(self.equations.input_delays, delays)))
+            return self.t, self.U, np.arange(self.t.size)
+        return inputs_on_grid(self.equations, self.t, self.U, dict(zip(self.equations.input_delays, delays)))
 
-    def _integrate(self, U, subs, h_max, x_init, P):
+    def _grid_substeps(self, grid, subs):
+        """Sub-steps of each interval of `grid`: those of the sample interval it lies in, shared
+        in proportion to its length (`subs` per sample interval)."""
+        if grid is self.t:
+            return subs
+        parent = np.clip(np.searchsorted(self.t, grid[:-1], side="right") - 1, 0, self._dt.size - 1)
+        h = self._dt[parent] / subs[parent]
+        return np.maximum(1, np.ceil(np.diff(grid) / h - 1e-9)).astype(int)
+
+    def _integrate(self, grid, U, subs, h_max, x_init, P):
         from diagnosis.errors import SimulationError
 
         m, n = self.model, P.shape[0]
@@ -299,13 +312,13 @@ class OutputSimulator:
         d = np.ascontiguousarray(np.tile(m.default_held, (n, 1)))
         P = np.ascontiguousarray(P)
         if subs.max() <= _STIFF_SUBSTEPS:
-            X, D = m.rk4_samples(self.t, U, subs, x, d, P)
+            X, D = m.rk4_samples(grid, U, subs, x, d, P)
             return X, D, int(subs.max())
         if self.equations.is_smooth:
             # a fast mode RK4 would have to resolve (a smoothed Coulomb friction at rest, a
             # damper across a stiff gear): the L-stable linearly implicit ROS2 steps over it
             from bondgraph.numerics.evaluate_stiff import ros2_samples
-            return ros2_samples(m, self.t, U, x, d, P)
+            return ros2_samples(m, grid, U, x, d, P)
         raise SimulationError(f"model {self.equations.name!r}: {subs.max()} RK4 sub-steps of "
                               f"{h_max:.3g} s per sample interval needed (stiff model with held "
                               "variables, or sparse samples); resample the recording",

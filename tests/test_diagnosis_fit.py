@@ -120,6 +120,23 @@ def test_transport_delay_recovered_from_a_shifted_input(msd):
     assert fit.train_nrmse["x"] < 1e-6
 
 
+def test_a_delay_an_output_reads_directly_is_found_to_the_sample():
+    """The output `force` reads the (delayed) source's effort itself: at a sample it sees the
+    zero-order-hold command of k samples before, and nothing in between, so the fit starts from
+    whole samples (the truth, 3 of them, is not among the lags' half-to-32-sample trial times)."""
+    graph = library.build("mass-spring-damper").copy()
+    graph.add_output("force", "e_F", unit="N")
+    rng = np.random.default_rng(4)
+    u = np.repeat(rng.choice([-1.0, 1.0], T.size // 5 + 1), 5)[:T.size]     # a command switched every 5 samples
+    seen = np.concatenate([np.zeros(3), u[:-3]])                           # 3 samples late, 0 before
+    y = OutputSimulator(graph, Experiment(T, {"F": seen}, {"force": T, "x": T}, UNITS))()
+    exp = Experiment(T, {"F": u}, y, {**UNITS, "force": "N"})
+    train, hold = exp.split(0.3)
+    fit = fit_candidate(graph, _candidate(graph, Place("input", "F"), "transport_delay", train), train, hold)
+    assert fit.values["T_delay_F"] == pytest.approx(3 * (T[1] - T[0]), rel=1e-6)
+    assert fit.holdout_nrmse["force"] < 1e-12
+
+
 def test_sensor_offset_and_uncertain_nominal_parameter(msd, rng):
     exp = _record(msd, rng=rng, noise=0.01)
     exp.outputs["x"] = exp.outputs["x"] + 0.05             # the x sensor reads 5 cm high

@@ -1,12 +1,14 @@
-"""Delayed inputs on sampled records: :math:`u_d(t_k) = u(t_k - T)`.
+"""Delayed inputs on sampled records: :math:`u_d(t) = u(t - T)`, exact on zero-order-hold tables.
 
 A delayed input (:class:`~bondgraph.elements.base.InputDelay`) is realised on the source's
 samples, not by states: a state realisation (a lag, a Pade chain) reads the command of the
 previous interval at a sample, so an output that reads the input directly (a force ``p A``, a
-velocity ``(x - x_s)/tau``) is a sample late, whatever the delay.  Between samples the source is
-interpolated linearly, so the delayed values move smoothly with :math:`T` (a fit can find it) and
-a delay of whole samples shifts the record exactly.  Before the record the source is at its
-``before`` value, taken to hold one sample interval before the first sample.
+velocity ``(x - x_s)/tau``) is a sample late, whatever the delay.  A recorded command is a
+zero-order-hold table, and so is its delayed copy: its steps move by :math:`T`.  A delay of whole
+samples keeps them on the sample grid; a fraction of a sample puts them inside the intervals, so
+the grid the model is integrated on gets those instants too (:func:`inputs_on_grid`): the state
+then sees each value for exactly as long as the delayed command holds it, and moves smoothly with
+:math:`T` (a fit can find it).  Before the record the source is at its ``before`` value.
 """
 from __future__ import annotations
 
@@ -14,47 +16,52 @@ import numpy as np
 
 from ..errors import ArgumentError
 
-__all__ = ["delayed_samples", "fill_delayed_inputs", "delay_values"]
+__all__ = ["delayed_samples", "delay_values", "inputs_on_grid"]
+
+#: a step this close to a grid time (as a share of the smallest sample interval) is on it
+_ON_GRID = 1e-9
 
 
-def delayed_samples(t, values, delay: float, before: float | None = None) -> np.ndarray:
-    """`values` (sampled at `t`) delayed by `delay` seconds, at the times `t`.
+def delayed_samples(t, values, delay: float, before: float | None = None, at=None) -> np.ndarray:
+    """The zero-order-hold table (`t`, `values`) delayed by `delay` seconds, at the times `at`.
 
     Parameters
     ----------
     t : ndarray, shape (n,)
         Strictly increasing sample times, s.
     values : ndarray, shape (n,)
-        The source's samples.
+        The source's samples, each held until the next sample.
     delay : float
         Delay, s (>= 0).
     before : float, optional
-        The source's value before ``t[0]`` (one sample interval before it and earlier); default
-        its first sample.
+        The source's value before ``t[0]``; default its first sample.
+    at : ndarray, optional
+        Times to evaluate at, s; default `t`.
 
     Returns
     -------
-    ndarray, shape (n,)
+    ndarray
 
     Examples
     --------
-    A delay of two samples shifts the record by two; half a sample blends neighbours:
+    Two samples late the record shifts by two; half a sample late, the sample times still see the
+    previous value (the step comes half an interval after each of them):
 
     >>> t = np.arange(5.0)
     >>> delayed_samples(t, np.array([1.0, 2, 3, 4, 5]), 2.0, 0.0).tolist()
     [0.0, 0.0, 1.0, 2.0, 3.0]
     >>> delayed_samples(t, np.array([1.0, 2, 3, 4, 5]), 0.5, 0.0).tolist()
-    [0.5, 1.5, 2.5, 3.5, 4.5]
+    [0.0, 1.0, 2.0, 3.0, 4.0]
     """
     t = np.asarray(t, dtype=float)
     values = np.asarray(values, dtype=float)
+    at = t if at is None else np.asarray(at, dtype=float)
     before = float(values[0]) if before is None else float(before)
     if not delay >= 0 or not np.isfinite(delay):
         raise ArgumentError(f"a delay must be a finite number of seconds >= 0; found {delay!r}")
-    if t.size < 2:
-        return np.full(t.shape, before) if delay > 0 else values.copy()
-    grid = np.concatenate([[t[0] - (t[1] - t[0])], t])
-    return np.interp(t - delay, grid, np.concatenate([[before], values]), left=before)
+    tol = _ON_GRID * (float(np.min(np.diff(t))) if t.size > 1 else 1.0)
+    k = np.searchsorted(t, at - delay + tol, side="right") - 1
+    return np.where(k >= 0, values[np.clip(k, 0, None)], before)
 
 
 def delay_values(eqs, params: dict | None = None) -> dict:
@@ -70,14 +77,47 @@ def delay_values(eqs, params: dict | None = None) -> dict:
     return delays
 
 
-def fill_delayed_inputs(eqs, t, U, delays: dict) -> np.ndarray:
-    """The input matrix `U` (model input order, shape (n, n_inputs)) with every delayed input's
-    column computed from its source's column (:func:`delayed_samples`); `delays` from
-    :func:`delay_values`.  `U` itself is left alone."""
+def inputs_on_grid(eqs, t, U, delays: dict):
+    """The grid a run on the samples `t` is integrated on, and its inputs.
+
+    Parameters
+    ----------
+    eqs : StateEquations
+    t : ndarray, shape (n,)
+        Sample times, s.
+    U : ndarray, shape (n, n_inputs)
+        Inputs at the samples, model input order, each held over its interval; the delayed
+        inputs' columns are ignored.
+    delays : dict str -> float
+        Delay of each delayed input, s (:func:`delay_values`).
+
+    Returns
+    -------
+    (grid, U_grid, at)
+        `grid` holds `t` and every step of a delayed input that falls between two samples;
+        `U_grid` the inputs held over each of its intervals (the undelayed ones as recorded, the
+        delayed ones their source `T` late); ``grid[at] == t``.  Without delayed inputs, or with
+        whole-sample delays only, `grid` is `t`.
+    """
+    t = np.asarray(t, dtype=float)
     if not eqs.input_delays:
-        return U
-    U = np.array(U, dtype=float, copy=True)
+        return t, U, np.arange(t.size)
+    tol = _ON_GRID * (float(np.min(np.diff(t))) if t.size > 1 else 1.0)
+    steps = [t + delays[name] for name in eqs.input_delays]
+    extra = np.concatenate(steps) if steps else np.empty(0)
+    extra = extra[(extra > t[0]) & (extra < t[-1])]
+    # steps that fall on (or a rounding error from) a sample stay on it
+    near = np.searchsorted(t, extra)
+    off = np.ones(extra.size, dtype=bool)
+    for j in (near - 1, near):
+        ok = (j >= 0) & (j < t.size)
+        off[ok] &= np.abs(extra[ok] - t[j[ok]]) > tol
+    grid = np.union1d(t, extra[off])
+    at = np.searchsorted(grid, t)
     column = {name: j for j, name in enumerate(eqs.input_names)}
+    parent = np.searchsorted(t, grid + tol, side="right") - 1      # the sample each grid time holds
+    U_grid = np.ascontiguousarray(np.asarray(U, dtype=float)[np.clip(parent, 0, None)])
     for name, d in eqs.input_delays.items():
-        U[:, column[name]] = delayed_samples(t, U[:, column[d.source]], delays[name], d.before)
-    return np.ascontiguousarray(U)
+        U_grid[:, column[name]] = delayed_samples(t, np.asarray(U, float)[:, column[d.source]], delays[name],
+                                                  d.before, at=grid)
+    return grid, np.ascontiguousarray(U_grid), at

@@ -6,6 +6,7 @@ command of the previous sample interval, so an output that reads the input direc
 :math:`pA`, a velocity :math:`(x - x_s)/\\tau`) would be a sample late whatever :math:`T` is,
 while a delay of whole samples shifts the record exactly (:mod:`bondgraph.numerics.input_delays`).
 Before the record the input is where it rested (:func:`~diagnosis.kinds.signal_common.resting_input`).
+The fit starts from whole numbers of samples (:func:`delay_trials`).
 The graph exports to an FMU with the delay as Pade [2/3] states
 (:meth:`~bondgraph.editing.GraphEditing.with_delays_realised`).
 """
@@ -13,7 +14,7 @@ from __future__ import annotations
 
 from ..catalogue_common import ParamSpec, fresh_name
 from .base import Kind, Proposal, register
-from .signal_common import input_record, trial_times
+from .signal_common import input_record
 
 
 @register
@@ -25,7 +26,7 @@ class TransportDelay(Kind):
         u, span, dt = site.name, site.scales.span, site.scales.dt
         delay = fresh_name(site.taken, f"T_delay_{u}")
         return [Proposal(initial={_late(u): input_record(site).rest},
-                         starts=tuple({delay: v} for v in trial_times(site)),
+                         starts=tuple({delay: v} for v in delay_trials(site)),
                          params=(ParamSpec(delay, max(3 * dt, span / 200), 0.0, span / 4, "s",
                                            f"transport delay of {u}"),))]
 
@@ -38,6 +39,19 @@ class TransportDelay(Kind):
         u = cand.place.name
         return (f"the input {u} acts {show(cand.params[0].name)} late: a transport delay on input {u} "
                 "(exact on the recorded samples; Pade [2/3] states in an exported FMU)")
+
+
+#: whole samples the fit of a delay starts from (those under a quarter of the record)
+_WHOLE_SAMPLES = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64)
+
+
+def delay_trials(site) -> list[float]:
+    """Delays the fit starts from, s: half a sample and whole samples up to 64.  An output that
+    reads the delayed input directly sees a zero-order-hold command, whose value at a sample does
+    not change while the delay moves inside one interval: the fit cannot slide across samples
+    there, so it starts at each of them (one batch of runs, :func:`diagnosis.fit.fit_candidate`)."""
+    dt, span = site.scales.dt, site.scales.span
+    return [k * dt for k in (0.5, *_WHOLE_SAMPLES) if k * dt < span / 4]
 
 
 def _late(u: str) -> str:

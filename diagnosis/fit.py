@@ -536,12 +536,9 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
     (True, True)
     """
     from .catalogue import KINDS
-    floor = dict(noise or {})
-    names = list(nominal_holdout)
-    significant = needs_explaining(nominal_holdout, floor)
+    floor, names, significant, e0 = _reference(nominal_holdout, noise)
     if not significant:
         return None
-    e0 = _reference_excess(nominal_holdout, floor, significant)
     usable = usable_fits(fits, names)
     if not usable:
         return None
@@ -646,14 +643,21 @@ def within_tie(fit, reference, nominal_holdout: dict, floor: dict | None = None)
     only where the held-out part does not resolve the two
     (:func:`~diagnosis.holdout_resolution.resolution`); testing that is the caller's part.
     False when no output needs explaining (nothing is chosen then)."""
-    floor = dict(floor or {})
-    names = list(nominal_holdout)
-    significant = needs_explaining(nominal_holdout, floor)
+    floor, names, significant, e0 = _reference(nominal_holdout, floor)
     if not significant:
         return False
-    e0 = _reference_excess(nominal_holdout, floor, significant)
     return bool(_score(fit, floor, names, e0) <= _score(reference, floor, names, e0) * (1 + TIE)
                 or _raw_score(fit, significant) <= _raw_score(reference, significant) * (1 + TIE) ** 2)
+
+
+def _reference(nominal_holdout: dict, noise: dict | None):
+    """``(floor, names, significant, e0)`` of the reference model's held-out errors: the noise
+    floor, every output, those that need explaining and their excess error :math:`E_0` (None
+    when none needs explaining)."""
+    floor = dict(noise or {})
+    significant = needs_explaining(nominal_holdout, floor)
+    e0 = _reference_excess(nominal_holdout, floor, significant) if significant else None
+    return floor, list(nominal_holdout), significant, e0
 
 
 def _at_law(candidate) -> bool:

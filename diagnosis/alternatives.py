@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .fit import MIN_GAIN, MIN_SHARE, acceptance, needs_explaining, usable_fits, within_tie
+from .fit import _unpriced_raw as _held_out_error   # the held-out error choose compares, unpriced
 from .holdout_resolution import Z_RESOLVED, resolution
 
 __all__ = ["Alternative", "indistinguishable", "MAX_ALTERNATIVES"]
@@ -116,11 +117,6 @@ def indistinguishable(winner, fits, nominal_holdout: dict, *, noise: dict | None
                                           _largest_difference(measured, winner, fit, significant, floor),
                                           fit.n_params)
     return list(found.values())
-
-
-def _held_out_error(fit, significant) -> float:
-    """Sum of squared held-out NRMSEs on the outputs that need explaining."""
-    return float(sum(fit.holdout_nrmse[o] ** 2 for o in significant))
 
 
 def _accepted(nominal_holdout, fit, floor) -> bool:

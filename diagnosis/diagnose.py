@@ -301,7 +301,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
             x0 = est.values
             res, diverged = _nominal_residuals(sim, graph, exp, x0)
             res.noise.update(_noise_overrides(noise, exp))
-    exp, rule = settle_substeps(sim, x0, res.noise)
+    # a diverging nominal has no run to refine (settle_substeps would find it diverge again)
+    exp, rule = (exp, exp.substeps) if diverged else settle_substeps(sim, x0, res.noise, run=res.run)
     if exp.substeps > rule:
         say("integration", f"{exp.substeps} RK4 sub-steps per sample, not {rule}: halving the step moved the "
                            "nominal's outputs by more than a tenth of their noise")

@@ -353,7 +353,7 @@ SUBSTEP_TOLERANCE = 0.1
 MOST_SUBSTEPS = 64
 
 
-def settle_substeps(simulator, x0, noise: dict):
+def settle_substeps(simulator, x0, noise: dict, *, run=None):
     """The experiment of `simulator` with as many RK4 sub-steps per sample as its outputs need.
 
     The simulator's step rule (:math:`h |\\lambda_{max}| \\le` 0.5 at the start) can leave an
@@ -373,6 +373,9 @@ def settle_substeps(simulator, x0, noise: dict):
         The state the recording starts from.
     noise : dict str -> float
         Noise standard deviation per output, model units.
+    run : SimRun, optional
+        The simulator's run from `x0` when one was made already (the nominal residuals' run):
+        not simulated again.
 
     Returns
     -------
@@ -386,7 +389,7 @@ def settle_substeps(simulator, x0, noise: dict):
 
     exp = simulator.experiment
     try:
-        run = simulator.run(None, x0)
+        run = run if run is not None else simulator.run(None, x0)
     except SimulationError:
         return exp, 1
     first = n = max(int(run.substeps), 1)

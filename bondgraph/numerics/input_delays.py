@@ -22,6 +22,11 @@ __all__ = ["delayed_samples", "delay_values", "inputs_on_grid"]
 _ON_GRID = 1e-9
 
 
+def _tolerance(t) -> float:
+    """How close to a sample time a step counts as on it, s (:data:`_ON_GRID` of the shortest interval)."""
+    return _ON_GRID * (float(np.min(np.diff(t))) if t.size > 1 else 1.0)
+
+
 def delayed_samples(t, values, delay: float, before: float | None = None, at=None) -> np.ndarray:
     """The zero-order-hold table (`t`, `values`) delayed by `delay` seconds, at the times `at`.
 
@@ -59,7 +64,7 @@ def delayed_samples(t, values, delay: float, before: float | None = None, at=Non
     before = float(values[0]) if before is None else float(before)
     if not delay >= 0 or not np.isfinite(delay):
         raise ArgumentError(f"a delay must be a finite number of seconds >= 0; found {delay!r}")
-    tol = _ON_GRID * (float(np.min(np.diff(t))) if t.size > 1 else 1.0)
+    tol = _tolerance(t)
     k = np.searchsorted(t, at - delay + tol, side="right") - 1
     return np.where(k >= 0, values[np.clip(k, 0, None)], before)
 
@@ -102,9 +107,8 @@ def inputs_on_grid(eqs, t, U, delays: dict):
     t = np.asarray(t, dtype=float)
     if not eqs.input_delays:
         return t, U, np.arange(t.size)
-    tol = _ON_GRID * (float(np.min(np.diff(t))) if t.size > 1 else 1.0)
-    steps = [t + delays[name] for name in eqs.input_delays]
-    extra = np.concatenate(steps) if steps else np.empty(0)
+    tol = _tolerance(t)
+    extra = np.concatenate([t + delays[name] for name in eqs.input_delays])
     extra = extra[(extra > t[0]) & (extra < t[-1])]
     # steps that fall on (or a rounding error from) a sample stay on it
     near = np.searchsorted(t, extra)

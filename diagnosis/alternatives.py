@@ -27,8 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .fit import MIN_GAIN, MIN_SHARE, acceptance, needs_explaining, usable_fits, within_tie
-from .fit import _unpriced_raw as _held_out_error   # the held-out error choose compares, unpriced
+from .fit import MIN_GAIN, MIN_SHARE, acceptance, needs_explaining, unpriced_error, usable_fits, within_tie
 from .holdout_resolution import Z_RESOLVED, resolution
 
 __all__ = ["Alternative", "indistinguishable", "MAX_ALTERNATIVES"]
@@ -106,7 +105,7 @@ def indistinguishable(winner, fits, nominal_holdout: dict, *, noise: dict | None
     if winner is None or not significant:
         return []
     found = {}
-    for fit in sorted(usable_fits(fits, list(nominal_holdout)), key=lambda f: _held_out_error(f, significant)):
+    for fit in sorted(usable_fits(fits, list(nominal_holdout)), key=lambda f: unpriced_error(f, significant)):
         if fit.kind == winner.kind or fit.kind in found or len(found) >= limit:
             continue
         if not (_accepted(nominal_holdout, fit, floor) and within_tie(fit, winner, nominal_holdout, floor)):
@@ -131,7 +130,7 @@ def _prediction(fit):
 
 def _resolution_either_way(measured, a, b, significant) -> float:
     """z of the lower held-out error of `a` and `b` over the other's (NaN when untestable)."""
-    lower, higher = (a, b) if _held_out_error(a, significant) <= _held_out_error(b, significant) else (b, a)
+    lower, higher = (a, b) if unpriced_error(a, significant) <= unpriced_error(b, significant) else (b, a)
     return float(resolution(measured, _prediction(lower), _prediction(higher), significant))
 
 

@@ -31,7 +31,7 @@ from .holdout_resolution import Z_RESOLVED, held_out_prediction, resolution
 
 __all__ = ["CandidateFit", "fit_candidate", "choose", "noise_floor", "needs_explaining", "usable_fits",
            "single_fits_by_holdout",
-           "acceptance", "within_tie", "PARAMETER_PRICE", "MIN_SHARE", "MIN_GAIN", "TIE"]
+           "acceptance", "within_tie", "unpriced_error", "PARAMETER_PRICE", "MIN_SHARE", "MIN_GAIN", "TIE"]
 
 #: relative reduction of the held-out excess error each extra parameter must buy
 PARAMETER_PRICE = 0.10
@@ -554,7 +554,7 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
         return value if np.isfinite(value) else np.inf
 
     def unpriced_raw(f):  # on the outputs that need explaining: the others only add their noise
-        return _unpriced_raw(f, significant)
+        return unpriced_error(f, significant)
 
     def raw_score(f):
         return _raw_score(f, significant)
@@ -624,15 +624,15 @@ def _score(fit, floor: dict, names, e0: float) -> float:
     return (excess_error(fit.holdout_nrmse, floor, names) + 1e-4 * e0) * (1 + PARAMETER_PRICE) ** fit.n_params
 
 
-def _unpriced_raw(fit, significant) -> float:
+def unpriced_error(fit, significant) -> float:
     """Held-out sum of squared NRMSEs on the outputs that need explaining (the others only add
     their noise), before the parameter price."""
     return sum(fit.holdout_nrmse[o] ** 2 for o in significant)
 
 
 def _raw_score(fit, significant) -> float:
-    """:func:`_unpriced_raw` priced per fitted parameter (the second tie of :func:`choose`)."""
-    return _unpriced_raw(fit, significant) * (1 + PARAMETER_PRICE) ** fit.n_params
+    """:func:`unpriced_error` priced per fitted parameter (the second tie of :func:`choose`)."""
+    return unpriced_error(fit, significant) * (1 + PARAMETER_PRICE) ** fit.n_params
 
 
 def within_tie(fit, reference, nominal_holdout: dict, floor: dict | None = None) -> bool:

@@ -207,18 +207,32 @@ class _Objective:
             raise _Abandoned(self.best_cost)
         return r
 
+    def batch(self, trials) -> list:
+        """The walled residuals of several parameter vectors, simulated as one batch; where one of
+        them does not run the batch fails as a whole, and each is simulated on its own (outside the
+        optimiser's count of evaluations)."""
+        self.n_runs += len(trials)
+        try:
+            runs = self.sim.run_batch([self.params(th) for th in trials], self.x0)
+            return [self._walled(self._vector(run.outputs)) for run in runs]
+        except BondcosimError:
+            pass
+        columns = []
+        for th in trials:
+            try:
+                r = self._vector(self.sim(self.params(th), self.x0))
+            except BondcosimError:
+                r = None
+            columns.append(self._walled(r))
+        return columns
+
     def jacobian(self, theta, lower, upper):
         theta = np.asarray(theta, dtype=float)
         r0 = self._last[1] if self._last[0] is not None and np.array_equal(self._last[0], theta) else self(theta)
         steps = np.where(theta + _FD_STEP <= upper, _FD_STEP, -_FD_STEP)
         steps = np.where((theta + steps < lower), 0.5 * (upper - lower), steps)
         trials = [theta + np.eye(len(theta))[i] * steps[i] for i in range(len(theta))]
-        self.n_runs += len(trials)
-        try:
-            runs = self.sim.run_batch([self.params(th) for th in trials], self.x0)
-            columns = [self._walled(self._vector(run.outputs)) for run in runs]
-        except BondcosimError:
-            columns = [self(th) for th in trials]
+        columns = self.batch(trials)
         J = np.column_stack([(c - r0) / s for c, s in zip(columns, steps)])
         return np.where(np.isfinite(J), J, 0.0)
 
@@ -268,14 +282,36 @@ def _best_start(objective, candidate, theta0):
     guess = objective.params(theta0)
     trials = [theta0] + [np.array([{**guess, **start}[s.name] for s in objective.specs]) / objective.scale
                          for start in candidate.starts]
-    objective.n_runs += len(trials)
-    try:
-        runs = objective.sim.run_batch([objective.params(th) for th in trials], objective.x0)
-        costs = [float(np.sum(objective._vector(run.outputs) ** 2)) for run in runs]
-    except BondcosimError:
-        return theta0
-    costs = [c if np.isfinite(c) else np.inf for c in costs]
+    costs = [float(r @ r) for r in objective.batch(trials)]
     return trials[int(np.argmin(costs))]
+
+
+def _scaled_bounds(objective):
+    """The parameters' bounds in the optimiser's units (:attr:`_Objective.scale`)."""
+    return tuple(np.array([getattr(s, side) for s in objective.specs]) / objective.scale for side in ("lower", "upper"))
+
+
+#: the factors by which :func:`_shrunk_start` shrinks the magnitudes of a guess that does not run
+SHRINK = (1e-1, 1e-2, 1e-3, 1e-4)
+
+
+def _shrunk_start(objective, specs, theta0):
+    """Where the guess does not run, the magnitudes (the parameters bounded below by 0, whose 0 is
+    no effect) shrunk by each of :data:`SHRINK` towards the nominal model: the largest that runs,
+    made the new unit of those parameters (:attr:`_Objective.scale`), so the optimiser's steps are
+    relative to it.  A guess scaled on the place's effort (a viscous coefficient of 10 % of the
+    muscles' torque per RMS speed) can make a light joint too stiff for the integration steps
+    (seed 8888, case 068).  Returns the start (`theta0` when none runs)."""
+    magnitudes = np.array([s.lower == 0 and s.guess > 0 for s in specs])
+    if not magnitudes.any():
+        return theta0
+    trials = [np.where(magnitudes, theta0 * f, theta0) for f in SHRINK]
+    runnable = [not np.all(r == _WALL) for r in objective.batch(trials)]
+    if any(runnable):
+        factor = SHRINK[runnable.index(True)]
+        objective.scale = np.where(magnitudes, objective.scale * factor, objective.scale)
+        objective._last = (None, None)      # its cache is keyed on theta, whose unit changed
+    return theta0
 
 
 def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, max_nfev: int = 40,
@@ -357,13 +393,16 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
         objective = _Objective(OutputSimulator(model, train, outputs=outputs), train, specs, x0)
     except BondcosimError as exc:
         return CandidateFit(candidate, message=f"{label} could not be built or compiled: {exc}", **failed)
-    lower = np.array([s.lower for s in specs]) / objective.scale
-    upper = np.array([s.upper for s in specs]) / objective.scale
+    lower, upper = _scaled_bounds(objective)
     theta0 = np.array([s.guess for s in specs]) / objective.scale
     if specs:
         theta0 = _best_start(objective, candidate, theta0)
         r0 = objective(theta0)
-        if np.all(r0 == 1e3):
+        if np.all(r0 == _WALL):
+            theta0 = _shrunk_start(objective, specs, theta0)
+            lower, upper = _scaled_bounds(objective)
+            r0 = objective(theta0)
+        if np.all(r0 == _WALL):
             return CandidateFit(candidate, message=f"{label}: the model does not run at the initial guess "
                                 f"{objective.params(theta0)}", graph=model, n_simulations=objective.n_runs, **failed)
         objective.abandon_above = abandon_above

@@ -3,6 +3,8 @@
 Recordings come from HAND-WRITTEN truth graphs (or numpy transformations of the nominal
 output), never from a candidate's own build, so a fit that recovers the truth checks the
 candidate's law, its parameter plumbing and the optimiser together."""
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -507,3 +509,38 @@ def test_what_the_samples_resolve_a_promoted_fit_over_does_not_tie_with_it(rng):
     assert KINDS.index("hysteresis") < KINDS.index("coulomb_viscous_friction")
     chosen = choose({"x": 0.5}, [coulomb, dahl, both], noise=floor, measured=held)
     assert chosen is both and chosen.extra["resolved_over"][0] == str(coulomb.candidate)
+
+
+def _sampled_msd(extra_b: float = 0.0):
+    """The mass-spring-damper with a held element of no effect at 50 Hz (a fixed-step model, as the
+    PAM joint's Kikuuwe friction makes it: RK4 on the samples, no stiff solver behind it), and a
+    truth's extra damper."""
+    g = mass_spring_damper()
+    g.add(EquationElement("sampler", ports={"p": "in"}, outputs={"e_p": "Ts"},
+                          held={"Ts": "0*f_p"}, fixed_step=0.02))
+    g.connect("v_mass", "sampler")
+    if extra_b:
+        g.add(R("damper2", extra_b, domain="translation"))
+        g.connect("v_mass", "damper2")
+    return g
+
+
+@pytest.mark.parametrize("starts", [True, False], ids=["a start that runs", "no start runs"])
+def test_a_guess_that_does_not_run_starts_from_one_that_does(starts):
+    """A viscous guess of 1000 N s/m on a 1 kg mass is far beyond RK4's stability on 20 ms steps
+    (b h / m < 2.8); the alternative start 100 times smaller runs (a batch with one diverging run
+    fails as a whole, and once did not look at the others), and without alternative starts the
+    guess shrunk by tens until it runs. Either way the truth's 0.8 N s/m is recovered."""
+    nominal = _sampled_msd()
+    assert not nominal.equations().is_smooth
+    T50 = np.arange(0.0, 20.0, 0.02)
+    u = np.where(T50 % 6.0 < 3.0, 2.0, -1.0)
+    units = {"F": "N", "x": "m", "v": "m/s"}
+    y = OutputSimulator(_sampled_msd(0.8), Experiment(T50, {"F": u}, {"x": T50, "v": T50}, units))()
+    train, hold = Experiment(T50, {"F": u}, y, units).split(0.3)
+    cand = _candidate(nominal, Place("junction", "v_mass"), "viscous_friction", train)
+    spec = replace(cand.params[0], guess=1000.0, upper=1e4)
+    cand = replace(cand, params=[spec], starts=({spec.name: 10.0},) if starts else ())
+    fit = fit_candidate(nominal, cand, train, hold)
+    assert fit.success, fit.message
+    assert fit.values[spec.name] == pytest.approx(0.8, rel=1e-3)

@@ -14,7 +14,12 @@ Its twins are then not fitted either (:mod:`diagnosis.twins` groups successful f
 A richer kind that extends a simpler one fitted earlier at the same place (Coulomb + viscous,
 Stribeck, pressure-dependent and modulated friction extend Coulomb friction) also starts where
 that fit ended, its extra terms at zero (:func:`nested_starts`): it then starts no worse than the
-simpler law, and is never given up for a poor guess of its own.
+simpler law, and is never given up for a poor guess of its own.  The other way round, a simpler
+fit is fitted again from where the best richer fit at its place ended, the richer one's extra terms
+dropped (:func:`simpler_refits`), when that richer fit reached a lower training cost: the two
+optimisers' paths then do not decide between them (seed 8888, case 076: a pressure-dependent
+friction whose pressure term stayed at 0 beat the Coulomb fit by a sharper smoothing of its sign
+alone, which the Coulomb fit had not reached from its own start).
 
 Why a factor 10 and the stall: the choice (:func:`diagnosis.fit.choose`) is made on held-out
 error, not training error, so the margin must be wide.  Every fit's best training cost after
@@ -29,7 +34,7 @@ import time
 
 import numpy as np
 
-__all__ = ["HOPELESS", "fit_in_turn", "nested_starts"]
+__all__ = ["HOPELESS", "fit_in_turn", "nested_starts", "simpler_refits"]
 
 #: a fit whose training cost stays above this many times the best one's so far is given up
 HOPELESS = 10.0
@@ -70,7 +75,7 @@ def fit_in_turn(candidates, fit, say, label: str, *, best: float = np.inf, suffi
             best = min(best, float(cost))
         say(label, f"{cand}: {_outcome(result)}, {result.n_simulations} simulations, "
                    f"{time.perf_counter() - start:.1f} s")
-    return fits, best
+    return simpler_refits(fits, fit, say, label), best
 
 
 def nested_starts(cand, fits):
@@ -82,15 +87,49 @@ def nested_starts(cand, fits):
     answered Coulomb so).  Groups of twins are returned unchanged."""
     if hasattr(cand, "members") or not hasattr(cand, "definition"):
         return cand
-    starts = []
-    for fit in fits:
-        simpler = fit.candidate
-        if (fit.success and simpler is not None and not hasattr(simpler, "members") and simpler.place == cand.place
-                and simpler.kind != cand.kind and getattr(simpler, "regime", None) in (None, cand.regime)):
-            start = cand.definition.start_from(cand, simpler, fit.values)
-            if start is not None:
-                starts.append(start)
-    return cand.with_starts(starts)
+    return cand.with_starts([cand.definition.start_from(cand, fit.candidate, fit.values) for fit in fits
+                             if fit.success and fit.candidate is not None and _extends(cand, fit.candidate)])
+
+
+def simpler_refits(fits, fit, say, label: str) -> list:
+    """`fits` with each successful fit of a kind a richer one extends (same place) replaced by its
+    refit from where the richer fit with the lowest training cost ended, when that cost is lower
+    than its own (:meth:`Kind.reduced_start <diagnosis.kinds.base.Kind.reduced_start>`), and the
+    refit's is lower still.  `fit` and `say` as for :func:`fit_in_turn`."""
+    out = list(fits)
+    for k, simple in enumerate(fits):
+        own = _train_cost(simple)
+        if not (own < np.inf and hasattr(getattr(simple, "candidate", None), "definition")):
+            continue
+        richer = [(cost, f) for f in fits if f is not simple and (cost := _train_cost(f)) < own
+                  and _extends(getattr(f, "candidate", None), simple.candidate)]
+        if not richer:
+            continue
+        best = min(richer, key=lambda pair: pair[0])[1]
+        start = best.candidate.definition.reduced_start(best.candidate, simple.candidate, best.values)
+        cand = simple.candidate.with_starts([start])
+        say(label, f"{cand} again, from the end of {best.candidate}")
+        began = time.perf_counter()
+        refit = fit(cand, None)
+        say(label, f"{cand}: {_outcome(refit)}, {refit.n_simulations} simulations, "
+                   f"{time.perf_counter() - began:.1f} s")
+        if _train_cost(refit) < own:
+            out[k] = refit
+    return out
+
+
+def _train_cost(fit) -> float:
+    """A successful fit's training cost, else inf."""
+    cost = fit.extra.get("train_cost", np.inf) if fit.success else np.inf
+    return float(cost) if np.isfinite(cost) else np.inf
+
+
+def _extends(richer, simpler) -> bool:
+    """Whether candidate `richer` extends `simpler` (a kind it nests, the same place, its regime)."""
+    return (richer is not None and hasattr(richer, "definition") and not hasattr(simpler, "members")
+            and richer.place == simpler.place and richer.kind != simpler.kind
+            and simpler.kind in richer.definition.nests
+            and getattr(simpler, "regime", None) in (None, getattr(richer, "regime", None)))
 
 
 def _outcome(fit) -> str:

@@ -87,3 +87,40 @@ def test_a_richer_friction_starts_where_the_coulomb_fit_it_extends_ended():
     elsewhere = [SimpleNamespace(candidate=coulomb, success=True, values=fitted)]
     other = candidates(msd, Place("junction", "v_mass"))[0]
     assert other.kind == "coulomb_friction" and fit_in_turn.nested_starts(other, elsewhere) is other
+
+
+def test_a_simpler_fit_is_refitted_from_where_a_richer_one_ended():
+    """A Coulomb fit stopped early (two evaluations, taken as converged: a local minimum) ends far
+    from the truth; the Coulomb + viscous fit
+    reaches it with its viscous term near 0. Refitted from the richer fit's level and smoothing,
+    the Coulomb law matches it (the truth's 0.3 N, smoothed over 0.02 m/s) and replaces the short
+    fit; the richer fit and a fit of another place are left as they were."""
+    from dataclasses import replace
+
+    from diagnosis.catalogue import candidates
+    from diagnosis.fit import fit_candidate
+    from diagnosis.place import Place
+    from plants.library.textbook import mass_spring_damper
+    from test_diagnosis_fit import _record, coulomb_truth
+
+    msd = mass_spring_damper()
+    train, hold = _record(coulomb_truth()).split(0.3)
+    at = {c.kind: c for c in candidates(msd, Place("junction", "v_mass"), experiment=train)}
+    sensor = next(c for c in candidates(msd, Place("output", "x"), experiment=train) if c.kind == "sensor_offset")
+    short = replace(fit_candidate(msd, at["coulomb_friction"], train, hold, max_nfev=2), success=True)
+    richer = fit_candidate(msd, at["coulomb_viscous_friction"], train, hold)
+    other = fit_candidate(msd, sensor, train, hold)
+    assert richer.extra["train_cost"] < short.extra["train_cost"]
+    calls = []
+
+    def fit(cand, abandon_above):
+        calls.append(cand)
+        return fit_candidate(msd, cand, train, hold)
+
+    out = fit_in_turn.simpler_refits([short, richer, other], fit, lambda *a: None, "fitting")
+    assert len(calls) == 1 and calls[0].kind == "coulomb_friction"
+    assert calls[0].starts[-1] == {"Fc_v_mass": richer.values["Fc_v_mass"],
+                                   "v_eps_v_mass": richer.values["v_eps_v_mass"]}
+    assert out[1] is richer and out[2] is other and out[0] is not short
+    assert out[0].values["Fc_v_mass"] == pytest.approx(0.3, rel=1e-3)
+    assert out[0].values["v_eps_v_mass"] == pytest.approx(0.02, rel=1e-2)

@@ -165,6 +165,19 @@ class Kind:
             start[spec.name] = spec.clipped(value)
         return start
 
+    def reduced_start(self, cand, simpler, values: dict) -> dict | None:
+        """A start for the `simpler` candidate (a kind in :attr:`nests`, same place) where a fit of
+        `cand` ended with `values`: the mapped parameters at that fit's values, the others at their
+        guess; None when this kind does not extend that one.  The inverse of :meth:`start_from`:
+        a richer fit that went further along the shared parameters (a sign's smoothing) with its
+        extra terms near 0 is then matched by the simpler law, which the choice prices lower."""
+        mapping = self.nests.get(simpler.kind)
+        if mapping is None:
+            return None
+        return {simpler.params[j].name: simpler.params[j].clipped(values.get(cand.params[i].name,
+                                                                             simpler.params[j].guess))
+                for i, j in mapping.items()}
+
     def feature_start(self, cand, evidence) -> dict | None:
         """A start for `cand` from the feature regression of its kind at its place (`evidence`, a
         :class:`~diagnosis.features.KindEvidence`): its :attr:`feature_params` leading parameters

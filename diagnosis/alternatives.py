@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .fit import MIN_GAIN, MIN_SHARE, acceptance, needs_explaining, unpriced_error, usable_fits, within_tie
-from .holdout_resolution import Z_RESOLVED, resolution
+from .holdout_resolution import Z_RESOLVED, largest_difference, resolution
 
 __all__ = ["Alternative", "indistinguishable", "MAX_ALTERNATIVES"]
 
@@ -113,7 +113,8 @@ def indistinguishable(winner, fits, nominal_holdout: dict, *, noise: dict | None
         z = _resolution_either_way(measured, winner, fit, significant)
         if not z >= Z_RESOLVED:
             found[fit.kind] = Alternative(fit.kind, _place_of(fit), dict(fit.holdout_nrmse), z,
-                                          _largest_difference(measured, winner, fit, significant, floor),
+                                          largest_difference(measured, _prediction(winner), _prediction(fit),
+                                                             significant, floor),
                                           fit.n_params)
     return list(found.values())
 
@@ -132,24 +133,6 @@ def _resolution_either_way(measured, a, b, significant) -> float:
     """z of the lower held-out error of `a` and `b` over the other's (NaN when untestable)."""
     lower, higher = (a, b) if unpriced_error(a, significant) <= unpriced_error(b, significant) else (b, a)
     return float(resolution(measured, _prediction(lower), _prediction(higher), significant))
-
-
-def _largest_difference(measured, a, b, significant, floor) -> float:
-    """Largest ``|prediction_a - prediction_b|`` over the held-out samples, in noise standard
-    deviations (the floor's NRMSE times the measured output's spread), over `significant`."""
-    pa, pb = _prediction(a), _prediction(b)
-    if measured is None or pa is None or pb is None:
-        return float("nan")
-    largest = float("nan")
-    for o in significant:
-        if o not in pa or o not in pb or o not in measured:
-            return float("nan")
-        y = np.asarray(measured[o], dtype=float)
-        sigma = floor.get(o, 0.0) * float(np.nanstd(y))
-        gap = np.abs(np.asarray(pa[o], dtype=float) - np.asarray(pb[o], dtype=float))
-        if sigma > 0 and np.isfinite(gap).any():
-            largest = float(np.nanmax([largest, np.nanmax(gap) / sigma]))
-    return largest
 
 
 def _place_of(fit) -> str:

@@ -27,7 +27,7 @@ import numpy as np
 
 from .catalogue_common import RELEASED, ParamSpec, priced
 from .errors import BondcosimError, DiagnosisError
-from .holdout_resolution import Z_RESOLVED, held_out_prediction, resolution
+from .holdout_resolution import Z_RESOLVED, held_out_prediction, largest_difference, resolution
 
 __all__ = ["CandidateFit", "fit_candidate", "choose", "noise_floor", "needs_explaining", "usable_fits",
            "single_fits_by_holdout",
@@ -48,6 +48,10 @@ MIN_GAIN = 0.05
 #: where no fit reaches the noise, something else is missing too, and a richer law absorbs part
 #: of it
 NEAR_FLOOR = 2.0
+#: a richer law that extends the chosen one (:attr:`Kind.nests <diagnosis.kinds.base.Kind.nests>`) and
+#: moves no held-out prediction by this many noise standard deviations is that law, its extra terms
+#: fitted to nothing: the feature evidence (rule 4 of :func:`choose`) does not prefer it
+COLLAPSED = 0.5
 #: nominal excess NRMSE^2 below which an output counts as explained (noise-free data)
 _EXPLAINED = 1e-6
 _FD_STEP = 1e-3  # forward-difference step on the scaled parameters
@@ -543,7 +547,10 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
        price (and :data:`TIE`) of the winner's (a near-tie) wins instead when
        its features explain clearly more of the located estimate
        (:func:`~diagnosis.features.prefer_by_evidence`) and it passes rule 3; it records
-       ``extra["preferred_over"]``.
+       ``extra["preferred_over"]``.  A fit of a kind that extends the winner's at its place
+       (:attr:`Kind.nests <diagnosis.kinds.base.Kind.nests>`) and whose held-out prediction stays
+       within :data:`COLLAPSED` noise standard deviations of the winner's is the winner's law
+       with its extra terms fitted to nothing, and is not preferred.
 
     Parameters
     ----------
@@ -645,7 +652,8 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
         # priced (parsimony alone would decide between them)
         unpriced = lambda f: score(f) / (1 + PARAMETER_PRICE) ** f.n_params   # noqa: E731
         near = [f for f in usable if f.candidate is not None
-                and unpriced(f) <= unpriced(best) * (1 + PARAMETER_PRICE) * (1 + TIE)]
+                and unpriced(f) <= unpriced(best) * (1 + PARAMETER_PRICE) * (1 + TIE)
+                and not _collapsed_onto(f, best, measured, significant, floor)]
         preferred = prefer_by_evidence(best, near, evidence)
         share, gain = acceptance(nominal_holdout, preferred, floor)
         if preferred is not best and share >= MIN_SHARE and gain >= MIN_GAIN:
@@ -655,6 +663,20 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
         best.extra["resolved_over"] = max(resolved_over, key=lambda item: item[1])
     share, gain = acceptance(nominal_holdout, best, floor)
     return best if share >= MIN_SHARE and gain >= MIN_GAIN else None
+
+
+def _collapsed_onto(fit, simpler, measured, significant, floor) -> bool:
+    """Whether `fit`, of a kind that extends `simpler`'s at the same place, predicts the held-out
+    part as `simpler` does to within :data:`COLLAPSED` noise standard deviations: its extra terms
+    fitted to nothing (seed 8888, case 076: a Stribeck peak of 3e-9 N m on a Coulomb level of
+    4e-6 N m), so it names no physics `simpler` does not."""
+    richer, plain = fit.candidate, simpler.candidate
+    nests = getattr(getattr(richer, "definition", None), "nests", {})
+    if plain is None or plain.kind not in nests or getattr(richer, "place", None) != getattr(plain, "place", None):
+        return False
+    gap = largest_difference(measured, fit.extra.get("holdout_y"), simpler.extra.get("holdout_y"), significant,
+                             floor)
+    return bool(gap < COLLAPSED)
 
 
 def _score(fit, floor: dict, names, e0: float) -> float:

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["Z_RESOLVED", "held_out_prediction", "max_lag", "resolution"]
+__all__ = ["Z_RESOLVED", "held_out_prediction", "largest_difference", "max_lag", "resolution"]
 
 #: z from which the held-out part resolves a difference (one-sided p of about 0.001)
 Z_RESOLVED = 3.0
@@ -97,3 +97,28 @@ def _weighted_long_run_variance(w, r, lags: int) -> float:
     s = np.fft.irfft(np.abs(np.fft.rfft(w, size)) ** 2, size)[:lags + 1]
     weights = np.concatenate([[1.0], 2.0 * (1.0 - np.arange(1, lags + 1) / (lags + 1.0))])
     return max(float(np.sum(weights * c * s)), 0.0)
+
+
+def largest_difference(measured: dict | None, a: dict | None, b: dict | None, outputs, floor: dict) -> float:
+    """Largest :math:`|\\hat y_a - \\hat y_b|` of two held-out predictions over `outputs`, in
+    noise standard deviations (`floor`, each output's noise as an NRMSE, times the measured
+    output's spread); NaN when a prediction or a measured output is missing.  A recording that
+    excites the two fits' difference beyond the noise would tell them apart.
+
+    Examples
+    --------
+    >>> y = {"x": np.linspace(0.0, 1.0, 11)}
+    >>> round(largest_difference(y, {"x": y["x"]}, {"x": y["x"] + 0.01}, ["x"], {"x": 0.1}), 3)
+    0.316
+    """
+    if measured is None or a is None or b is None:
+        return float("nan")
+    largest = float("nan")
+    for o in outputs:
+        if o not in a or o not in b or o not in measured:
+            return float("nan")
+        sigma = floor.get(o, 0.0) * float(np.nanstd(np.asarray(measured[o], dtype=float)))
+        gap = np.abs(np.asarray(a[o], dtype=float) - np.asarray(b[o], dtype=float))
+        if sigma > 0 and np.isfinite(gap).any():
+            largest = float(np.nanmax([largest, np.nanmax(gap) / sigma]))
+    return largest

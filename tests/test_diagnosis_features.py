@@ -184,3 +184,36 @@ def test_feature_coefficients_start_the_fits_of_the_kinds_they_estimate():
     assert viscous == {spec.name: float(np.clip(_by_kind(ev)["viscous_friction"].coefficients["v"],
                                                 spec.lower, spec.upper))}
     assert started["hysteresis"].starts == before["hysteresis"].starts
+
+
+def test_a_richer_law_fitted_to_nothing_is_not_preferred_by_its_features():
+    """A pressure-dependent friction extends Coulomb friction: where its fit predicts the held-out
+    part as the Coulomb fit does (a tenth of the noise apart, its pressure term fitted to
+    nothing), the features that favour it do not name it; where it predicts differently (two
+    noise standard deviations at one sample), they do, as above."""
+    from types import SimpleNamespace
+
+    from diagnosis.features import evidence_lookup
+    from diagnosis.fit import COLLAPSED, choose
+    from diagnosis.kinds import kind_named
+
+    t = np.linspace(0.0, 10.0, 400)
+    truth = np.sin(t)
+    sigma = 0.05
+    measured = {"x": truth + sigma * np.random.default_rng(3).standard_normal(t.size)}
+    floor = {"x": sigma / float(np.std(measured["x"]))}
+
+    def fit(kind, holdout, n_params, predicted):
+        from diagnosis.fit import CandidateFit
+        cand = SimpleNamespace(kind=kind, place=PLACE, regime=None, target=None, definition=kind_named(kind))
+        return CandidateFit(cand, {}, {"x": holdout}, {"x": holdout}, n_params, True, "",
+                            extra={"holdout_y": {"x": predicted}})
+
+    shares = {"coulomb_friction": 0.90, "pressure_dependent_friction": 0.99}
+    evidence = evidence_lookup({PLACE: _place_evidence(shares)})
+    coulomb = fit("coulomb_friction", 0.100, 1, truth)
+    for shift, preferred in ((0.2 * COLLAPSED * sigma, False), (4 * COLLAPSED * sigma, True)):
+        bump = np.where(np.arange(t.size) == 200, shift, 0.0)
+        pressure = fit("pressure_dependent_friction", 0.098, 2, truth + bump)
+        chosen = choose({"x": 0.5}, [coulomb, pressure], noise=floor, evidence=evidence, measured=measured)
+        assert chosen is (pressure if preferred else coulomb)

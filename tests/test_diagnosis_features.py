@@ -162,8 +162,9 @@ def test_diagnose_reports_the_feature_regression(tmp_path):
 
 
 def test_feature_coefficients_start_the_fits_of_the_kinds_they_estimate():
-    """with_feature_starts: a Coulomb level from sign(v), a viscous coefficient from v, clipped to
-    the parameter's bounds; a kind whose parameters the features do not give is left alone."""
+    """with_feature_starts: a Coulomb level from sign(v), a viscous coefficient from v, a Dahl
+    level from the Dahl state, clipped to the parameter's bounds; a kind whose parameters the
+    features do not give is left alone."""
     from diagnosis.catalogue import candidates
     from diagnosis.features import with_feature_starts
     from plants import library
@@ -183,7 +184,14 @@ def test_feature_coefficients_start_the_fits_of_the_kinds_they_estimate():
     spec = started["viscous_friction"].params[0]
     assert viscous == {spec.name: float(np.clip(_by_kind(ev)["viscous_friction"].coefficients["v"],
                                                 spec.lower, spec.upper))}
-    assert started["hysteresis"].starts == before["hysteresis"].starts
+    # a Dahl level from the normalised Dahl state, its stiffness at the grid's sigma/F_h times it
+    dahl = _by_kind(ev)["hysteresis"]
+    fh, sigma = started["hysteresis"].params
+    start = started["hysteresis"].starts[-1]
+    assert start[fh.name] == pytest.approx(fh.clipped(dahl.coefficients["z_dahl"]))
+    assert start[fh.name] == pytest.approx(0.3, rel=0.2)
+    assert start[sigma.name] == pytest.approx(sigma.clipped(dahl.grid[0] * start[fh.name]))
+    assert started["backlash"].starts == before["backlash"].starts
 
 
 def test_a_richer_law_fitted_to_nothing_is_not_preferred_by_its_features():

@@ -33,19 +33,33 @@ class Hysteresis(Kind):
     def features(self, s):
         """The Dahl state for sigma/F_h on a grid of the RMS displacement."""
         X = rms(s.displacement)
-        return [FeatureGroup(None, f"sigma/F_h = {a / X:.3g}", ["z_dahl"], dahl_state(s.v, s.t, a / X)[:, None])
+        return [FeatureGroup(None, f"sigma/F_h = {a / X:.3g}", ["z_dahl"], dahl_state(s.v, s.t, a / X)[:, None],
+                             grid=(a / X,))
                 for a in FEATURE_GRID]
+
+    def feature_start(self, cand, evidence):
+        """The level at the coefficient of the normalised Dahl state (the Dahl friction is
+        :math:`F_h z`), the stiffness at the grid's :math:`\\sigma / F_h` times it: a friction far
+        below the place's effort scale (a muscle's braid on a light joint, a thousandth of a
+        percent of its force) is out of reach of the optimiser from a tenth of that scale."""
+        coef = evidence.coefficients.get("z_dahl")
+        if coef is None or not np.isfinite(coef) or coef <= 0 or len(evidence.grid) != 1:
+            return None
+        fh, sigma = cand.params
+        level = fh.clipped(float(coef))
+        return {fh.name: level, sigma.name: sigma.clipped(float(evidence.grid[0]) * level)}
 
     def propose(self, site):
         j, E, X = site.name, site.scales.effort, site.scales.displacement
         e_unit, f_unit = junction_units(site.graph, j)
         name = namer(site)
         return [with_level_starts([
-            ParamSpec(name("Fh"), 0.1 * E, 1e-3 * E, 10 * E, e_unit, f"Dahl friction level at {j}"),
-            # the stiffness down to a thousandth of the level guess over one RMS displacement: the
-            # effort scale may be far above the friction (a cylinder's p A), and a seal's loop may
-            # close only over most of a stroke
-            ParamSpec(name("sigma_dahl"), 2.0 * E / X, 1e-4 * E / X, 2e3 * E / X,
+            # the level down to a millionth of the effort scale, which may be far above the friction
+            # (a cylinder's p A, a muscle's force on a light joint)
+            ParamSpec(name("Fh"), 0.1 * E, 1e-6 * E, 10 * E, e_unit, f"Dahl friction level at {j}"),
+            # the stiffness down to a thousandth of the level guess over one RMS displacement (a
+            # seal's loop may close only over most of a stroke), and as far below as the level
+            ParamSpec(name("sigma_dahl"), 2.0 * E / X, 1e-7 * E / X, 2e3 * E / X,
                       f"{e_unit}/{displacement_unit(f_unit)}", f"Dahl pre-sliding stiffness at {j}")])]
 
     def build(self, graph, cand, values):

@@ -233,6 +233,19 @@ def test_a_two_level_input_clipped_on_both_levels_is_a_saturation(msd, rng):
     assert max(fit.holdout_nrmse.values()) < 1e-3
 
 
+def test_a_two_level_input_clipped_a_little_on_one_level_is_a_saturation(msd, rng):
+    """A PRBS between -0.93 N and 0.92 N through a drive that delivers at most 0.70 N (seed 9494,
+    case 059, on the msd): a start clipping a quarter of the span in costs more than clipping
+    nothing, where the fit sees no gradient; the start a tenth in finds the limit."""
+    levels = np.repeat(rng.choice([-0.93, 0.92], size=T.size // 25 + 1), 25)[:T.size]
+    y = OutputSimulator(msd, Experiment(T, {"F": np.minimum(levels, 0.70)}, {"x": T, "v": T}, UNITS))()
+    train, hold = Experiment(T, {"F": levels}, y, UNITS).split(0.3)
+    fit = fit_candidate(msd, _candidate(msd, Place("input", "F"), "saturation", train), train, hold)
+    assert fit.success, fit.message
+    assert fit.values["u_max_F"] == pytest.approx(0.70, abs=0.005) and fit.values["u_min_F"] == -RELEASED
+    assert max(fit.holdout_nrmse.values()) < 1e-3
+
+
 def test_a_sensor_clipped_on_both_sides_is_a_sensor_range(msd):
     """The position sensor reads only -0.2 .. 0.25 m of a motion that goes beyond both: the
     starts at the recorded extremes clip both sides, and the fit recovers both ends."""

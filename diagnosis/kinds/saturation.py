@@ -26,6 +26,8 @@ from .signal_common import input_record
 from .storage_common import capacitors, stiffness_scale, units_of
 
 
+#: how far inside an input's recorded span (a fraction of it) its limits also start
+INSIDE = (0.1, 0.25, 0.5)
 #: the limits the features try: (upper, lower) quantiles of the C's content
 FEATURE_STOPS = ((0.75, 0.25), (0.9, 0.1), (0.97, 0.03))
 
@@ -182,11 +184,13 @@ def _input_range(site) -> Proposal:
     starts += [{u_min: a, u_max: hi + 1e-3 * width} for a, _ in limits]
     starts += [{u_min: a, u_max: b} for a, b in limits]
     # an input of a few held levels (a PRBS, steps) has its quantiles AT its levels, where a limit
-    # clips nothing and the fit sees no gradient: start each side inside the recorded span too
-    inside = [s for f in (0.25, 0.5) for s in ({u_min: lo - 1e-3 * width, u_max: max(hi - f * width, lo)},
-                                               {u_min: min(lo + f * width, hi), u_max: hi + 1e-3 * width})]
+    # clips nothing and the fit sees no gradient: start each side inside the recorded span too, a
+    # tenth of it in as well (a start that clips a level by far more than the truth does costs more
+    # than clipping nothing, and the fit then starts where it sees no gradient: seed 9494, case 059)
+    inside = [s for f in INSIDE for s in ({u_min: lo - 1e-3 * width, u_max: max(hi - f * width, lo)},
+                                          {u_min: min(lo + f * width, hi), u_max: hi + 1e-3 * width})]
     # both sides at once: a two-level input clipped on both levels is clipped nowhere by one side alone
-    inside += [{u_min: lo + f * width, u_max: hi - g * width} for f in (0.25, 0.4) for g in (0.25, 0.4)]
+    inside += [{u_min: lo + f * width, u_max: hi - g * width} for f in INSIDE[:-1] for g in INSIDE[:-1]]
     starts += [s for s in inside if hi > lo and not any(
         abs(s[u_min] - t[u_min]) + abs(s[u_max] - t[u_max]) < 0.02 * width for t in starts)]
     # a recording of a saturated input has many samples AT the limit: its median may be the limit

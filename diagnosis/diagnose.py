@@ -311,6 +311,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         res, diverged = _nominal_residuals(sim, graph, exp, x0)
         res.noise.update(_noise_overrides(noise, exp))
     floor = noise_floor(held, res.noise)
+    measurement_floor = dict(floor)
     say("held-out judge")
     judge, nominal_judged = choose_judge(sim, exp, held, res, diverged, floor, x0)
     nominal = dict(nominal_judged.nrmse)
@@ -365,7 +366,9 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                                   through=train, judge=judge))
     say("choosing")
     chosen, alternatives = _choose(nominal, fits, floor, evidence, res, exp, train, held,
-                                   diverged or judge.kind != "open-loop", sim)
+                                   diverged or judge.kind != "open-loop", sim,
+                                   open_loop=((nominal_judged.open_loop, measurement_floor)
+                                              if judge.kind == "segments" else None))
 
     say("improved model")
     improved_judged = nominal_judged
@@ -423,12 +426,15 @@ def _features(graph, scores, places, train, x0, rv, cands, say, label):
     return evidence, with_feature_starts(kept, evidence), [str(c) for c in pruned]
 
 
-def _choose(reference, fits, floor, evidence, res, exp, train, held, not_open_loop, sim=None):
+def _choose(reference, fits, floor, evidence, res, exp, train, held, not_open_loop, sim=None, open_loop=None):
     """:func:`~diagnosis.fit.choose` on the held-out part; when it answers "none" and the
     held-out part is judged open-loop (`not_open_loop` False: the nominal neither diverges nor
     drifts), the training part's answer among the fits the held-out part cannot judge
     (:mod:`diagnosis.training_judge`: fits whose held-out prediction is the reference's; `sim`,
     the reference model's OutputSimulator, tells an effect at the start from a wrong start state).
+    Under the segment judge, `open_loop` (the reference's open-loop held-out NRMSE and the
+    measurement noise floor) lets a fit that predicts the held-out part open-loop to about the
+    noise answer instead of "none" (:mod:`diagnosis.open_loop_judge`).
 
     Returns ``(chosen, alternatives)``: the fits of other kinds the held-out part cannot tell
     apart from a held-out choice (:func:`diagnosis.alternatives.indistinguishable`; none for an
@@ -448,6 +454,9 @@ def _choose(reference, fits, floor, evidence, res, exp, train, held, not_open_lo
     alternatives = indistinguishable(chosen, fits, reference, noise=floor, measured=held.outputs)
     for f in fits:
         f.extra.pop("holdout_y", None)     # read by the choice only
+    if chosen is None and open_loop is not None:
+        from .open_loop_judge import choose_open_loop
+        chosen = choose_open_loop(*open_loop, fits, evidence=_lookup(evidence))
     if chosen is not None or not_open_loop:
         return chosen, alternatives
     nominal_train = {o: nrmse(train.outputs[o], res.simulated[o][:n]) for o in exp.outputs}

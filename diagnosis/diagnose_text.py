@@ -89,6 +89,16 @@ def _judged_on_training(fit) -> str:
             f"{100 * fit.extra.get('train_share', 0.0):.0f} % of the error beyond the noise.")
 
 
+def _judged_open_loop(fit) -> str:
+    """Why an effect the segment judge found within its floor was accepted
+    (:mod:`diagnosis.open_loop_judge`)."""
+    reading = ", ".join(f"{o} {v:.3g}" for o, v in fit.extra.get("open_loop_reading", {}).items())
+    return ("Judged open-loop: the segment error's restarts carry the noise of their estimated states, and "
+            "within that floor it is not told from the nominal; but simulated open-loop from the recording's "
+            f"start, the model with it predicts the held-out part to about the measurement noise "
+            f"(NRMSE {reading}), where the nominal drifts.")
+
+
 def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, rv, scores, fits,
              chosen, improved_graph, locate_regime, timings, rounds=(), judge=None,
              judged=(None, None)) -> DiagnosisReport:
@@ -228,6 +238,8 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
                      f"{'; '.join(e['explanation'] for e in first)}")
         if chosen.extra.get("judge") == "training":
             lines.append(_judged_on_training(chosen))
+        if chosen.extra.get("judge") == "open-loop":
+            lines.append(_judged_open_loop(chosen))
         if chosen.extra.get("resolved_over"):
             other, z = chosen.extra["resolved_over"]
             lines.append(f"{other}, with fewer parameters, tied it or won on the parameters' price; the "

@@ -4,7 +4,7 @@ Schema of :meth:`DiagnosisReport.to_json` (issue 6, section 2e)::
 
     {"location": {"junction": str, "bond": str, "windows": [[t0, t1], ...], "regime": str},
      "missing_physics": [{"kind": str, "attached_to": str, "parameters": {name: value},
-                          "explanation": str, "judged_on": "held-out" | "training",
+                          "explanation": str, "judged_on": "held-out" | "training" | "open-loop",
                           "indistinguishable": [{"kind": str, "place": str,
                                                  "holdout_nrmse": {output: nrmse}, "z": float,
                                                  "difference": float, "n_params": int}]}],
@@ -21,7 +21,9 @@ element name, or ``"input NAME"`` / ``"output NAME"`` for actuator and sensor
 effects; ``""`` for none); ``bond`` is ``""`` when there is none;
 ``improved_model`` is ``null`` until :meth:`DiagnosisReport.save`;
 ``judged_on`` is ``"training"`` for an effect the held-out part cannot judge
-(:mod:`diagnosis.training_judge`), else ``"held-out"``;
+(:mod:`diagnosis.training_judge`), ``"open-loop"`` for one the segment judge found within its
+floor that predicts the held-out part open-loop to the noise (:mod:`diagnosis.open_loop_judge`),
+else ``"held-out"``;
 ``indistinguishable`` lists, lowest held-out error first, the fits of other kinds in the effect's
 round that the held-out part cannot tell apart from it (:mod:`diagnosis.alternatives`): their held-out
 NRMSE, ``z`` of the lower error over the other's (below 3; ``null`` where it cannot be computed) and
@@ -112,7 +114,8 @@ class DiagnosisReport:
     missing_physics : list of dict
         ``kind``, ``attached_to``, ``parameters`` (name -> SI value), ``explanation``,
         ``judged_on`` (``"held-out"``, or ``"training"`` when the held-out part never reaches
-        the effect's regime: :mod:`diagnosis.training_judge`), ``indistinguishable`` (the other
+        the effect's regime: :mod:`diagnosis.training_judge`, or ``"open-loop"``:
+        :mod:`diagnosis.open_loop_judge`), ``indistinguishable`` (the other
         readings the recording cannot tell apart: :mod:`diagnosis.alternatives`).
     fit : dict
         ``holdout`` [t0, t1] (s), ``nominal`` and ``improved`` held-out NRMSE per output.

@@ -206,6 +206,20 @@ def test_a_clipping_sensor_is_located_and_named(tmp_path):
     assert r["improvement"] >= 0.5
 
 
+def test_a_friction_the_segment_floor_hides_is_judged_open_loop(tmp_path):
+    """Seed 4747, case 014: a viscous friction on the force-driven carriage, whose nominal drifts
+    (segment judge). The fit recovers the truth's coefficient, but its segment error of the speed
+    stays within the segment floor; simulated open-loop it predicts the held-out part to the
+    noise, and it is named (diagnosis.open_loop_judge)."""
+    spec = CaseSpec(14, 1019124, "carriage", "viscous_friction", "junction", "v_cart",
+                    target_change=0.06575332060637167, ratio=3.0394915233352426, excitation="levels+sine")
+    r = run_case(spec, PLANTS, tmp_path, max_effects=1)
+    assert r["judge"] == "segments"
+    assert (r["answer_kind"], r["answer_place"]) == ("viscous_friction", "junction v_cart"), r["answers"]
+    truth = r["effect"]["magnitude"]
+    assert r["parameters"]["b_visc_v_cart"] == pytest.approx(truth, rel=0.01)
+
+
 def test_a_muscles_force_law_is_a_door_of_the_pam_truth():
     """Hysteresis may sit at a muscle's force law (the diagnosis's ``law muscle<i>``): only
     hysteresis draws there, so other kinds' draws are unchanged; its place is accepted at the

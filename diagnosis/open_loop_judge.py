@@ -16,8 +16,9 @@ same rule (:func:`diagnosis.fit.choose`), and the winner is accepted only when i
 held-out part open-loop to within :data:`~diagnosis.fit.NEAR_FLOOR` times that floor (root sum
 of squares over the outputs that need explaining).  Stopping the drift is not enough: a Coulomb
 friction or a constant load on the same carriage stops it too, with open-loop errors of the speed
-three and seven times the viscous law's.  A null recording whose nominal does not drift never reaches this rule (it is judged
-open-loop from the start).
+three and seven times the viscous law's.  A null recording whose nominal does not drift never
+reaches this rule (it is judged open-loop from the start).  It applies to the first round
+(:func:`diagnosis.diagnose.diagnose`); further rounds are judged as before.
 """
 from __future__ import annotations
 

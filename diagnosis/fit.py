@@ -197,11 +197,7 @@ class _Objective:
             r = self._last[1].copy()
         else:
             self.n_runs += 1
-            try:
-                r = self._vector(self.sim(self.params(theta), self.x0))
-            except BondcosimError:
-                r = None
-            r = self._walled(r)
+            r = self._residual(theta)
             self._last = (theta, r)
         self.evaluations += 1
         self.best_cost = min(self.best_cost, 0.5 * float(r @ r))
@@ -210,6 +206,13 @@ class _Objective:
                 and self.best_cost > self.abandon_above and self.best_cost > _STALLED * self.best_costs[-3]):
             raise _Abandoned(self.best_cost)
         return r
+
+    def _residual(self, theta):
+        """The walled residual of one simulation at `theta` (not counted as a run here)."""
+        try:
+            return self._walled(self._vector(self.sim(self.params(theta), self.x0)))
+        except BondcosimError:
+            return self._walled(None)
 
     def batch(self, trials) -> list:
         """The walled residuals of several parameter vectors, simulated as one batch; where one of
@@ -220,15 +223,7 @@ class _Objective:
             runs = self.sim.run_batch([self.params(th) for th in trials], self.x0)
             return [self._walled(self._vector(run.outputs)) for run in runs]
         except BondcosimError:
-            pass
-        columns = []
-        for th in trials:
-            try:
-                r = self._vector(self.sim(self.params(th), self.x0))
-            except BondcosimError:
-                r = None
-            columns.append(self._walled(r))
-        return columns
+            return [self._residual(th) for th in trials]
 
     def jacobian(self, theta, lower, upper):
         theta = np.asarray(theta, dtype=float)
@@ -295,27 +290,27 @@ def _scaled_bounds(objective):
     return tuple(np.array([getattr(s, side) for s in objective.specs]) / objective.scale for side in ("lower", "upper"))
 
 
-#: the factors by which :func:`_shrunk_start` shrinks the magnitudes of a guess that does not run
+#: the factors by which :func:`_shrink_magnitudes` shrinks the magnitudes of a guess that does not run
 SHRINK = (1e-1, 1e-2, 1e-3, 1e-4)
 
 
-def _shrunk_start(objective, specs, theta0):
-    """Where the guess does not run, the magnitudes (the parameters bounded below by 0, whose 0 is
-    no effect) shrunk by each of :data:`SHRINK` towards the nominal model: the largest that runs,
-    made the new unit of those parameters (:attr:`_Objective.scale`), so the optimiser's steps are
-    relative to it.  A guess scaled on the place's effort (a viscous coefficient of 10 % of the
-    muscles' torque per RMS speed) can make a light joint too stiff for the integration steps
-    (seed 8888, case 068).  Returns the start (`theta0` when none runs)."""
-    magnitudes = np.array([s.lower == 0 and s.guess > 0 for s in specs])
+def _shrink_magnitudes(objective, theta0) -> None:
+    """Where the guess `theta0` does not run, its magnitudes (the parameters bounded below by 0,
+    whose 0 is no effect) shrunk by each of :data:`SHRINK` towards the nominal model: the largest
+    that runs becomes the new unit of those parameters (:attr:`_Objective.scale`), so the same
+    `theta0` now stands for it and the optimiser's steps are relative to it.  A guess scaled on the
+    place's effort (a viscous coefficient of 10 % of the muscles' torque per RMS speed) can make a
+    light joint too stiff for the integration steps (seed 8888, case 068).  Nothing changes when
+    none runs."""
+    magnitudes = np.array([s.lower == 0 and s.guess > 0 for s in objective.specs])
     if not magnitudes.any():
-        return theta0
+        return
     trials = [np.where(magnitudes, theta0 * f, theta0) for f in SHRINK]
     runnable = [not np.all(r == _WALL) for r in objective.batch(trials)]
     if any(runnable):
         factor = SHRINK[runnable.index(True)]
         objective.scale = np.where(magnitudes, objective.scale * factor, objective.scale)
         objective._last = (None, None)      # its cache is keyed on theta, whose unit changed
-    return theta0
 
 
 def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, max_nfev: int = 40,
@@ -403,7 +398,7 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
         theta0 = _best_start(objective, candidate, theta0)
         r0 = objective(theta0)
         if np.all(r0 == _WALL):
-            theta0 = _shrunk_start(objective, specs, theta0)
+            _shrink_magnitudes(objective, theta0)
             lower, upper = _scaled_bounds(objective)
             r0 = objective(theta0)
         if np.all(r0 == _WALL):

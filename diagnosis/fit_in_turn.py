@@ -67,14 +67,9 @@ def fit_in_turn(candidates, fit, say, label: str, *, best: float = np.inf, suffi
     for i, cand in enumerate(candidates, 1):
         cand = nested_starts(cand, fits)
         say(label, f"{cand} ({i}/{len(candidates)}{suffix})")
-        start = time.perf_counter()
-        result = fit(cand, HOPELESS * best if np.isfinite(best) else None)
+        result = _fit_and_say(fit, cand, HOPELESS * best if np.isfinite(best) else None, say, label)
         fits.append(result)
-        cost = result.extra.get("train_cost", np.inf)
-        if result.success and np.isfinite(cost):
-            best = min(best, float(cost))
-        say(label, f"{cand}: {_outcome(result)}, {result.n_simulations} simulations, "
-                   f"{time.perf_counter() - start:.1f} s")
+        best = min(best, _train_cost(result))
     return simpler_refits(fits, fit, say, label), best
 
 
@@ -109,13 +104,19 @@ def simpler_refits(fits, fit, say, label: str) -> list:
         start = best.candidate.definition.reduced_start(best.candidate, simple.candidate, best.values)
         cand = simple.candidate.with_starts([start])
         say(label, f"{cand} again, from the end of {best.candidate}")
-        began = time.perf_counter()
-        refit = fit(cand, None)
-        say(label, f"{cand}: {_outcome(refit)}, {refit.n_simulations} simulations, "
-                   f"{time.perf_counter() - began:.1f} s")
+        refit = _fit_and_say(fit, cand, None, say, label)
         if _train_cost(refit) < own:
             out[k] = refit
     return out
+
+
+def _fit_and_say(fit, cand, abandon_above, say, label: str):
+    """``fit(cand, abandon_above)``, its outcome, simulations and time said under `label`."""
+    start = time.perf_counter()
+    result = fit(cand, abandon_above)
+    say(label, f"{cand}: {_outcome(result)}, {result.n_simulations} simulations, "
+               f"{time.perf_counter() - start:.1f} s")
+    return result
 
 
 def _train_cost(fit) -> float:

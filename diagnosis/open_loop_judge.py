@@ -26,7 +26,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .fit import NEAR_FLOOR, choose, needs_explaining
+from .fit import NEAR_FLOOR, choose, needs_explaining, unpriced_error
 
 __all__ = ["choose_open_loop"]
 
@@ -64,23 +64,22 @@ def choose_open_loop(nominal_open_loop: dict, floor: dict, fits, evidence=None):
     >>> choose_open_loop({"v": 1.5}, {"v": 0.02}, [drift_stopped]) is None
     True
     """
-    proxies = {}
+    pairs = []        # (fit, the same fit with its open-loop errors as its held-out ones)
     for f in fits:
         reading = f.extra.get("open_loop") if f.success else None
         if reading and all(np.isfinite(reading.get(o, np.inf)) for o in nominal_open_loop):
             extra = {k: v for k, v in f.extra.items() if k != "holdout_y"}   # the segments' prediction
-            proxies[id(f)] = (f, replace(f, holdout_nrmse=dict(reading), extra=extra))
-    if not proxies:
+            pairs.append((f, replace(f, holdout_nrmse=dict(reading), extra=extra)))
+    if not pairs:
         return None
     reference = {o: (v if np.isfinite(v) else 1.0) for o, v in nominal_open_loop.items()}
-    best = choose(reference, [p for _, p in proxies.values()], noise=floor, evidence=evidence)
+    best = choose(reference, [p for _, p in pairs], noise=floor, evidence=evidence)
     significant = needs_explaining(reference, floor)
     if best is None or not significant:
         return None
-    error = sum(best.holdout_nrmse[o] ** 2 for o in significant)
-    if error > NEAR_FLOOR ** 2 * sum(floor.get(o, 0.0) ** 2 for o in significant):
+    if unpriced_error(best, significant) > NEAR_FLOOR ** 2 * sum(floor.get(o, 0.0) ** 2 for o in significant):
         return None
-    original = next(f for f, p in proxies.values() if p is best)
+    original = next(f for f, p in pairs if p is best)
     original.extra["judge"] = "open-loop"
     original.extra["open_loop_reading"] = dict(best.holdout_nrmse)
     return original

@@ -139,6 +139,11 @@ class Candidate:
         """
         return self.definition.settle(self, dict(values), experiment)
 
+    def combined_starts(self, tried: list) -> list:
+        """Starts to try after :attr:`starts` (see :meth:`Kind.combined_starts
+        <diagnosis.kinds.base.Kind.combined_starts>`); `tried` lists ``(start, training cost)``."""
+        return self.definition.combined_starts(self, tried)
+
     def build(self, model_graph, values=None):
         """A new graph: `model_graph` with this effect added.
 

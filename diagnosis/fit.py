@@ -275,13 +275,24 @@ def _release_unsupported_limits(objective, specs, theta, lower, upper):
 
 
 def _best_start(objective, candidate, theta0):
-    """The guess or the candidate's alternative start with the smallest training cost (one batch)."""
+    """The guess or the candidate's alternative start with the smallest training cost (one batch),
+    then the starts its kind combines from those costs (:meth:`Candidate.combined_starts
+    <diagnosis.catalogue.Candidate.combined_starts>`, a second batch)."""
     if candidate is None or not candidate.starts:
         return theta0
     guess = objective.params(theta0)
-    trials = [theta0] + [np.array([{**guess, **start}[s.name] for s in objective.specs]) / objective.scale
-                         for start in candidate.starts]
+
+    def scaled(starts):
+        return [np.array([{**guess, **start}[s.name] for s in objective.specs]) / objective.scale for start in starts]
+
+    trials = [theta0] + scaled(candidate.starts)
     costs = [float(r @ r) for r in objective.batch(trials)]
+    combine = getattr(candidate, "combined_starts", None)       # a group of twins has none
+    if combine is not None:
+        more = combine([(objective.params(t), c) for t, c in zip(trials, costs)])
+        if more:
+            trials += scaled(more)
+            costs += [float(r @ r) for r in objective.batch(trials[-len(more):])]
     return trials[int(np.argmin(costs))]
 
 

@@ -246,6 +246,23 @@ def test_a_two_level_input_clipped_a_little_on_one_level_is_a_saturation(msd, rn
     assert max(fit.holdout_nrmse.values()) < 1e-3
 
 
+def test_an_input_of_held_levels_clipped_a_little_on_each_side_is_a_saturation(msd, rng):
+    """Random held levels, clipped a quarter of the way from each extreme level to the next one (a
+    motor torque limit, seed 4747, case 005, on the msd): the quantile starts sit AT the levels and
+    clip nothing, or clip a whole further level; one side tried alone is judged with the other
+    side's error still in the residual.  Starts just inside the levels, and each side's starts
+    paired with the best other side, find both limits."""
+    levels = np.repeat(rng.uniform(-1.0, 1.0, size=T.size // 25 + 1), 25)[:T.size]
+    held = np.unique(levels[T < 14.0])                                  # the training part's levels
+    lo, hi = 0.75 * held[1] + 0.25 * held[2], 0.75 * held[-1] + 0.25 * held[-2]
+    y = OutputSimulator(msd, Experiment(T, {"F": np.clip(levels, lo, hi)}, {"x": T, "v": T}, UNITS))()
+    train, hold = Experiment(T, {"F": levels}, y, UNITS).split(0.3)
+    fit = fit_candidate(msd, _candidate(msd, Place("input", "F"), "saturation", train), train, hold)
+    assert fit.success, fit.message
+    assert (fit.values["u_min_F"], fit.values["u_max_F"]) == (pytest.approx(lo, abs=1e-4), pytest.approx(hi, abs=1e-4))
+    assert max(fit.holdout_nrmse.values()) < 1e-4
+
+
 def test_a_sensor_clipped_on_both_sides_is_a_sensor_range(msd):
     """The position sensor reads only -0.2 .. 0.25 m of a motion that goes beyond both: the
     starts at the recorded extremes clip both sides, and the fit recovers both ends."""

@@ -178,6 +178,12 @@ class Kind:
                                                                              simpler.params[j].guess))
                 for i, j in mapping.items()}
 
+    def combined_starts(self, cand, tried: list) -> list:
+        """Further starts for `cand` once its own were tried: `tried` lists ``(start, cost)``
+        (start: parameter name -> value, cost: its training cost).  None here; a kind whose
+        parameters act apart (a range's two limits) combines the best of each."""
+        return []
+
     def feature_start(self, cand, evidence) -> dict | None:
         """A start for `cand` from the feature regression of its kind at its place (`evidence`, a
         :class:`~diagnosis.features.KindEvidence`): its :attr:`feature_params` leading parameters

@@ -26,6 +26,11 @@ from .signal_common import input_record
 from .storage_common import capacitors, stiffness_scale, units_of
 
 
+#: the shares of an input's samples beyond a limit at which one limit starts alone (a limit may
+#: clip a few per cent of the samples by a little: a command's extreme levels)
+ONE_SIDED = (0.01, 0.02, 0.05, 0.1, 0.25)
+#: and both limits together
+BOTH_SIDES = (0.02, 0.1, 0.25)
 #: how far inside an input's recorded span (a fraction of it) its limits also start
 INSIDE = (0.1, 0.25, 0.5)
 #: the limits the features try: (upper, lower) quantiles of the C's content
@@ -68,6 +73,23 @@ class Saturation(Kind):
         return {q_min.name: q_min.clipped(bottom if down > 0 else q_min.guess),
                 q_max.name: q_max.clipped(top if up > 0 else q_max.guess),
                 k.name: k.clipped(max(pushes))}
+
+    def combined_starts(self, cand, tried):
+        """A range's two limits act on different samples, so the limits tried alone are tried again
+        with the other side at the best start's limit: an input clipped a little on both sides by
+        different amounts (the exoskeleton's motor torque, seed 4747, case 005) is met by no start
+        that moves both limits by the same quantile, and one side tried alone is judged with the
+        other side's error still in the residual."""
+        if len(cand.params) != 2 or len(tried) < 2:
+            return []
+        low, high = (spec.name for spec in cand.params)
+        outer_low, outer_high = min(s[low] for s, _ in tried), max(s[high] for s, _ in tried)
+        best = min(tried, key=lambda sc: sc[1])[0]
+        lows = {s[low] for s, _ in tried if s[high] == outer_high and s[low] != outer_low}
+        highs = {s[high] for s, _ in tried if s[low] == outer_low and s[high] != outer_high}
+        pairs = {(best[low], h) for h in highs} | {(lo, best[high]) for lo in lows}
+        seen = {(s[low], s[high]) for s, _ in tried}
+        return [{low: a, high: b} for a, b in sorted(pairs - seen) if a < b]
 
     def propose(self, site):
         if site.door == "input":
@@ -177,12 +199,16 @@ def _input_range(site) -> Proposal:
     q_lo, q_hi = (float(v) for v in np.percentile(values, [5, 95]))
     q_lo, q_hi = min(q_lo, mid - 1e-3 * width), max(q_hi, mid + 1e-3 * width)
     u_min, u_max = fresh_name(site.taken, f"u_min_{u}"), fresh_name(site.taken, f"u_max_{u}")
-    limits = [(float(np.quantile(values, q)), float(np.quantile(values, 1 - q))) for q in (0.02, 0.1, 0.25)]
+    # a thousandth of the span inside each quantile: an input of held levels has its quantiles AT
+    # its levels, where a limit clips nothing and the fit sees no gradient; just inside, it clips
+    # that level a little and sees which way to go
+    limits = [(float(np.quantile(values, q)) + 1e-3 * width, float(np.quantile(values, 1 - q)) - 1e-3 * width)
+              for q in ONE_SIDED]
     limits = [(a, b) for a, b in limits if a < mid < b]
     # one-sided starts first: on a tie (no sample beyond a limit) the limit stays inactive
     starts = [{u_min: lo - 1e-3 * width, u_max: b} for _, b in limits]
     starts += [{u_min: a, u_max: hi + 1e-3 * width} for a, _ in limits]
-    starts += [{u_min: a, u_max: b} for a, b in limits]
+    starts += [{u_min: a, u_max: b} for (a, b), q in zip(limits, ONE_SIDED) if q in BOTH_SIDES]
     # an input of a few held levels (a PRBS, steps) has its quantiles AT its levels, where a limit
     # clips nothing and the fit sees no gradient: start each side inside the recorded span too, a
     # tenth of it in as well (a start that clips a level by far more than the truth does costs more

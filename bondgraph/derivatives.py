@@ -11,6 +11,7 @@ one-sided difference is needed instead.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from itertools import combinations
 
@@ -37,11 +38,23 @@ def diff_almost_everywhere(expr, var):
     implicit-solver step needs.  (Plain ``sympy.diff`` leaves ``Derivative(sign(g))``
     unevaluated when it cannot prove ``g`` finite, and yields ``DiracDelta`` otherwise.)
 
+    Results are kept (:data:`_REMEMBERED` of them): exporting, compiling and linearising one
+    model differentiate the same laws again, and sympy spends seconds on a PAM's.
+
     Raises
     ------
     NotDifferentiable
         sympy leaves a ``Derivative`` unevaluated.
     """
+    return _diff_almost_everywhere(sp.sympify(expr), sp.sympify(var))
+
+
+#: how many derivatives :func:`diff_almost_everywhere` keeps
+_REMEMBERED = 16384
+
+
+@functools.lru_cache(maxsize=_REMEMBERED)
+def _diff_almost_everywhere(expr, var):
     frozen: dict = {}
 
     def freeze(node):

@@ -93,14 +93,20 @@ __all__ = ["linearize", "LinearModel"]
 
 # Symbolic Jacobians, compiled once per StateEquations
 # ---------------------------------------------------------------------------
+#: the first index of :class:`_Jacobians`' real dummies (far above sympy's own counter)
+_DUMMY_BASE = 10**12
+
+
 class _Jacobians:
     """Lambdified f, h, r and their Jacobians w.r.t. x, u, z of one StateEquations."""
 
     def __init__(self, eqs: StateEquations):
         declared = (eqs.t, *eqs.states, *eqs.inputs, *eqs.algebraic, *eqs.held, *eqs.params)
-        # Real dummies: differentiation of Abs/sign stays real-valued even when
-        # the caller built the equations with assumption-free symbols.
-        real = {s: sp.Dummy(s.name, real=True) for s in declared}
+        # Real dummies: differentiation of Abs/sign stays real-valued even when the
+        # caller built the equations with assumption-free symbols.  Numbered by position, the same
+        # equations of another build get equal dummies, and their derivatives are remembered
+        # (:func:`~bondgraph.derivatives.diff_almost_everywhere`)
+        real = {s: sp.Dummy(s.name, real=True, dummy_index=_DUMMY_BASE + i) for i, s in enumerate(declared)}
         self.args = [real[s] for s in declared]
         groups = (("f", eqs.state_names, eqs.f), ("h", eqs.outputs, eqs.h),
                   ("r", tuple(z.name for z in eqs.algebraic), eqs.residuals))

@@ -29,3 +29,23 @@ def load_script():
         spec.loader.exec_module(module)
         return module
     return load
+
+
+@pytest.fixture(scope="session")
+def exported_fmu(tmp_path_factory):
+    """`exported_fmu(model, version, **options)` -> path of the library model's FMU, exported once
+    per test session (`fmus.export`'s options, e.g. ``fixed_step``): a PAM's export takes seconds,
+    and eight test modules read the same few FMUs.  Tests read them and never change them."""
+    from fmus import export
+    import plants.library as library
+
+    root = tmp_path_factory.mktemp("fmus")
+    cache = {}
+
+    def get(model, version=2, **options):
+        key = (model, version, tuple(sorted(options.items())))
+        if key not in cache:
+            cache[key] = export(library.build(model), root / f"{model}-{version}-{len(cache)}.fmu",
+                                fmi_version=version, **options)
+        return cache[key]
+    return get

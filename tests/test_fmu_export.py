@@ -31,17 +31,9 @@ INPUTS = {
 
 
 @pytest.fixture(scope="session")
-def exported(tmp_path_factory):
+def exported(exported_fmu):
     """`exported(model, version)` -> path of the FMU, built once per session."""
-    root = tmp_path_factory.mktemp("fmus")
-    cache = {}
-
-    def get(model, version=2):
-        if (model, version) not in cache:
-            cache[model, version] = export(library.build(model), root / f"{model}-{version}.fmu",
-                                           fmi_version=version)
-        return cache[model, version]
-    return get
+    return exported_fmu
 
 
 def _reference(model, T, dt, inputs):

@@ -24,9 +24,6 @@ import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 
-import plants.library as library
-from fmus import export
-
 T, DT = 0.2, 1e-3
 INPUTS = {"u1": 7.0, "u2": 3.0}
 #: (model, export options): sampled friction (RK4, guards), Dormand-Prince with 52 event
@@ -46,17 +43,8 @@ def _ecos_loads() -> bool:
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
-    root = tmp_path_factory.mktemp("independent")
-    cache = {}
-
-    def get(model, version, **options):
-        key = (model, version, tuple(sorted(options.items())))
-        if key not in cache:
-            cache[key] = export(library.build(model), root / f"{model}-{version}-{len(cache)}.fmu",
-                                fmi_version=version, **options)
-        return cache[key]
-    return get
+def fmus(exported_fmu):
+    return exported_fmu
 
 
 def _fmpy_reference(path, names):

@@ -48,9 +48,8 @@ def _xml(path):
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
-    root = tmp_path_factory.mktemp("meta")
-    return {(m, v): export(library.build(m), root / f"{m}{v}.fmu", fmi_version=v)
+def fmus(exported_fmu):
+    return {(m, v): exported_fmu(m, v)
             for m in ("pam", "dc-motor", "mass-spring-damper", "resistor-loop-nl") for v in VERSIONS}
 
 

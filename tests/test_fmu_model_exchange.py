@@ -10,9 +10,6 @@ import pytest
 from fmpy import simulate_fmu
 from fmpy.fmi1 import FMICallException
 
-import plants.library as library
-from fmus import export
-
 from fmu_helpers import Model
 
 VERSIONS = (2, 3)
@@ -20,10 +17,8 @@ DISCARD = 2   # fmi2Discard == fmi3Discard
 
 
 @pytest.fixture(scope="module")
-def vented(tmp_path_factory):
-    root = tmp_path_factory.mktemp("me")
-    return {v: export(library.build("pam-frictionless"), root / f"pf{v}.fmu", fmi_version=v)
-            for v in VERSIONS}
+def vented(exported_fmu):
+    return {v: exported_fmu("pam-frictionless", v) for v in VERSIONS}
 
 
 @pytest.mark.parametrize("version", VERSIONS)

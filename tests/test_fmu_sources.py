@@ -48,9 +48,8 @@ def _run(fmu: Path):
 
 
 @pytest.fixture(scope="module")
-def pam_fmus(tmp_path_factory):
-    root = tmp_path_factory.mktemp("src")
-    return {v: export(library.build("pam"), root / f"pam{v}.fmu", fmi_version=v) for v in VERSIONS}
+def pam_fmus(exported_fmu):
+    return {v: exported_fmu("pam", v) for v in VERSIONS}
 
 
 @pytest.mark.parametrize("version", VERSIONS)

@@ -6,14 +6,12 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 from bondgraph.numerics import simulate
 import plants.library as library
-from fmus import export
 
 from fmu_helpers import Slave, open_slave
 
@@ -21,16 +19,11 @@ VERSIONS = (2, 3)
 
 
 @pytest.fixture(scope="module")
-def fmu(tmp_path_factory):
-    root = tmp_path_factory.mktemp("vs")
-    cache = {}
-
+def fmu(exported_fmu):
     def get(model, version):
-        if (model, version) not in cache:
-            cache[model, version] = export(library.build(model), root / f"{model}{version}.fmu",
-                                           fmi_version=version)
-            assert validate_fmu(str(cache[model, version])) == []
-        return cache[model, version]
+        path = exported_fmu(model, version)
+        assert validate_fmu(str(path)) == []
+        return path
     return get
 
 

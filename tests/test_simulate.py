@@ -149,6 +149,19 @@ def test_table_input_is_zero_order_hold(backend):
     np.testing.assert_array_equal(res["u"], np.where(res.t < 0.5, 1.0, np.where(res.t < 1.25, -2.0, 3.0)))
 
 
+def test_a_table_restarts_the_integration_only_where_it_steps(msd):
+    """A 1 kHz recording of levels held over 50 samples integrates exactly as the table of its steps
+    alone: samples that repeat the value before them are no restart (each one was a solve_ivp run)."""
+    rng = np.random.default_rng(7)
+    t = np.arange(2001) * 1e-3
+    levels = np.repeat(rng.uniform(-1.0, 1.0, 41), 50)[:t.size]
+    steps = np.concatenate([[0], np.flatnonzero(np.diff(levels)) + 1])
+    dense = simulate(msd, (0.0, 2.0), inputs={"F": (t, levels)}, output_interval=0.01)
+    sparse = simulate(msd, (0.0, 2.0), inputs={"F": (t[steps], levels[steps])}, output_interval=0.01)
+    np.testing.assert_array_equal(dense["v"], sparse["v"])
+    assert dense.info["nfev"] == sparse.info["nfev"]
+
+
 # -- fixed-step models ---------------------------------------------------------------------
 
 @pytest.mark.parametrize("backend", _backends())

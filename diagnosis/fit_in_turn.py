@@ -34,6 +34,8 @@ import time
 
 import numpy as np
 
+from .kinds.base import extends
+
 __all__ = ["HOPELESS", "fit_in_turn", "nested_starts", "simpler_refits"]
 
 #: a fit whose training cost stays above this many times the best one's so far is given up
@@ -83,7 +85,7 @@ def nested_starts(cand, fits):
     if hasattr(cand, "members") or not hasattr(cand, "definition"):
         return cand
     return cand.with_starts([cand.definition.start_from(cand, fit.candidate, fit.values) for fit in fits
-                             if fit.success and fit.candidate is not None and _extends(cand, fit.candidate)])
+                             if fit.success and fit.candidate is not None and extends(cand, fit.candidate)])
 
 
 def simpler_refits(fits, fit, say, label: str) -> list:
@@ -97,7 +99,7 @@ def simpler_refits(fits, fit, say, label: str) -> list:
         if not (own < np.inf and hasattr(getattr(simple, "candidate", None), "definition")):
             continue
         richer = [(cost, f) for f in fits if f is not simple and (cost := _train_cost(f)) < own
-                  and _extends(getattr(f, "candidate", None), simple.candidate)]
+                  and extends(getattr(f, "candidate", None), simple.candidate)]
         if not richer:
             continue
         best = min(richer, key=lambda pair: pair[0])[1]
@@ -123,14 +125,6 @@ def _train_cost(fit) -> float:
     """A successful fit's training cost, else inf."""
     cost = fit.extra.get("train_cost", np.inf) if fit.success else np.inf
     return float(cost) if np.isfinite(cost) else np.inf
-
-
-def _extends(richer, simpler) -> bool:
-    """Whether candidate `richer` extends `simpler` (a kind it nests, the same place, its regime)."""
-    return (richer is not None and hasattr(richer, "definition") and not hasattr(simpler, "members")
-            and richer.place == simpler.place and richer.kind != simpler.kind
-            and simpler.kind in richer.definition.nests
-            and getattr(simpler, "regime", None) in (None, getattr(richer, "regime", None)))
 
 
 def _outcome(fit) -> str:

@@ -448,6 +448,29 @@ def test_a_near_tie_the_held_out_part_resolves_goes_to_the_better_fit(rng):
             assert 3.0 <= richer.extra["resolved_over"][1] < 7.0
 
 
+def test_a_richer_law_that_fits_the_training_part_no_better_is_not_chosen(rng):
+    """A pressure-dependent friction extends Coulomb friction at the same place.  Its fit is 3 %
+    better held out, which the samples resolve (z >= 3), but its training error is above the
+    Coulomb fit's, which its own law reaches with the pressure term at 0: the term explains nothing
+    (seed 4747, case 047).  With a lower training error, the samples' verdict stands."""
+    from types import SimpleNamespace
+    from diagnosis.kinds import kind_named
+    t = np.linspace(0.0, 50.0, 20000)
+    truth, held, floor, _ = _sine_held_out(rng, t)
+    place = Place("junction", "seesaw")
+
+    def fit(kind, n_params, y, train):
+        cand = SimpleNamespace(kind=kind, place=place, regime=None, definition=kind_named(kind))
+        return CandidateFit(cand, {}, {"x": train}, {"x": nrmse(held["x"], y)}, n_params, True, "",
+                            extra={"holdout_y": {"x": y}})
+
+    coulomb = fit("coulomb_friction", 2, truth + 0.012 * np.sign(np.sin(40 * t)), 0.1000)
+    for train, richer_wins in ((0.1001, False), (0.0990, True)):
+        pressure = fit("pressure_dependent_friction", 3, truth, train)
+        assert choose({"x": 0.5}, [coulomb, pressure], noise=floor, measured=held) is (
+            pressure if richer_wins else coulomb)
+
+
 def test_a_richer_fit_the_held_out_part_resolves_is_not_priced_out(rng):
     """A simpler fit 4 % worse on the held-out part than a richer one two parameters dearer (21 %)
     wins on price alone; where the held-out samples resolve the difference (z >= 3), the richer one

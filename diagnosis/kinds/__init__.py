@@ -15,9 +15,10 @@ from . import (coulomb_friction, viscous_friction, stribeck_friction, pressure_d
                leak, heat_transfer, valve_lag, transport_delay, hysteresis, backlash, nonlinear_stiffness,
                saturation, sensor_offset, sensor_gain, constant_load, coulomb_viscous_friction,
                modulated_friction)
-from .base import DOORS, REGISTRY, Kind, Proposal, Site, kind_named, register
+from .base import DOORS, REGISTRY, Kind, Proposal, Site, extends, kind_named, register
 
-__all__ = ["KINDS", "MODULES", "REGISTRY", "DOORS", "Kind", "Proposal", "Site", "kind_named", "register"]
+__all__ = ["KINDS", "MODULES", "REGISTRY", "DOORS", "Kind", "Proposal", "Site", "extends", "kind_named",
+           "register"]
 
 #: The kind modules, in the catalogue order (a new kind: its module here and in the import above).
 MODULES = (coulomb_friction, viscous_friction, stribeck_friction, pressure_dependent_friction, leak, heat_transfer,

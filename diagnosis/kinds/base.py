@@ -239,3 +239,13 @@ def kind_named(name: str) -> Kind:
 def hang(graph, element, junction: str):
     """`graph` with `element` bonded to `junction` by a bond ``b_<element>``."""
     return graph.insert(element, at=junction, bond=f"b_{element.name}")
+
+
+def extends(richer, simpler) -> bool:
+    """Whether candidate `richer` extends candidate `simpler`: a kind it nests
+    (:attr:`Kind.nests`), at the same place and regime, so that its extra parameters at 0 are
+    `simpler`'s law.  A group of twins extends nothing and is extended by nothing."""
+    return (richer is not None and simpler is not None and hasattr(richer, "definition")
+            and not hasattr(simpler, "members") and richer.place == simpler.place
+            and richer.kind != simpler.kind and simpler.kind in richer.definition.nests
+            and getattr(simpler, "regime", None) in (None, getattr(richer, "regime", None)))

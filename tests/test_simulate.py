@@ -352,3 +352,16 @@ def test_a_solver_grinding_towards_a_singularity_stops_with_a_named_error():
                                               r"at t = .* fastest-changing states") as info:
         simulate(library.build("pam-frictionless"), (0.0, 2.0), max_nfev=3000)
     assert 0.0 < info.value.time < 2.0
+
+
+def test_an_implicit_method_given_a_non_finite_jacobian_stops_with_a_named_error():
+    """pam-frictionless from vented muscles starts with its chambers at atmospheric pressure, where
+    the valves' flow law has the square root of 1 - (P/P_u)^((k-1)/k) at 0: its slope is infinite,
+    and the Jacobian of P_1' and P_2' not finite (the closed valves make it 0 * inf).  Radau needs
+    that Jacobian; it failed in scipy's LU with a bare ValueError."""
+    import plants.library as library
+    from bondgraph.errors import SimulationError
+    with pytest.raises(SimulationError, match=r"non-finite Jacobian of the time derivative of P_1, P_2 at t = 0 s, "
+                                              r"which Radau needs.*method='LSODA'") as info:
+        simulate(library.build("pam-frictionless"), (0.0, 0.1), method="Radau")
+    assert info.value.time == 0.0

@@ -464,7 +464,14 @@ def _integrate_smooth(model, plan, x0, p, d, times, method, dt, rtol, atol, bar,
 
     def jac(t, x):
         counts["njev"] += 1
-        return model.jac_x(x, plan.vector(t, hold[0])[0], t=t, p=p, d=d)
+        J = model.jac_x(x, plan.vector(t, hold[0])[0], t=t, p=p, d=d)
+        if not np.isfinite(J).all():   # an implicit method would fail in its LU with a bare ValueError
+            rows = sorted({model.state_names[i] for i in np.argwhere(~np.isfinite(J))[:, 0]})
+            raise SimulationError(f"model {model.equations.name!r}: non-finite Jacobian of the time derivative "
+                                  f"of {', '.join(rows)} at t = {t:.9g} s, which {info['method']} needs: the model is at a "
+                                  "singularity there or a law has an infinite slope (a square root at 0); "
+                                  "method='LSODA' or 'DOP853' need no Jacobian", time=float(t))
+        return J
 
     options = {"rtol": rtol, "atol": atol}
     events = _guard_events(model.equations, plan, p, d, hold)

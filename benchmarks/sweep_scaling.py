@@ -28,6 +28,7 @@ measurement: on a shared machine the speed-up is bounded by the free cores, not
 by the code.  ``docs/scaling.md`` records a run and extrapolates to 100 nodes.
 
 Run:  python benchmarks/sweep_scaling.py [--runs 200] [--segment 0.3] [--workers 2] [--no-external] [--model-runs 400]
+      [--no-shipping]
 """
 from __future__ import annotations
 
@@ -196,7 +197,7 @@ def external_cluster(workers: int, directory: Path):
 
 
 def main(runs: int = 200, segment: float = 0.3, workers: int = 2, external: bool = True, null_tasks: int = 1000,
-         json_path=None, model_runs: int = 400) -> dict:
+         json_path=None, model_runs: int = 400, ship: bool = True) -> dict:
     spec = setup(runs, segment)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -218,7 +219,7 @@ def main(runs: int = 200, segment: float = 0.3, workers: int = 2, external: bool
                     p.wait(timeout=30)
         null = null_task_overhead(workers, null_tasks)
     chunks = chunking(model_runs, workers) if model_runs else []
-    ship = shipping(spec)
+    ship = shipping(spec) if ship else None
     serial = rows[0]["wall_s"]
     print(f"{runs} pam-ukf runs of 13 x {segment} s on {os.cpu_count()} cores")
     print(f"{'engine':<12} {'wall s':>8} {'setup s':>8} {'speed-up':>9} {'tasks':>6} {'ovh/task ms':>12} "
@@ -234,12 +235,15 @@ def main(runs: int = 200, segment: float = 0.3, workers: int = 2, external: bool
         print(f"{model_runs} model runs, {c['chunks']:<10} (chunk {c['chunk_size']:>3}, {c['tasks']:>4} tasks): "
               f"wall {c['wall_s']:.2f} s, run {c['mean_run_ms']:.1f} ms, overhead {c['overhead_per_run_ms']:.1f} ms "
               f"per run = {100 * c['overhead_fraction']:.1f} % of run time (load {c['load_before']:.2f})")
-    print(f"shipped once per worker: runner {ship['runner_bytes'] / 1e3:.0f} kB pickled (FMUs "
-          f"{ship['fmu_bytes'] / 1e3:.0f} kB, {ship['libraries']} C libraries {ship['kernel_bytes'] / 1e3:.0f} kB); "
-          f"client preparation {ship['prepare_s']:.2f} s; in a fresh process: unpickle {ship['unpickle_s']:.2f} s, "
-          f"install + load the libraries {1e3 * ship['install_load_s']:.1f} ms; first run with the libraries shipped "
-          f"{ship['first_run_shipped_s']:.2f} s, compiling them (empty cache) {ship['first_run_compiling_s']:.2f} s "
-          f"(load {ship['load_before']:.2f} -> {ship['load_after']:.2f})")
+    if ship is None:
+        print("shipping: not measured (--no-shipping)")
+    else:
+        print(f"shipped once per worker: runner {ship['runner_bytes'] / 1e3:.0f} kB pickled (FMUs "
+              f"{ship['fmu_bytes'] / 1e3:.0f} kB, {ship['libraries']} C libraries {ship['kernel_bytes'] / 1e3:.0f} "
+              f"kB); client preparation {ship['prepare_s']:.2f} s; in a fresh process: unpickle "
+              f"{ship['unpickle_s']:.2f} s, install + load the libraries {1e3 * ship['install_load_s']:.1f} ms; first "
+              f"run with the libraries shipped {ship['first_run_shipped_s']:.2f} s, compiling them (empty cache) "
+              f"{ship['first_run_compiling_s']:.2f} s (load {ship['load_before']:.2f} -> {ship['load_after']:.2f})")
     result = {"runs": runs, "segment_s": segment, "cores": os.cpu_count(), "rows": rows, "null_tasks": null,
               "chunking": chunks, "shipping": ship}
     if json_path:
@@ -256,5 +260,6 @@ if __name__ == "__main__":
     ap.add_argument("--no-external", action="store_true", help="skip the dask scheduler / dask worker processes")
     ap.add_argument("--model-runs", type=int, default=400, help="short runs for the chunking comparison (0: skip)")
     ap.add_argument("--json", default=None, help="also write the numbers to this JSON file")
+    ap.add_argument("--no-shipping", action="store_true", help="skip (f), the shipping measurement")
     a = ap.parse_args()
-    main(a.runs, a.segment, a.workers, not a.no_external, a.null_tasks, a.json, a.model_runs)
+    main(a.runs, a.segment, a.workers, not a.no_external, a.null_tasks, a.json, a.model_runs, not a.no_shipping)

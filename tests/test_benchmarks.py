@@ -21,11 +21,13 @@ def test_codegen_benchmark_runs(capsys, load_script):
 
 
 def test_sweep_scaling_benchmark_runs(capsys, load_script):
+    # shipping (f) compiles the pam-ukf kernels in a fresh process with an empty cache (a minute);
+    # tests/test_sweeps_shipping.py runs shipped runners on workers without a compiler
     bench = load_script("benchmarks/sweep_scaling.py")
-    result = bench.main(runs=2, segment=0.3, workers=1, external=False, null_tasks=5, model_runs=4)
+    result = bench.main(runs=2, segment=0.3, workers=1, external=False, null_tasks=5, model_runs=4, ship=False)
     assert [r["engine"] for r in result["rows"]] == ["serial", "local:1"] and result["rows"][1]["failed"] == 0
     assert [c["chunk_size"] for c in result["chunking"]] == [1, 1]     # 4 runs, 1 worker: one each
-    assert "speed-up" in capsys.readouterr().out
+    assert "speed-up" in capsys.readouterr().out and result["shipping"] is None
 
 
 def test_fmu_solvers_benchmark_runs(capsys, load_script):

@@ -84,8 +84,9 @@ def nested_starts(cand, fits):
     answered Coulomb so).  Groups of twins are returned unchanged."""
     if hasattr(cand, "members") or not hasattr(cand, "definition"):
         return cand
-    return cand.with_starts([cand.definition.start_from(cand, fit.candidate, fit.values) for fit in fits
-                             if fit.success and fit.candidate is not None and extends(cand, fit.candidate)])
+    return cand.with_starts([start for fit in fits
+                             if fit.success and fit.candidate is not None and extends(cand, fit.candidate)
+                             for start in cand.definition.starts_from(cand, fit.candidate, fit.values)])
 
 
 def simpler_refits(fits, fit, say, label: str) -> list:

@@ -78,8 +78,15 @@ def test_a_richer_friction_starts_where_the_coulomb_fit_it_extends_ended():
     for kind in extending:
         richer = at[kind]
         warmed = fit_in_turn.nested_starts(richer, done)
-        (start,) = [s for s in warmed.starts if s not in richer.starts]
+        start, *more = [s for s in warmed.starts if s not in richer.starts]
         assert start[richer.params[0].name] == 0.3
+        if kind == "stribeck_friction":     # and at that level with peaks, decays and sharper signs
+            fc, dfs, vs, eps = (p.name for p in richer.params)
+            assert len(more) == 12 and all(s[fc] == 0.3 for s in more)
+            assert sorted({s[dfs] for s in more}) == pytest.approx([0.15, 0.3, 0.6])
+            assert len({s[vs] for s in more}) == 2 and max(s[eps] for s in more) < start[eps] * 1.0001
+        else:
+            assert more == []
         # the same law: the outputs agree to the integrator's tolerance
         assert np.max(np.abs(x(richer.build(msd, start), None) - reference)) < 1e-6 * np.ptp(reference)
     # a kind that extends nothing, and one fitted at another place, get no such start

@@ -165,6 +165,13 @@ class Kind:
             start[spec.name] = spec.clipped(value)
         return start
 
+    def starts_from(self, cand, simpler, values: dict) -> list:
+        """The starts for `cand` where a fit of the `simpler` candidate it extends ended with
+        `values`: :meth:`start_from`'s (none when this kind does not extend that one).  A kind
+        whose extra terms are invisible at 0 adds more."""
+        start = self.start_from(cand, simpler, values)
+        return [] if start is None else [start]
+
     def reduced_start(self, cand, simpler, values: dict) -> dict | None:
         """A start for the `simpler` candidate (a kind in :attr:`nests`, same place) where a fit of
         `cand` ended with `values`: the mapped parameters at that fit's values, the others at their

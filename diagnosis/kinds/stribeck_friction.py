@@ -8,11 +8,15 @@ import numpy as np
 from ..catalogue_common import ParamSpec, junction_units
 from .base import Kind, register
 from .feature_signals import FeatureGroup
-from .friction_common import friction_r, level, namer, sharpened, sign, smoothing, with_level_starts
+from .friction_common import (SHARPNESS_GRID, V_EPS_FRACTION, friction_r, level, namer, sharpened, sign, smoothing,
+                              with_level_starts)
 
 
 #: the Stribeck velocities the features try, as fractions of the RMS flow
 FEATURE_GRID = (0.1, 0.3, 1.0)
+#: from a Coulomb fit's level: the peaks (fractions of the level), decay velocities and smoothing
+#: flows (fractions of the RMS flow) a Stribeck fit also starts at (:meth:`StribeckFriction.starts_from`)
+PEAKS, DECAYS, SIGNS = (0.5, 1.0, 2.0), FEATURE_GRID[:2], SHARPNESS_GRID[:2]
 
 
 @register
@@ -38,6 +42,22 @@ class StribeckFriction(Kind):
             level(site, "dFs", f"static friction in excess of the Coulomb level at {j}"),
             ParamSpec(namer(site)("v_s"), 0.2 * V, 0.005 * V, 10 * V, f_unit, f"Stribeck velocity at {j}"),
             smoothing(site)])]
+
+    def starts_from(self, cand, simpler, values):
+        """Besides the Coulomb fit's level with no peak, that level with a peak of half, once and
+        twice it, decaying at a tenth and three tenths of the RMS flow, under a sign as sharp as the
+        features' sharpest two (:data:`PEAKS`, :data:`DECAYS`, :data:`SIGNS`).  At no peak the
+        decay velocity has no gradient, and a peak's stick and slip make the training error rugged
+        in it: from the Coulomb fit alone, the pam seesaw's Stribeck friction stayed a Coulomb
+        friction smoothed over 14 % of the speed (seed 1212, case 034)."""
+        starts = super().starts_from(cand, simpler, values)
+        if not starts:
+            return starts
+        fc, dfs, vs, eps = cand.params
+        level = starts[0][fc.name]
+        flow = eps.guess / V_EPS_FRACTION
+        return starts + [{fc.name: level, dfs.name: dfs.clipped(a * level), vs.name: vs.clipped(b * flow),
+                          eps.name: eps.clipped(e * flow)} for a in PEAKS for b in DECAYS for e in SIGNS]
 
     def build(self, graph, cand, values):
         fc, dfs, vs = (p.name for p in cand.params[:3])

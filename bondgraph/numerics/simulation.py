@@ -468,9 +468,9 @@ def _integrate_smooth(model, plan, x0, p, d, times, method, dt, rtol, atol, bar,
         if not np.isfinite(J).all():   # an implicit method would fail in its LU with a bare ValueError
             rows = sorted({model.state_names[i] for i in np.argwhere(~np.isfinite(J))[:, 0]})
             raise SimulationError(f"model {model.equations.name!r}: non-finite Jacobian of the time derivative "
-                                  f"of {', '.join(rows)} at t = {t:.9g} s, which {info['method']} needs: the model is at a "
-                                  "singularity there or a law has an infinite slope (a square root at 0); "
-                                  "method='LSODA' or 'DOP853' need no Jacobian", time=float(t))
+                                  f"of {', '.join(rows)} at t = {t:.9g} s, which {info['method']} needs: the "
+                                  "model is at a singularity there or a law has an infinite slope (a square root "
+                                  "at 0); method='LSODA' or 'DOP853' need no Jacobian", time=float(t))
         return J
 
     options = {"rtol": rtol, "atol": atol}

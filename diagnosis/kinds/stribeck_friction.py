@@ -54,9 +54,9 @@ class StribeckFriction(Kind):
         if not starts:
             return starts
         fc, dfs, vs, eps = cand.params
-        level = starts[0][fc.name]
+        coulomb = starts[0][fc.name]
         flow = eps.guess / V_EPS_FRACTION
-        return starts + [{fc.name: level, dfs.name: dfs.clipped(a * level), vs.name: vs.clipped(b * flow),
+        return starts + [{fc.name: coulomb, dfs.name: dfs.clipped(a * coulomb), vs.name: vs.clipped(b * flow),
                           eps.name: eps.clipped(e * flow)} for a in PEAKS for b in DECAYS for e in SIGNS]
 
     def build(self, graph, cand, values):

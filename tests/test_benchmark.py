@@ -89,6 +89,22 @@ def test_leak_on_the_lower_tank_gives_the_analytic_steady_level():
     assert 4e-5 * np.sqrt(2 * 9.81 * h2) + k * 1000 * 9.81 * h2 == pytest.approx(2e-4, rel=1e-3)
 
 
+def test_a_viscous_friction_in_series_with_the_tanks_orifice_holds_its_steady_levels():
+    # in series with the orifice: rho g (h1 - h2) = rho/2 (q / a12)^2 + b q at the steady flow q,
+    # whose lower level is Q_out's, h2 = (q / a2)^2 / (2 g).  Started there, the truth stays there
+    # only if it solves the orifice's flow together with the friction's pressure drop
+    plant = tb.coupled_tanks()
+    q, b, a12, a2, g, rho, area = 2e-4, 2e7, 5e-5, 4e-5, 9.81, 1000.0, 0.02
+    h2 = (q / a2) ** 2 / (2 * g)
+    h1 = h2 + ((q / a12) ** 2 / 2 + b * q / rho) / g
+    t = np.arange(0, 100.0, 1 / plant.rate)
+    eff = make_effect("viscous_friction", plant, "junction", "Q12", b, {}, {"eps": 1e-6, "sign": 1.0})
+    y = simulate_truth(plant, t, {"Q_in": np.full(t.size, q)}, eff, x0=np.array([area * h1, area * h2]),
+                       signals=True)
+    assert np.ptp(y["h1"]) < 1e-9 * h1 and np.ptp(y["h2"]) < 1e-9 * h2
+    assert y["_signals"]["Q12"] == pytest.approx(np.full(t.size, q), rel=1e-9)
+
+
 def test_sensor_and_delay_effects_are_exact():
     plant = tb.mass_spring_damper()
     t, u = _levels(plant, 5.0)

@@ -93,6 +93,10 @@ class JunctionSpec:
     nominal graph but a constitutive law whose bond ends at no junction (the diagnosis's
     ``law <name>`` place, :mod:`diagnosis.law_places`): ``name`` is the element owning the law,
     ``signals[name]`` the flow of its bond and ``extra[name]`` an effort added to its law.
+    ``algebraic`` (a 1-junction): its flow is no state but set by a law of the effort across it
+    (an orifice), so an effort added there changes the flow it depends on: the plant's
+    ``signals(x, u, extra)`` gives the flow under an added effort, and the truth solves the two
+    together (:func:`diagnosis.benchmark.simulate.effect_extra`).
     """
 
     name: str
@@ -103,6 +107,7 @@ class JunctionSpec:
     equivalent: tuple[str, ...] = ()
     modulators: tuple[str, ...] = ()
     law: bool = False
+    algebraic: bool = False
 
     @property
     def place(self) -> str:
@@ -155,7 +160,9 @@ class TruthPlant:
     signals : callable ``(x, u) -> dict``
         Local variables an effect may need: the flow of each 1-junction and the
         effort of each 0-junction in :attr:`junctions` (by junction name), each
-        storage's content (by storage name), pressures (by name).
+        storage's content (by storage name), pressures (by name).  With an
+        ``algebraic`` junction it also takes ``extra`` (``(x, u, extra)``): the
+        flows under the efforts added there.
     measure : callable ``(x, u) -> dict``
         The outputs, nominal-model names, SI.
     junctions, storages : tuple

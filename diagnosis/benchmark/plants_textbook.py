@@ -118,6 +118,10 @@ def coupled_tanks() -> TruthPlant:
         return np.array([u["Q_in"] - q12 + extra.get("P1", 0.0),
                          q12 - q_out + extra.get("P2", 0.0)])
 
+    def signals(x, u, extra=None):
+        return dict(zip(("P1", "P2"), pressures(x))) | {"tank1": x[0], "tank2": x[1],
+                                                        "Q12": flows(x, extra or {})[0]}
+
     def measure(x, u):
         return {"h1": x[0] / A1, "h2": x[1] / A2, "Q_out": flows(x, {})[1]}
 
@@ -126,11 +130,10 @@ def coupled_tanks() -> TruthPlant:
         inputs=(InputSpec("Q_in", "m^3/s", 0.5e-4, 3.0e-4, 1e-6, (20.0, 60.0), ambient=float(q_rest)),),
         outputs=(OutputSpec("h1", "m"), OutputSpec("h2", "m"), OutputSpec("Q_out", "m^3/s")),
         states=("V1", "V2"), x0=x0, nominal_x0={"V1": float(x0[0]), "V2": float(x0[1])}, rhs=rhs,
-        signals=lambda x, u: dict(zip(("P1", "P2"), pressures(x))) | {"tank1": x[0], "tank2": x[1],
-                                                                        "Q12": flows(x, {})[0]},
+        signals=signals,
         measure=measure,
         junctions=(JunctionSpec("P1", "0", "hydraulic"), JunctionSpec("P2", "0", "hydraulic"),
-                   JunctionSpec("Q12", "1", "hydraulic")),
+                   JunctionSpec("Q12", "1", "hydraulic", algebraic=True)),
         storages=(StorageSpec("tank1", "P1", None, content_range=(0.0, 0.03)),
                   StorageSpec("tank2", "P2", None, content_range=(0.0, 0.03))),
         rate=10.0, duration=600.0, substeps=4,

@@ -13,10 +13,11 @@ delay, a saturation) and the outputs after it (a sensor).
 from __future__ import annotations
 
 import numpy as np
+from scipy.optimize import brentq
 
 from .plant import TruthPlant, TruthPlantError
 
-__all__ = ["simulate_truth", "NoEffect"]
+__all__ = ["simulate_truth", "NoEffect", "effect_extra"]
 
 
 #: Right-hand side evaluations one sample of an ``lsoda`` truth may take (a smooth run takes about
@@ -88,6 +89,50 @@ class NoEffect:
         return y
 
 
+def _at_algebraic_junction(plant: TruthPlant, effect) -> bool:
+    """Whether `effect` adds an effort at an ``algebraic`` junction of `plant`."""
+    return getattr(effect, "door", None) == "junction" and plant.junction(effect.junction).algebraic
+
+
+def effect_extra(plant: TruthPlant, effect, x: np.ndarray, ue: dict, uk: dict, z: np.ndarray):
+    """``effect.extra`` at plant state `x` (inputs `ue` as the plant sees them, `uk` as recorded,
+    effect states `z`), with the flow of an ``algebraic`` junction it acts at solved together with
+    the effort it adds there.
+
+    A friction in series with an orifice sets the flow ``v = Q(dP + e(v))``: the orifice's flow
+    under the pressure the friction leaves.  With ``e`` falling and ``Q`` rising in their
+    arguments the gap ``Q(dP + e(v)) - v`` falls in ``v``, so one root lies between 0 and the
+    flow without the effort (widened until it brackets one).  Read at that flow without the
+    effort, a viscous friction of the tanks' Q12 was no series resistance but a change of the
+    orifice's law that a Coulomb term fitted better (seed 3535, case 054).
+    """
+    sig = plant.signals(x, ue)
+    if not _at_algebraic_junction(plant, effect):
+        return effect.extra(sig, uk, z)
+    name = effect.junction
+
+    def gap(v):
+        return plant.signals(x, ue, effect.extra({**sig, name: v}, uk, z)[0])[name] - v
+
+    v0 = float(sig[name])
+    lo, hi = min(0.0, v0), max(0.0, v0)
+    width = max(hi - lo, 1e-12 * max(1.0, abs(v0)), np.finfo(float).tiny)
+    for _ in range(60):
+        g_lo, g_hi = gap(lo), gap(hi)
+        if g_lo >= 0.0 >= g_hi:
+            break
+        if g_lo < 0.0:
+            lo -= width
+        if g_hi > 0.0:
+            hi += width
+        width *= 2.0
+    else:
+        raise TruthPlantError(f"plant {plant.name}: no flow at junction {name} balances the effort "
+                              f"{effect.kind} adds there")
+    v = v0 if g_lo == g_hi else brentq(gap, lo, hi, xtol=1e-13 * max(abs(lo), abs(hi)), rtol=1e-12)
+    return effect.extra({**sig, name: v}, uk, z)
+
+
 def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None, *, x0=None,
                    signals: bool = False) -> dict:
     """Noise-free outputs of `plant` (with `effect`) at the sample times `t`.
@@ -122,7 +167,7 @@ def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None, *, x0
     def f(s, uk, held=None):
         x, z = s[:nx], s[nx:]
         ue = effect.inputs_now(uk, z)
-        ext, dz = effect.extra(plant.signals(x, ue), uk, z)
+        ext, dz = effect_extra(plant, effect, x, ue, uk, z)
         if held:
             ue = {**ue, **held}
         return np.concatenate([plant.rhs(x, ue, ext), dz])
@@ -133,7 +178,7 @@ def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None, *, x0
             return None
         x, z = s[:nx], s[nx:]
         ue = effect.inputs_now(uk, z)
-        ext, _ = effect.extra(plant.signals(x, ue), uk, z)
+        ext, _ = effect_extra(plant, effect, x, ue, uk, z)
         return plant.hold(x, ue, ext, h)
 
     n = t.size
@@ -203,13 +248,15 @@ def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None, *, x0
         x, z = states[k, :nx], states[k, nx:]
         uk = {name: u[name][k] for name in names}
         ue = effect.inputs_now(uk, z)
-        ext = effect.extra(plant.signals(x, ue), uk, z)[0] if plant.feedthrough or reads_storage else {}
+        ext = effect_extra(plant, effect, x, ue, uk, z)[0] if plant.feedthrough or reads_storage else {}
         y = plant.measure(x, ue, ext) if plant.feedthrough else plant.measure(x, ue)
         y = effect.sensed(effect.read_by_sensors(y, ext))
         for o in plant.outputs:
             out[o.name][k] = y[o.name]
         if signals:
-            for key, v in plant.signals(x, ue).items():
+            sig = (plant.signals(x, ue, effect_extra(plant, effect, x, ue, uk, z)[0])
+                   if _at_algebraic_junction(plant, effect) else plant.signals(x, ue))
+            for key, v in sig.items():
                 local.setdefault(key, np.full(n, np.nan))[k] = v
     out["_finite"] = finite
     if signals:

@@ -368,7 +368,9 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     chosen, alternatives = _choose(nominal, fits, floor, evidence, res, exp, train, held,
                                    diverged or judge.kind != "open-loop", sim,
                                    open_loop=((nominal_judged.open_loop, measurement_floor)
-                                              if judge.kind == "segments" else None))
+                                              if judge.kind == "segments" else None),
+                                   held_nominal=(nominal_judged.segments if judge.kind == "segments" and not diverged
+                                                 and _finite_over(res.simulated, n_train) else None))
 
     say("improved model")
     improved_judged = nominal_judged
@@ -426,7 +428,8 @@ def _features(graph, scores, places, train, x0, rv, cands, say, label):
     return evidence, with_feature_starts(kept, evidence), [str(c) for c in pruned]
 
 
-def _choose(reference, fits, floor, evidence, res, exp, train, held, not_open_loop, sim=None, open_loop=None):
+def _choose(reference, fits, floor, evidence, res, exp, train, held, not_open_loop, sim=None, open_loop=None,
+            held_nominal=None):
     """:func:`~diagnosis.fit.choose` on the held-out part; when it answers "none" and the
     held-out part is judged open-loop (`not_open_loop` False: the nominal neither diverges nor
     drifts), the training part's answer among the fits the held-out part cannot judge
@@ -434,7 +437,11 @@ def _choose(reference, fits, floor, evidence, res, exp, train, held, not_open_lo
     the reference model's OutputSimulator, tells an effect at the start from a wrong start state).
     Under the segment judge, `open_loop` (the reference's open-loop held-out NRMSE and the
     measurement noise floor) lets a fit that predicts the held-out part open-loop to about the
-    noise answer instead of "none" (:mod:`diagnosis.open_loop_judge`).
+    noise answer instead of "none" (:mod:`diagnosis.open_loop_judge`), and `held_nominal` (the
+    reference's held-out segment predictions, where its open-loop run over the training part
+    stays finite) lets the training part answer among the fits whose segment predictions are the
+    reference's: a drifting carriage's position sensor that clips at a level only the training part
+    reaches (seed 3535, case 014, answered "none").
 
     Returns ``(chosen, alternatives)``: the fits of other kinds the held-out part cannot tell
     apart from a held-out choice (:func:`diagnosis.alternatives.indistinguishable`; none for an
@@ -446,8 +453,9 @@ def _choose(reference, fits, floor, evidence, res, exp, train, held, not_open_lo
     if not fits:
         return None, []
     n = train.t.size
-    if not not_open_loop:
-        mark_silent(fits, res.simulated, exp.outputs, res.noise, n)
+    by_training = not not_open_loop or held_nominal is not None
+    if by_training:
+        mark_silent(fits, res.simulated, exp.outputs, res.noise, n, held_nominal=held_nominal)
     for f in fits:
         f.y = None
     chosen = choose(reference, fits, noise=floor, evidence=_lookup(evidence), measured=held.outputs)
@@ -457,7 +465,7 @@ def _choose(reference, fits, floor, evidence, res, exp, train, held, not_open_lo
     if chosen is None and open_loop is not None:
         from .open_loop_judge import choose_open_loop
         chosen = choose_open_loop(*open_loop, fits, evidence=_lookup(evidence))
-    if chosen is not None or not_open_loop:
+    if chosen is not None or not by_training:
         return chosen, alternatives
     nominal_train = {o: nrmse(train.outputs[o], res.simulated[o][:n]) for o in exp.outputs}
 
@@ -466,6 +474,11 @@ def _choose(reference, fits, floor, evidence, res, exp, train, held, not_open_lo
 
     return choose_on_training(nominal_train, fits, floor=noise_floor(train, res.noise), n_train=n,
                               restart=restart if sim is not None else None), []
+
+
+def _finite_over(y: dict, n: int) -> bool:
+    """Whether every output of `y` is finite over its first `n` samples."""
+    return all(np.all(np.isfinite(np.asarray(v[:n], float))) for v in y.values())
 
 
 def _lookup(evidence):

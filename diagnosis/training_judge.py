@@ -49,14 +49,17 @@ START_SHARE = 0.05
 
 def holdout_change(y_fit: dict, y_nominal: dict, sigma: dict) -> float:
     """The largest, over outputs, rms difference between two held-out predictions in noise
-    standard deviations (``inf`` when a prediction is missing or not finite)."""
+    standard deviations (``inf`` when a prediction is missing or not finite).  Samples neither
+    prediction scores (NaN in both: a segment judge's start-estimation samples) are left out."""
     worst = 0.0
     for o, ref in y_nominal.items():
         y = y_fit.get(o) if y_fit else None
         if y is None or sigma.get(o, 0.0) <= 0:
             return float("inf")
-        d = np.asarray(y, float) - np.asarray(ref, float)
-        if not np.all(np.isfinite(d)):
+        y, ref = np.asarray(y, float), np.asarray(ref, float)
+        scored = ~(np.isnan(y) & np.isnan(ref))
+        d = y[scored] - ref[scored]
+        if d.size == 0 or not np.all(np.isfinite(d)):
             return float("inf")
         worst = max(worst, float(np.sqrt(np.mean(d ** 2))) / sigma[o])
     return worst
@@ -100,20 +103,27 @@ def restart_evidence(sim, train, nominal_y: dict, sigma: dict) -> float:
     return max(total, 0.0) if np.isfinite(total) else 0.0
 
 
-def mark_silent(fits, nominal_y: dict, measured: dict, sigma: dict, n_train: int) -> None:
+def mark_silent(fits, nominal_y: dict, measured: dict, sigma: dict, n_train: int, held_nominal=None) -> None:
     """Record, on each fit with a prediction (``fit.y``, training then held-out samples), its
     held-out change against the nominal prediction `nominal_y` (same samples) in noise
     standard deviations (``extra["holdout_change"]``) and, for the training part, the drop of
     the noise-weighted sum of squares against the nominal (``extra["train_evidence"]``) and
     the share of it in the first :data:`START_SHARE` of the part (``extra["start_share"]``).
-    The prediction is then dropped (it is large and used nowhere else)."""
+    The prediction is then dropped (it is large and used nowhere else).
+
+    `held_nominal` (under the segment judge): the nominal's held-out prediction as that judge
+    scores it (:attr:`diagnosis.segments.Judged.segments`), compared with each fit's
+    (``extra["holdout_y"]``) instead of the open-loop runs' held-out samples."""
     n_start = start_samples(n_train)
     for fit in fits:
         y = getattr(fit, "y", None)
         if not y:
             continue
-        held = {o: y[o][n_train:] for o in nominal_y}
-        fit.extra["holdout_change"] = holdout_change(held, {o: v[n_train:] for o, v in nominal_y.items()}, sigma)
+        if held_nominal is None:
+            held, reference = {o: y[o][n_train:] for o in nominal_y}, {o: v[n_train:] for o, v in nominal_y.items()}
+        else:
+            held, reference = fit.extra.get("holdout_y"), held_nominal
+        fit.extra["holdout_change"] = holdout_change(held, reference, sigma)
         drop = evidence_drop(y, nominal_y, measured, sigma, n_train)
         total = float(np.sum(drop)) if np.all(np.isfinite(drop)) else float("-inf")
         fit.extra["train_evidence"] = total

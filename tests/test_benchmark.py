@@ -258,6 +258,20 @@ def test_a_friction_the_segment_floor_hides_is_judged_open_loop(tmp_path):
     assert r["parameters"]["b_visc_v_cart"] == pytest.approx(truth, rel=0.01)
 
 
+def test_a_sensor_range_only_the_training_part_reaches_is_judged_there_under_the_segment_judge(tmp_path):
+    """Seed 3535, case 014: the drifting carriage's position sensor reads nothing above -2.13 m,
+    which only the training part reaches; the segment predictions of the held-out part are the
+    nominal's, so the training part judges (diagnosis.training_judge), as under the open-loop judge."""
+    spec = CaseSpec(14, 361030412, "carriage", "saturation", "output", "x", target_change=0.25694204126778714,
+                    ratio=21.468635979323174, excitation="levels")
+    r = run_case(spec, PLANTS, tmp_path, max_effects=1)
+    assert r["judge"] == "segments"
+    assert (r["answer_kind"], r["answer_place"]) == ("saturation", "output x"), r["answers"]
+    lo, hi = r["effect"]["shape"]["lo"], r["effect"]["shape"]["hi"]
+    top = 0.5 * (lo + hi) + r["effect"]["magnitude"] * 0.5 * (hi - lo)
+    assert r["parameters"]["y_max_x"] == pytest.approx(top, abs=0.01)
+
+
 def test_a_muscles_force_law_is_a_door_of_the_pam_truth():
     """Hysteresis may sit at a muscle's force law (the diagnosis's ``law muscle<i>``): only
     hysteresis draws there, so other kinds' draws are unchanged; its place is accepted at the

@@ -84,6 +84,15 @@ def test_holdout_change_in_noise_units():
     assert holdout_change({}, {"x": y}, {"x": 0.01}) == np.inf
 
 
+def test_holdout_change_leaves_out_the_samples_a_segment_judge_does_not_score():
+    # NaN in both predictions: a segment's start-estimation samples; NaN in one only: a run that failed
+    y, skipped = np.zeros(100), np.zeros(100)
+    skipped[:40] = np.nan
+    assert holdout_change({"x": skipped + 0.02}, {"x": skipped}, {"x": 0.01}) == pytest.approx(2.0)
+    assert holdout_change({"x": skipped}, {"x": y}, {"x": 0.01}) == np.inf
+    assert holdout_change({"x": np.full(100, np.nan)}, {"x": np.full(100, np.nan)}, {"x": 0.01}) == np.inf
+
+
 def test_evidence_mostly_at_the_start_must_beat_a_restart():
     floor = {"x": 0.01}
     at_start = _fit(0.02, 0.5, start_share=0.8, evidence=1e4)

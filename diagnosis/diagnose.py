@@ -45,7 +45,8 @@ from plants import load as load_model
 
 from .errors import DiagnosisError
 from .initial_state import start_inconsistent
-from .place_choice import MIN_PLACE_SHARE, actuator_places, companions, located_places, without_companions
+from .place_choice import (MIN_PLACE_SHARE, actuator_places, companions, located_places, on_storage, spring_places,
+                           without_companions)
 from .rounds import JointRefit, Round
 
 __all__ = ["diagnose", "MIN_PLACE_SHARE", "MAX_FIT_SAMPLES"]
@@ -344,8 +345,10 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
 
     # a diverging nominal's candidates take their scales from where it still runs
     cand_part = _before_divergence(train, diverged)
-    cands = [c for p in place_list for c in candidates(graph, p, regime_variables=rv, experiment=cand_part,
-                                                     x0=x0)]
+    springs = spring_places(graph, place_list)      # the storage kinds only (place_choice.spring_places)
+    cands = [c for p in place_list + springs for c in candidates(graph, p, regime_variables=rv, experiment=cand_part,
+                                                                x0=x0) if p not in springs or on_storage(graph, c)]
+    place_list += springs
     # the feature regression runs along the nominal run: none where it diverges
     evidence, cands, pruned = _features(graph, [] if diverged else scores, place_list, train, x0, rv, cands,
                                         say, "feature regression")
@@ -555,10 +558,12 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     places = located_places(without_companions(graph, scores), top)
     by_place = {s.place: s for s in scores}
     places += [by_place[p] for p in actuator_places(graph, [s.place for s in places], train) if p in by_place]
+    springs = [by_place[p] for p in spring_places(graph, [s.place for s in places]) if p in by_place]
+    places += springs
     done = {(c.kind, c.place) for r in rounds if r.chosen is not None and r.chosen.candidate is not None
             for c in getattr(r.chosen.candidate, "members", (r.chosen.candidate,))}
     cands = [c for s in places for c in candidates(graph, s.place, regime_variables=rv, experiment=train, x0=x0)
-             if (c.kind, c.place) not in done]
+             if (c.kind, c.place) not in done and (s not in springs or on_storage(graph, c))]
     evidence, cands, pruned = _features(graph, scores, [s.place for s in places], train, x0, rv, cands, say,
                                         f"{label}: feature regression")
     fit_part, fit_x0 = _fit_window(train, res.run, x0)

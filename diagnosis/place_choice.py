@@ -3,7 +3,9 @@
 Graph location (:mod:`diagnosis.graph_location`) ranks every junction, input and output by the
 share of the residual a correction there explains.  The candidates of the best few are fitted
 (:func:`located_places`), with the places location cannot tell from them: further places that
-explain as much, and the inputs that drive a located junction directly (:func:`actuator_places`).
+explain as much, the inputs that drive a located junction directly (:func:`actuator_places`), and the
+springs that carry a located 0-junction's effort, for the kinds acting on a storage element
+(:func:`spring_places`, :func:`on_storage`).
 A constitutive law acting on a located junction through a lever arm or a gear is that junction's
 companion (:func:`without_companions`, :func:`companions`): the kinds that fit best at the junction
 are fitted at the law too (:func:`companion_candidates`).
@@ -15,8 +17,8 @@ from bondgraph.editing_inputs import expression_fields, mentions
 from .catalogue_common import junction_elements
 from .place import Place
 
-__all__ = ["located_places", "actuator_places", "without_companions", "companions", "companion_candidates",
-           "MIN_PLACE_SHARE", "PLACE_TIE", "COMPANION_KINDS"]
+__all__ = ["located_places", "actuator_places", "spring_places", "on_storage", "without_companions", "companions",
+           "companion_candidates", "MIN_PLACE_SHARE", "PLACE_TIE", "COMPANION_KINDS"]
 
 #: places whose correction explains less than this share of the residual get no candidates
 MIN_PLACE_SHARE = 0.02
@@ -45,6 +47,34 @@ def actuator_places(graph, places, experiment) -> list:
                     have.add(("input", u))
                     out.append(Place("input", u))
     return out
+
+
+def spring_places(graph, places) -> list:
+    """The 1-junctions holding a C element and bonded to a located 0-junction, as junction places
+    not yet in `places`.  A spring in series carries the 0-junction's effort (the torque node
+    between two springs of a drive train): a change of its law (a hardening, a play, an end stop)
+    shows there as a flow correction, and graph location ranks the 0-junctions of a chain of series
+    springs alike, above the springs' own 1-junctions.  Only the kinds that act on the C
+    (:func:`on_storage`) are fitted at these places: seed 3535's exoskeleton, whose interface spring
+    k_eh hardened, located its three torque nodes and the gear spring's junction alike, and the
+    nonlinear stiffness of k_eh was never fitted (case 036)."""
+    have = {(p.kind, p.name) for p in places}
+    out = []
+    for p in places:
+        if p.kind != "junction" or graph.elements[p.name].kind != "0":
+            continue
+        for element, _ in junction_elements(graph, p.name):
+            if (element.kind == "1" and ("junction", element.name) not in have
+                    and any(e.kind == "C" for e, _ in junction_elements(graph, element.name))):
+                have.add(("junction", element.name))
+                out.append(Place("junction", element.name))
+    return out
+
+
+def on_storage(graph, candidate) -> bool:
+    """Whether `candidate` changes a C element's law or content (its target is a C)."""
+    target = getattr(candidate, "target", None)
+    return target is not None and target in graph.elements and graph.elements[target].kind == "C"
 
 
 #: the source kinds that set a junction's common variable: the flow of a 1-, the effort of a 0-junction

@@ -13,7 +13,7 @@ from diagnosis.benchmark.simulate import simulate_truth
 from diagnosis.catalogue import candidates
 from diagnosis.diagnose import diagnose
 from diagnosis.initial_state import _jumps_at_start
-from diagnosis.place_choice import actuator_places, located_places
+from diagnosis.place_choice import actuator_places, located_places, on_storage, spring_places
 from diagnosis.place import Place
 from diagnosis.recording import Experiment
 
@@ -102,6 +102,22 @@ def test_the_inputs_that_drive_a_located_junction_join_it():
     assert actuator_places(hydraulic, [Place("junction", "p1")], SimpleNamespace(inputs={"Q_p": None})) == \
         [Place("input", "Q_p")]
     assert actuator_places(hydraulic, [Place("junction", "p2")], SimpleNamespace(inputs={"Q_p": None})) == []
+
+
+def test_the_springs_that_carry_a_located_torque_node_join_it_for_the_storage_kinds():
+    """The exoskeleton's three torque nodes are located alike (a flow at any of them explains the
+    same): the series springs' 1-junctions they carry join, with only the kinds that act on the
+    spring (seed 3535, case 036: the interface spring k_eh hardened, and its nonlinear stiffness
+    was never fitted)."""
+    exo = library.build("exoskeleton")
+    located = [Place("junction", n) for n in ("tau_g", "tau_s_j", "tau_eh", "dw_g")]
+    assert spring_places(exo, located) == [Place("junction", "dw_s"), Place("junction", "dw_eh"),
+                                           Place("junction", "w_h_j")]
+    assert spring_places(exo, [Place("junction", "dw_g"), Place("input", "w_h")]) == []
+    assert spring_places(library.build("mass-spring-damper"), [Place("junction", "v_mass")]) == []
+    kinds = {c.kind for c in candidates(exo, Place("junction", "dw_eh")) if on_storage(exo, c)}
+    assert kinds == {"nonlinear_stiffness", "backlash"}      # an end stop needs the recording's content range
+    assert {c.target for c in candidates(exo, Place("junction", "dw_eh")) if on_storage(exo, c)} == {"k_eh"}
 
 
 def test_a_source_that_sets_a_neighbouring_junctions_common_variable_drives_the_located_one():

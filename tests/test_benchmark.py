@@ -303,6 +303,29 @@ def test_a_muscles_force_law_is_a_door_of_the_pam_truth():
     assert np.max(np.abs(law_run - nominal)) > 0.05          # deg: the braid friction shows
 
 
+def test_a_stiff_effect_on_the_pam_truth_keeps_its_friction_held_per_quarter_millisecond():
+    """A sharp friction at the seesaw makes the pam truth stiffer than its 4 sub-steps per sample
+    resolve: finer RK4 steps nest inside them, and the Kikuuwe friction (Z = h / J) stays held
+    over 0.25 ms, the plant's discrete law, not over the finer steps (seed 3535, case 019)."""
+    from dataclasses import replace
+    plant = PLANTS["pam"]()
+    calls = []
+
+    def counted(x, u, extra, h):
+        calls.append(h)
+        return plant.hold(x, u, extra, h)
+
+    counting = replace(plant, hold=counted)
+    t = np.arange(0.0, 0.02, 1.0 / plant.rate)
+    u = {i.name: np.full(t.size, 0.5 * (i.low + i.high)) for i in plant.inputs}
+    sharp = make_effect("coulomb_friction", plant, "junction", "seesaw", 0.01, {}, {"eps": 1e-4, "sign": 1.0})
+    out = simulate_truth(counting, t, u, sharp)
+    assert out["_finite"]
+    during = calls[1:]          # the first call sizes the steps at the start state
+    assert len(during) == (t.size - 1) * plant.substeps
+    assert np.allclose(during, 1.0 / plant.rate / plant.substeps, rtol=1e-12)
+
+
 def test_an_lsoda_truth_that_crawls_counts_as_a_failed_run(monkeypatch):
     """A sample that takes more right-hand-side evaluations than the budget ends the run as
     non-finite (the calibration then tries a smaller effect) instead of running for hours."""

@@ -29,7 +29,8 @@ MAX_EVALS_PER_SAMPLE = 20_000
 
 #: h |lambda_max| an RK4 sub-step of a truth may take (its stability limit is 2.8; 1 keeps it accurate)
 RK4_REACH = 1.0
-#: most RK4 sub-steps per sample of a truth with held variables, which cannot go to LSODA
+#: most RK4 steps per sample of a truth with held variables, which cannot go to LSODA (nested in
+#: its declared sub-steps, over each of which the held values stay those of its start)
 MAX_SUBSTEPS = 64
 
 
@@ -185,7 +186,7 @@ def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None, *, x0
     states = np.full((n, s0.size), np.nan)
     states[0] = s0
     finite = True
-    method, substeps = plant.method, plant.substeps
+    method, substeps, inner = plant.method, plant.substeps, 1
     if method == "rk4" and n > 1:
         u0, dt = {name: u[name][0] for name in names}, float(t[1] - t[0])
         held0 = held_at(s0, u0, dt / substeps)
@@ -194,19 +195,26 @@ def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None, *, x0
             # the effect made the plant stiffer than its sub-steps resolve (a sharp friction on
             # a light junction): its RK4 run would chatter where the law is steep, an artefact
             # that no model of the physics reproduces (seed 1212, case 036)
-            method, substeps = ("lsoda", substeps) if plant.hold is None else ("rk4", min(needed, MAX_SUBSTEPS))
+            # a discrete law's interval is the plant's (the pam's Kikuuwe friction, Z = h / J, is held
+            # per 0.25 ms): finer RK4 steps nest inside it, the held values computed once per interval
+            if plant.hold is None:
+                method = "lsoda"
+            else:
+                inner = min(-(-needed // substeps), max(MAX_SUBSTEPS // substeps, 1))
     if method == "rk4":
         s = s0.copy()
         for k in range(n - 1):
             uk = {name: u[name][k] for name in names}
             h = (t[k + 1] - t[k]) / substeps
+            g = h / inner
             for _ in range(substeps):
                 held = held_at(s, uk, h)
-                k1 = f(s, uk, held)
-                k2 = f(s + 0.5 * h * k1, uk, held)
-                k3 = f(s + 0.5 * h * k2, uk, held)
-                k4 = f(s + h * k3, uk, held)
-                s = s + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+                for _ in range(inner):
+                    k1 = f(s, uk, held)
+                    k2 = f(s + 0.5 * g * k1, uk, held)
+                    k3 = f(s + 0.5 * g * k2, uk, held)
+                    k4 = f(s + g * k3, uk, held)
+                    s = s + g / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
             if not np.all(np.isfinite(s)):
                 finite = False
                 break

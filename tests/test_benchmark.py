@@ -326,6 +326,16 @@ def test_a_stiff_effect_on_the_pam_truth_keeps_its_friction_held_per_quarter_mil
     assert np.allclose(during, 1.0 / plant.rate / plant.substeps, rtol=1e-12)
 
 
+def test_an_output_the_case_leaves_constant_is_not_bound(tmp_path):
+    """Seed 2727, case 021: the pneumatic cylinder's load cell reads one value throughout (its
+    pressure held, a null case): a user binds only what varies, and the diagnosis, which refuses a
+    constant output, runs on the rest."""
+    spec = CaseSpec(21, 1535409183, "pneumatic-cylinder", "none", "", "", target_change=0.0, ratio=0.0,
+                    excitation="prbs", noise_share=0.0137447782733697)
+    r = run_case(spec, PLANTS, tmp_path)
+    assert r["error"] == "" and r["answer_kind"] == "none" and r["kind_ok"]
+
+
 def test_an_lsoda_truth_that_crawls_counts_as_a_failed_run(monkeypatch):
     """A sample that takes more right-hand-side evaluations than the budget ends the run as
     non-finite (the calibration then tries a smaller effect) instead of running for hours."""

@@ -47,8 +47,9 @@ class Score:
     error: str = ""
 
 
-def write_csv(rec: Realised, path: Path, rng) -> None:
-    """The recording as a user would have it: commands as sent, outputs with noise and resolution."""
+def write_csv(rec: Realised, path: Path, rng) -> list[str]:
+    """The recording as a user would have it: commands as sent, outputs with noise and resolution.
+    Returns the outputs whose written column is constant (a user would not bind them)."""
     cols = {"t": [f"{v:.6f}" for v in rec.t]}
     for spec in rec.plant.inputs:
         cols[spec.name] = [f"{v:.10g}" for v in rec.u[spec.name]]
@@ -61,12 +62,13 @@ def write_csv(rec: Realised, path: Path, rng) -> None:
     names = list(cols)
     lines = [",".join(names)] + [",".join(row) for row in zip(*(cols[c] for c in names))]
     path.write_text("\n".join(lines) + "\n")
+    return [o.name for o in rec.plant.outputs if len(set(cols[o.name])) == 1]
 
 
-def bindings(rec: Realised) -> tuple[list[str], list[str]]:
-    """``NAME=COLUMN:UNIT`` bindings of the inputs and the measured outputs."""
+def bindings(rec: Realised, constant=()) -> tuple[list[str], list[str]]:
+    """``NAME=COLUMN:UNIT`` bindings of the inputs and the measured outputs but the `constant` ones."""
     return ([f"{i.name}={i.name}:{i.unit}" for i in rec.plant.inputs],
-            [f"{o.name}={o.name}:{o.unit}" for o in rec.plant.outputs])
+            [f"{o.name}={o.name}:{o.unit}" for o in rec.plant.outputs if o.name not in constant])
 
 
 def score_case(rec: Realised, report) -> Score:
@@ -108,9 +110,12 @@ def run_case(spec: CaseSpec, plants: dict, workdir: Path, *, max_effects: int = 
     except Exception as exc:   # a generator failure is the benchmark's, reported, not scored
         return {"label": spec.label, "generator_error": f"{type(exc).__name__}: {exc}"}
     path = Path(workdir) / f"{spec.label}.csv"
-    write_csv(rec, path, np.random.default_rng(spec.seed + 1))
+    constant = write_csv(rec, path, np.random.default_rng(spec.seed + 1))
+    if len(constant) == len(rec.plant.outputs):
+        return {"label": spec.label, "generator_error": f"every output is constant in the recording ({constant})"}
     t1 = time.perf_counter()
-    ins, outs = bindings(rec)
+    # a user binds the outputs that were measured varying (the diagnosis refuses a constant one)
+    ins, outs = bindings(rec, constant)
     try:
         # the recording starts where the plant rests, which a user states (diagnose's x0)
         report = diagnose(plant.model, str(path), inputs=ins, outputs=outs, max_effects=max_effects,

@@ -179,3 +179,39 @@ def test_a_noisy_recording_keeps_the_step_rule():
     sim, noise = _coarse_step(sigma=0.01)                    # the step rule's error is under 0.1 sigma
     exp, rule = settle_substeps(sim, None, noise)
     assert exp is sim.experiment and exp.substeps == 1 and rule == 1
+
+
+def test_a_stiff_law_on_a_held_variable_model_nests_finer_steps_in_the_held_laws_interval():
+    """The pam joint with a Coulomb friction at the seesaw sharp at 0.1 mrad/s (|lambda| h about
+    6 at its 0.25 ms steps, past RK4's stability): the diagnosis's simulator nests finer RK4 steps
+    in each 0.25 ms interval of the Kikuuwe friction (Z = h / J stays the plant's) and follows the
+    benchmark's hand-written truth with the same friction (seed 3535, case 019: before, the
+    catalogue's Stribeck law at the truth's own values was 32 noise sigmas of tau off it)."""
+    from diagnosis.benchmark.effects import make_effect
+    from diagnosis.benchmark.plants import PLANTS
+    from diagnosis.benchmark.simulate import simulate_truth
+    from diagnosis.catalogue import candidates
+    from diagnosis.place import Place
+
+    plant = PLANTS["pam"]()
+    t = np.arange(0.0, 0.6, 1.0 / plant.rate)
+    u = {"u1": np.where(t < 0.3, 8.0, 2.0), "u2": np.where(t < 0.3, 2.0, 8.5)}
+    level, eps = 0.01, 1e-4
+    truth = simulate_truth(plant, t, u, make_effect("coulomb_friction", plant, "junction", "seesaw", level, {},
+                                                    {"eps": eps, "sign": 1.0}))
+    graph = library.build(plant.model)
+    exp = Experiment(t, u, {o.name: truth[o.name] for o in plant.outputs},
+                     {"u1": "V", "u2": "V", **{o.name: o.unit for o in plant.outputs}})
+    cand = next(c for c in candidates(graph, Place("junction", "seesaw")) if c.kind == "coulomb_friction")
+    fc, v_eps = (p.name for p in cand.params)
+    sim = OutputSimulator(cand.build(graph, {fc: level, v_eps: eps}), exp)
+    run = sim.run(None, plant.nominal_x0)
+    assert run.substeps > 4                 # RK4 steps per 1 ms sample: finer than the law's 0.25 ms
+    y = run.outputs
+    for o in ("psi", "tau"):
+        spread = float(np.ptp(truth[o]))
+        assert np.max(np.abs(y[o] - truth[o])) < 0.02 * spread, o
+    # the numpy backend's bc_rk4_every (its reference) gives the same numbers on the first 10 ms
+    short = exp.window(0.0, 0.01)
+    slow = OutputSimulator(cand.build(graph, {fc: level, v_eps: eps}), short, backend="numpy")(x0=plant.nominal_x0)
+    np.testing.assert_allclose(slow["psi"], y["psi"][:short.t.size], rtol=1e-9, atol=1e-9)

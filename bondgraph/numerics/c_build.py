@@ -273,3 +273,7 @@ class CLibrary:
             self.rk4.argtypes = [i, dbl, dbl, i, vp, vp, i, vp, vp, vp, vp, i, vp]
             self.rk4.restype = ctypes.c_int
             self.kernels.append("rk4")
+        if hasattr(self._dll, "bc_rk4_every"):
+            self.rk4_every = self._dll.bc_rk4_every
+            self.rk4_every.argtypes = [i, dbl, dbl, i, i, vp, vp, i, vp, vp, vp, vp, i, vp]
+            self.rk4_every.restype = ctypes.c_int

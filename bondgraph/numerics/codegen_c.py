@@ -61,6 +61,9 @@ runs ``m`` classic RK4 sub-steps of length ``h`` from ``t0``; at each sub-step
 start ``d = held_update(t, x, u, z, d, p, h)``; ``z`` is solved at every
 stage (from the last solution, then from ``zinit`` if that fails).  Returns
 the number of rows stopped by a Newton failure (their ``status``).
+``bc_rk4_every(n, t0, h, m, every, <the rest as bc_rk4>)`` updates the held
+values only at every ``every``-th sub-step start, over ``every h``: finer RK4
+steps nested in a discrete law's interval (``bc_rk4`` is it with ``every = 1``).
 
 Code shape
 ----------
@@ -99,7 +102,7 @@ PARTS = {
 _ROW_ARGS = ("double t, const double *x, const double *u, const double *z, "
              "const double *d, const double *p, double step")
 _ROW_CALL = "t, x, u, z, d, p, step"
-GENERATOR_VERSION = "bondcosim-codegen-c 2"
+GENERATOR_VERSION = "bondcosim-codegen-c 3"   # 3: bc_rk4_every
 
 
 class _Printer(C99CodePrinter):

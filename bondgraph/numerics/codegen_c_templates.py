@@ -180,7 +180,9 @@ def newton_source(dims: dict) -> list[str]:
 
 def rk4_source(dims: dict) -> list[str]:
     """C lines of ``bc_rk4``: m classic RK4 sub-steps of length h per row, u constant,
-    held values updated at each sub-step start, z solved at every stage.
+    held values updated at each sub-step start, z solved at every stage; and of
+    ``bc_rk4_every``, which updates them only at every `every`-th sub-step start, over
+    ``every h`` (finer steps nested in a discrete law's interval).
 
     Where the including code defines ``BC_STAGE_CHECK(t, x, u, z, d, p)`` (the FMU core
     does, over the model's guards), the states of stages 2-4 are checked with it: a
@@ -219,14 +221,14 @@ def rk4_source(dims: dict) -> list[str]:
         return solve(tt, xx, "      ") + check + [f"      f_row({tt}, {xx}, ui, zi, di, pi, 0.0, {k});"]
 
     lines = [
-        "int bc_rk4(int n, double t0, double h, int m, double *x, const double *u, int su,",
-        "           double *z, const double *zinit, double *d, const double *p, int sp,",
-        "           int *status) {",
+        "int bc_rk4_every(int n, double t0, double h, int m, int every, double *x, const double *u, int su,",
+        "                 double *z, const double *zinit, double *d, const double *p, int sp,",
+        "                 int *status) {",
         f"  double *w = (double *)malloc(sizeof(double) * ({5 * nx + nd} + 1));",
         "  if (!w) return -1;",
         f"  double *k1 = w, *k2 = w + {nx}, *k3 = w + {2 * nx}, *k4 = w + {3 * nx};",
         f"  double *xt = w + {4 * nx}, *dn = w + {5 * nx};",
-        "  (void)zinit; (void)dn;",
+        "  (void)zinit; (void)dn; (void)every;",
         "  int bad = 0;",
         "  for (int i = 0; i < n; ++i) {",
         f"    double *xi = x + (size_t)i * {nx}, *zi = z + (size_t)i * {nz}, *di = d + (size_t)i * {nd};",
@@ -236,9 +238,11 @@ def rk4_source(dims: dict) -> list[str]:
         "      double t = t0 + j * h;",
     ]
     if nd:
+        lines += ["      if (j % every == 0) {"]
         lines += solve("t", "xi", "      ")
-        lines += ["      held_update_row(t, xi, ui, zi, di, pi, h, dn);",
-                  f"      for (int q = 0; q < {nd}; ++q) di[q] = dn[q];"]
+        lines += ["      held_update_row(t, xi, ui, zi, di, pi, h * every, dn);",
+                  f"      for (int q = 0; q < {nd}; ++q) di[q] = dn[q];",
+                  "      }"]
     lines += stage("k1", "t", "xi")
     lines += [f"      for (int q = 0; q < {nx}; ++q) xt[q] = xi[q] + 0.5 * h * k1[q];"]
     lines += stage("k2", "t + 0.5 * h", "xt")
@@ -255,6 +259,11 @@ def rk4_source(dims: dict) -> list[str]:
         "  }",
         "  free(w);",
         "  return bad;",
+        "}",
+        "int bc_rk4(int n, double t0, double h, int m, double *x, const double *u, int su,",
+        "           double *z, const double *zinit, double *d, const double *p, int sp,",
+        "           int *status) {",
+        "  return bc_rk4_every(n, t0, h, m, 1, x, u, su, z, zinit, d, p, sp, status);",
         "}",
     ]
     return lines

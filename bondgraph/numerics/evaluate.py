@@ -331,32 +331,34 @@ class CompiledModel:
         self._k.call(name, t, x, u, z, d, p, step, out)
         return out
 
-    def _rk4(self, t0, h, m, x, u, p, d):
+    def _rk4(self, t0, h, m, x, u, p, d, every=1):
         """`m` classic RK4 sub-steps of `h` s from `t0` (inputs held), updating the
         normalised arrays x (n, n_states) and d (n, n_held) in place; held values
-        are replaced by ``held_update`` at each sub-step start (see ``bc_rk4``)."""
+        are replaced by ``held_update`` at each sub-step start (see ``bc_rk4``), or at every
+        `every`-th, over ``every h`` (``bc_rk4_every``)."""
         n, nz = x.shape[0], len(self.algebraic_names)
         warm = self._z_warm.get(n)
         z = warm.copy() if warm is not None else np.tile(self.initial_guess, (n, 1))
         status = self._k.rk4(float(t0), float(h), int(m), x, u, z,
-                             np.ascontiguousarray(self.initial_guess), d, p)
+                             np.ascontiguousarray(self.initial_guess), d, p, *(() if every == 1 else (int(every),)))
         if status.any():
             self._raise_newton(status, np.array([t0]), x)
         if nz:
             self._z_warm[n] = z
 
-    def rk4_samples(self, t, U, substeps, x, d, p):
+    def rk4_samples(self, t, U, substeps, x, d, p, every=1):
         """RK4 over every sample interval of `t`, inputs held per interval, a batch at once.
 
         The loop of :meth:`rk4_step` over a whole recording without its per-call
         argument checks (:mod:`bondgraph.numerics.evaluate_samples`): `x`, `d` are
         C-contiguous ``(n_batch, n)`` arrays, overwritten with the final values;
-        `U` has one input row per sample; `substeps` one entry per interval;
+        `U` has one input row per sample; `substeps` one entry per interval (multiples of
+        `every`: the held values are updated at every `every`-th sub-step, over that many);
         `p` is ``(1 or n_batch, n_params)``.  Returns ``X`` ``(n_t, n_batch,
         n_states)`` and ``D`` ``(n_t, n_batch, n_held)``.
         """
         from .evaluate_samples import rk4_samples
-        return rk4_samples(self, t, U, substeps, x, d, p)
+        return rk4_samples(self, t, U, substeps, x, d, p, every=every)
 
     def rk4_step(self, x, u=None, *, t0=0.0, h, substeps=1, p=None, d=None):
         """`substeps` classic RK4 sub-steps of `h` s from `t0`, inputs held: one sample.

@@ -80,12 +80,13 @@ class NumpyKernels:
     def solve(self, t, x, u, z, d, p):
         return _newton_numpy(self, t, x, u, z, d, p)
 
-    def rk4(self, t0, h, m, x, u, z, zinit, d, p):
-        return _rk4_python(self, t0, h, m, x, u, z, zinit, d, p)
+    def rk4(self, t0, h, m, x, u, z, zinit, d, p, every=1):
+        return _rk4_python(self, t0, h, m, x, u, z, zinit, d, p, every)
 
 
-def _rk4_python(kern, t0, h, m, x, u, z, zinit, d, p):
-    """The C ``bc_rk4`` in numpy: m RK4 sub-steps, x, z, d updated in place.
+def _rk4_python(kern, t0, h, m, x, u, z, zinit, d, p, every=1):
+    """The C ``bc_rk4_every`` in numpy: m RK4 sub-steps, x, z, d updated in place, the held
+    values at every `every`-th sub-step start (over ``every h``).
     Stops at the first Newton failure and returns the status of every row."""
     n, nx = x.shape
     has_z, has_d = z.shape[1] > 0, d.shape[1] > 0
@@ -107,12 +108,12 @@ def _rk4_python(kern, t0, h, m, x, u, z, zinit, d, p):
 
     for j in range(m):
         t = np.array([t0 + j * h])
-        if has_d:
+        if has_d and j % every == 0:
             status = solve(t, x) if has_z else None
             if status is not None and status.any():
                 return status
             dn = np.empty_like(d)
-            kern.call("held_update", t, x, u, z, d, p, h, dn)
+            kern.call("held_update", t, x, u, z, d, p, h * every, dn)
             d[...] = dn
         for i, (c, a) in enumerate(((0.0, 0.0), (0.5, 0.5), (0.5, 0.5), (1.0, 1.0))):
             xx = x if i == 0 else np.ascontiguousarray(x + (a * h) * k[i - 1])

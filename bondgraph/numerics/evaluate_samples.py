@@ -25,7 +25,7 @@ def _c_function(model):
     return getattr(main, "rk4", None) if model.backend == "c" else None
 
 
-def rk4_samples(model, t, U, subs, x, d, p, *, use_driver: bool = True):
+def rk4_samples(model, t, U, subs, x, d, p, *, use_driver: bool = True, every: int = 1):
     """Integrate a batch over the sample intervals of `t`.
 
     Parameters
@@ -47,6 +47,10 @@ def rk4_samples(model, t, U, subs, x, d, p, *, use_driver: bool = True):
         On the C backend, loop over the samples in C
         (:mod:`bondgraph.numerics.evaluate_samples_c`) when a compiler is found; False: the
         Python loop (the same calls; kept as the reference and the fallback).
+    every : int
+        Held values are updated at every `every`-th sub-step start, over ``every`` sub-steps
+        (a discrete law's interval with finer RK4 steps nested in it; ``bc_rk4_every``); the
+        Python loop then runs.
 
     Returns
     -------
@@ -68,9 +72,9 @@ def rk4_samples(model, t, U, subs, x, d, p, *, use_driver: bool = True):
     ms = np.asarray(subs, dtype=int).tolist()
     ts = t.tolist()
     rk4 = _c_function(model)
-    if rk4 is None:
+    if rk4 is None or every != 1:
         for k in range(t.size - 1):
-            model._rk4(ts[k], hs[k], ms[k], x, U[k:k + 1], p, d)
+            model._rk4(ts[k], hs[k], ms[k], x, U[k:k + 1], p, d, every)
             X[k + 1], D[k + 1] = x, d
         return X, D
     U = np.ascontiguousarray(U, dtype=float)

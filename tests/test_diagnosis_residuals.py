@@ -87,15 +87,17 @@ def test_c_sample_loop_equals_the_python_loop_bit_for_bit(pam_run):
     if m.backend != "c" or sample_driver() is None:
         pytest.skip("no C compiler")
     P = np.vstack([m.param_vector(q) for q in (None, {"J": 1.3 * graph.equations().param_values["J"]})])
-    subs = np.full(exp.t.size - 1, 4)
-    out = []
-    for use_driver in (False, True):
-        x, d = np.tile(m.default_state, (2, 1)), np.tile(m.default_held, (2, 1))
-        X, D = rk4_samples(m, sim.t, sim.U, subs, x, d, np.ascontiguousarray(P), use_driver=use_driver)
-        out.append((X, D, x, d))
-    for a, b in zip(*out):
-        assert np.array_equal(a, b)
-    assert np.ptp(out[1][0][:, 0, -1]) > 0.01   # the joint moves
+    for every in (1, 2):          # bc_rk4 and bc_rk4_every (8 steps, friction held over 2 of them)
+        subs = np.full(exp.t.size - 1, 4 * every)
+        out = []
+        for use_driver in (False, True):
+            x, d = np.tile(m.default_state, (2, 1)), np.tile(m.default_held, (2, 1))
+            X, D = rk4_samples(m, sim.t, sim.U, subs, x, d, np.ascontiguousarray(P), use_driver=use_driver,
+                               every=every)
+            out.append((X, D, x, d))
+        for a, b in zip(*out):
+            assert np.array_equal(a, b)
+        assert np.ptp(out[1][0][:, 0, -1]) > 0.01   # the joint moves
 
 
 def test_nrmse_definition():

@@ -19,10 +19,10 @@ from .evaluate_samples_c import run_samples, sample_driver
 __all__ = ["rk4_samples"]
 
 
-def _c_function(model):
+def _c_function(model, every: int = 1):
     kernels = getattr(model, "_k", None)
     main = getattr(kernels, "_main", None)
-    return getattr(main, "rk4", None) if model.backend == "c" else None
+    return getattr(main, "rk4" if every == 1 else "rk4_every", None) if model.backend == "c" else None
 
 
 def rk4_samples(model, t, U, subs, x, d, p, *, use_driver: bool = True, every: int = 1):
@@ -49,8 +49,7 @@ def rk4_samples(model, t, U, subs, x, d, p, *, use_driver: bool = True, every: i
         Python loop (the same calls; kept as the reference and the fallback).
     every : int
         Held values are updated at every `every`-th sub-step start, over ``every`` sub-steps
-        (a discrete law's interval with finer RK4 steps nested in it; ``bc_rk4_every``); the
-        Python loop then runs.
+        (a discrete law's interval with finer RK4 steps nested in it; ``bc_rk4_every``).
 
     Returns
     -------
@@ -71,8 +70,8 @@ def rk4_samples(model, t, U, subs, x, d, p, *, use_driver: bool = True, every: i
     hs = hs_arr.tolist()
     ms = np.asarray(subs, dtype=int).tolist()
     ts = t.tolist()
-    rk4 = _c_function(model)
-    if rk4 is None or every != 1:
+    rk4 = _c_function(model, every)
+    if rk4 is None:
         for k in range(t.size - 1):
             model._rk4(ts[k], hs[k], ms[k], x, U[k:k + 1], p, d, every)
             X[k + 1], D[k + 1] = x, d
@@ -86,20 +85,22 @@ def rk4_samples(model, t, U, subs, x, d, p, *, use_driver: bool = True, every: i
     ua, row = U.ctypes.data, U.shape[1] * U.itemsize
     sp = 0 if p.shape[0] == 1 and n != 1 else p.shape[1]
     check = bool(model.algebraic_names)
-    driver = sample_driver() if use_driver else None
+    driver = sample_driver(every) if use_driver else None
     if driver is not None:
         # the same bc_rk4 calls from a C loop (bit for bit the loop below, without ~3 us of
         # Python per sample)
         k = run_samples(driver, rk4, np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(hs_arr),
-                        np.ascontiguousarray(subs, dtype=np.intc), U, x, z, zinit, d, p, sp, status, check, X, D)
+                        np.ascontiguousarray(subs, dtype=np.intc), U, x, z, zinit, d, p, sp, status, check, X, D,
+                        every)
         if k < 0:
             raise MemoryError("bc_rk4: out of memory")
         if k < t.size - 1:
             model._raise_newton(status, np.array([ts[k]]), x)
         return X, D
+    nest = () if every == 1 else (int(every),)
     for k in range(t.size - 1):
         # u stride 0: every batch row sees the recorded input row k
-        if rk4(n, ts[k], hs[k], ms[k], xa, ua + k * row, 0, za, zia, da, pa, sp, sa) < 0:
+        if rk4(n, ts[k], hs[k], ms[k], *nest, xa, ua + k * row, 0, za, zia, da, pa, sp, sa) < 0:
             raise MemoryError("bc_rk4: out of memory")
         if check and status.any():
             model._raise_newton(status, np.array([ts[k]]), x)

@@ -48,22 +48,52 @@ int bc_rk4_samples(void *fn, int n, int nt, const double *t, const double *hs, c
   }
   return nt - 1;
 }
+
+typedef int (*bc_rk4_every_fn)(int n, double t0, double h, int m, int every, double *x, const double *u,
+                               int su, double *z, const double *zinit, double *d, const double *p, int sp,
+                               int *status);
+
+/* The same loop over bc_rk4_every (held values updated at every every-th sub-step). */
+int bc_rk4_every_samples(void *fn, int every, int n, int nt, const double *t, const double *hs, const int *ms,
+                         const double *U, int nu, double *x, int nx, double *z, const double *zinit,
+                         double *d, int nd, const double *p, int sp, int *status, int check,
+                         double *X, double *D) {
+  bc_rk4_every_fn rk4 = (bc_rk4_every_fn)fn;
+  size_t xs = (size_t)n * nx, ds = (size_t)n * nd;
+  for (int k = 0; k < nt - 1; ++k) {
+    if (rk4(n, t[k], hs[k], ms[k], every, x, U + (size_t)k * nu, 0, z, zinit, d, p, sp, status) < 0)
+      return -1;
+    if (check) {
+      int bad = 0;
+      for (int i = 0; i < n; ++i) bad |= status[i];
+      if (bad) return k;
+    }
+    memcpy(X + (size_t)(k + 1) * xs, x, sizeof(double) * xs);
+    memcpy(D + (size_t)(k + 1) * ds, d, sizeof(double) * ds);
+  }
+  return nt - 1;
+}
 """
 
 
-def sample_driver():
-    """The compiled ``bc_rk4_samples`` (ctypes function), or None without a C compiler."""
+def sample_driver(every: int = 1):
+    """The compiled ``bc_rk4_samples`` (``bc_rk4_every_samples`` when `every` > 1; ctypes
+    function), or None without a C compiler."""
     from .c_build import driver_function
     vp, i = ctypes.c_void_p, ctypes.c_int
-    return driver_function(DRIVER_SOURCE, "bc_rk4_samples",
-                           [vp, i, i, vp, vp, vp, vp, i, vp, i, vp, vp, vp, i, vp, i, vp, i, vp, vp], i)
+    args = [vp, i, i, vp, vp, vp, vp, i, vp, i, vp, vp, vp, i, vp, i, vp, i, vp, vp]
+    if every != 1:
+        return driver_function(DRIVER_SOURCE, "bc_rk4_every_samples", [vp, i] + args[1:], i)
+    return driver_function(DRIVER_SOURCE, "bc_rk4_samples", args, i)
 
 
-def run_samples(driver, rk4, t, hs, ms, U, x, z, zinit, d, p, sp, status, check, X, D) -> int:
-    """Call `driver` on C-contiguous float64 arrays (int32 `ms`, `status`); its return value."""
+def run_samples(driver, rk4, t, hs, ms, U, x, z, zinit, d, p, sp, status, check, X, D, every: int = 1) -> int:
+    """Call `driver` (of :func:`sample_driver` with the same `every`) on C-contiguous float64
+    arrays (int32 `ms`, `status`); its return value."""
     ptr = ctypes.cast(rk4, ctypes.c_void_p).value
     n, nx = x.shape
     nd = d.shape[1]
-    return driver(ptr, n, t.size, t.ctypes.data, hs.ctypes.data, ms.ctypes.data, U.ctypes.data, U.shape[1],
+    head = (ptr,) if every == 1 else (ptr, int(every))
+    return driver(*head, n, t.size, t.ctypes.data, hs.ctypes.data, ms.ctypes.data, U.ctypes.data, U.shape[1],
                   x.ctypes.data, nx, z.ctypes.data, zinit.ctypes.data, d.ctypes.data, nd, p.ctypes.data, sp,
                   status.ctypes.data, int(check), X.ctypes.data, D.ctypes.data)

@@ -22,36 +22,38 @@ DRIVER_SOURCE = r"""
 typedef int (*bc_rk4_fn)(int n, double t0, double h, int m, double *x, const double *u, int su,
                          double *z, const double *zinit, double *d, const double *p, int sp,
                          int *status);
+typedef int (*bc_rk4_every_fn)(int n, double t0, double h, int m, int every, double *x, const double *u,
+                               int su, double *z, const double *zinit, double *d, const double *p, int sp,
+                               int *status);
 
-/* The loop over the nt - 1 sample intervals of t: bc_rk4 on interval k with the inputs of
+/* The loop over the nt - 1 sample intervals of t: one call on interval k with the inputs of
    row k (shared by the n batch rows: stride 0), then the states and held values copied
    into row k + 1 of X (nt, n, nx) and D (nt, n, nd).  Returns nt - 1 when every interval
-   was integrated, -1 when bc_rk4 ran out of memory, or the index k of the interval after
+   was integrated, -1 when the call ran out of memory, or the index k of the interval after
    which, with check set, some status is nonzero (a Newton failure; x, d are then as
-   bc_rk4 left them). */
+   the call left them).  CALL_ is bc_rk4's argument list, or bc_rk4_every's. */
+#define SAMPLE_LOOP(CALL_)                                                          \
+  size_t xs = (size_t)n * nx, ds = (size_t)n * nd;                                  \
+  for (int k = 0; k < nt - 1; ++k) {                                                \
+    const double *uk = U + (size_t)k * nu;                                          \
+    if (CALL_ < 0) return -1;                                                       \
+    if (check) {                                                                    \
+      int bad = 0;                                                                  \
+      for (int i = 0; i < n; ++i) bad |= status[i];                                 \
+      if (bad) return k;                                                            \
+    }                                                                               \
+    memcpy(X + (size_t)(k + 1) * xs, x, sizeof(double) * xs);                       \
+    memcpy(D + (size_t)(k + 1) * ds, d, sizeof(double) * ds);                       \
+  }                                                                                 \
+  return nt - 1;
+
 int bc_rk4_samples(void *fn, int n, int nt, const double *t, const double *hs, const int *ms,
                    const double *U, int nu, double *x, int nx, double *z, const double *zinit,
                    double *d, int nd, const double *p, int sp, int *status, int check,
                    double *X, double *D) {
   bc_rk4_fn rk4 = (bc_rk4_fn)fn;
-  size_t xs = (size_t)n * nx, ds = (size_t)n * nd;
-  for (int k = 0; k < nt - 1; ++k) {
-    if (rk4(n, t[k], hs[k], ms[k], x, U + (size_t)k * nu, 0, z, zinit, d, p, sp, status) < 0)
-      return -1;
-    if (check) {
-      int bad = 0;
-      for (int i = 0; i < n; ++i) bad |= status[i];
-      if (bad) return k;
-    }
-    memcpy(X + (size_t)(k + 1) * xs, x, sizeof(double) * xs);
-    memcpy(D + (size_t)(k + 1) * ds, d, sizeof(double) * ds);
-  }
-  return nt - 1;
+  SAMPLE_LOOP(rk4(n, t[k], hs[k], ms[k], x, uk, 0, z, zinit, d, p, sp, status))
 }
-
-typedef int (*bc_rk4_every_fn)(int n, double t0, double h, int m, int every, double *x, const double *u,
-                               int su, double *z, const double *zinit, double *d, const double *p, int sp,
-                               int *status);
 
 /* The same loop over bc_rk4_every (held values updated at every every-th sub-step). */
 int bc_rk4_every_samples(void *fn, int every, int n, int nt, const double *t, const double *hs, const int *ms,
@@ -59,19 +61,7 @@ int bc_rk4_every_samples(void *fn, int every, int n, int nt, const double *t, co
                          double *d, int nd, const double *p, int sp, int *status, int check,
                          double *X, double *D) {
   bc_rk4_every_fn rk4 = (bc_rk4_every_fn)fn;
-  size_t xs = (size_t)n * nx, ds = (size_t)n * nd;
-  for (int k = 0; k < nt - 1; ++k) {
-    if (rk4(n, t[k], hs[k], ms[k], every, x, U + (size_t)k * nu, 0, z, zinit, d, p, sp, status) < 0)
-      return -1;
-    if (check) {
-      int bad = 0;
-      for (int i = 0; i < n; ++i) bad |= status[i];
-      if (bad) return k;
-    }
-    memcpy(X + (size_t)(k + 1) * xs, x, sizeof(double) * xs);
-    memcpy(D + (size_t)(k + 1) * ds, d, sizeof(double) * ds);
-  }
-  return nt - 1;
+  SAMPLE_LOOP(rk4(n, t[k], hs[k], ms[k], every, x, uk, 0, z, zinit, d, p, sp, status))
 }
 """
 

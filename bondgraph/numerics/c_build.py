@@ -268,12 +268,8 @@ class CLibrary:
             fn.restype = ctypes.c_int if name == "solve" else None
             setattr(self, name, fn)
             self.kernels.append(name)
-        if hasattr(self._dll, "bc_rk4"):
-            self.rk4 = self._dll.bc_rk4
-            self.rk4.argtypes = [i, dbl, dbl, i, vp, vp, i, vp, vp, vp, vp, i, vp]
+        if hasattr(self._dll, "bc_rk4_every"):   # bc_rk4 (the FMU's entry) is it with every = 1
+            self.rk4 = self._dll.bc_rk4_every
+            self.rk4.argtypes = [i, dbl, dbl, i, i, vp, vp, i, vp, vp, vp, vp, i, vp]
             self.rk4.restype = ctypes.c_int
             self.kernels.append("rk4")
-        if hasattr(self._dll, "bc_rk4_every"):
-            self.rk4_every = self._dll.bc_rk4_every
-            self.rk4_every.argtypes = [i, dbl, dbl, i, i, vp, vp, i, vp, vp, vp, vp, i, vp]
-            self.rk4_every.restype = ctypes.c_int

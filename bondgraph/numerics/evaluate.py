@@ -340,7 +340,7 @@ class CompiledModel:
         warm = self._z_warm.get(n)
         z = warm.copy() if warm is not None else np.tile(self.initial_guess, (n, 1))
         status = self._k.rk4(float(t0), float(h), int(m), x, u, z,
-                             np.ascontiguousarray(self.initial_guess), d, p, *(() if every == 1 else (int(every),)))
+                             np.ascontiguousarray(self.initial_guess), d, p, int(every))
         if status.any():
             self._raise_newton(status, np.array([t0]), x)
         if nz:

@@ -77,10 +77,7 @@ class CKernels:
     def rk4(self, t0, h, m, x, u, z, zinit, d, p, every=1):
         n = x.shape[0]
         status = np.zeros(n, dtype=np.intc)
-        tail = (x.ctypes.data, u.ctypes.data, _stride(u, n), z.ctypes.data, zinit.ctypes.data, d.ctypes.data,
-                p.ctypes.data, _stride(p, n), status.ctypes.data)
-        done = (self._main.rk4(n, t0, h, m, *tail) if every == 1
-                else self._main.rk4_every(n, t0, h, m, int(every), *tail))
-        if done < 0:
+        if self._main.rk4(n, t0, h, m, int(every), x.ctypes.data, u.ctypes.data, _stride(u, n), z.ctypes.data,
+                          zinit.ctypes.data, d.ctypes.data, p.ctypes.data, _stride(p, n), status.ctypes.data) < 0:
             raise MemoryError("bc_rk4: out of memory")
         return status

@@ -19,10 +19,10 @@ from .evaluate_samples_c import run_samples, sample_driver
 __all__ = ["rk4_samples"]
 
 
-def _c_function(model, every: int = 1):
+def _c_function(model):
     kernels = getattr(model, "_k", None)
     main = getattr(kernels, "_main", None)
-    return getattr(main, "rk4" if every == 1 else "rk4_every", None) if model.backend == "c" else None
+    return getattr(main, "rk4", None) if model.backend == "c" else None
 
 
 def rk4_samples(model, t, U, subs, x, d, p, *, use_driver: bool = True, every: int = 1):
@@ -70,7 +70,7 @@ def rk4_samples(model, t, U, subs, x, d, p, *, use_driver: bool = True, every: i
     hs = hs_arr.tolist()
     ms = np.asarray(subs, dtype=int).tolist()
     ts = t.tolist()
-    rk4 = _c_function(model, every)
+    rk4 = _c_function(model)
     if rk4 is None:
         for k in range(t.size - 1):
             model._rk4(ts[k], hs[k], ms[k], x, U[k:k + 1], p, d, every)
@@ -85,7 +85,7 @@ def rk4_samples(model, t, U, subs, x, d, p, *, use_driver: bool = True, every: i
     ua, row = U.ctypes.data, U.shape[1] * U.itemsize
     sp = 0 if p.shape[0] == 1 and n != 1 else p.shape[1]
     check = bool(model.algebraic_names)
-    driver = sample_driver(every) if use_driver else None
+    driver = sample_driver() if use_driver else None
     if driver is not None:
         # the same bc_rk4 calls from a C loop (bit for bit the loop below, without ~3 us of
         # Python per sample)
@@ -97,10 +97,9 @@ def rk4_samples(model, t, U, subs, x, d, p, *, use_driver: bool = True, every: i
         if k < t.size - 1:
             model._raise_newton(status, np.array([ts[k]]), x)
         return X, D
-    nest = () if every == 1 else (int(every),)
     for k in range(t.size - 1):
         # u stride 0: every batch row sees the recorded input row k
-        if rk4(n, ts[k], hs[k], ms[k], *nest, xa, ua + k * row, 0, za, zia, da, pa, sp, sa) < 0:
+        if rk4(n, ts[k], hs[k], ms[k], every, xa, ua + k * row, 0, za, zia, da, pa, sp, sa) < 0:
             raise MemoryError("bc_rk4: out of memory")
         if check and status.any():
             model._raise_newton(status, np.array([ts[k]]), x)

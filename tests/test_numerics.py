@@ -269,3 +269,33 @@ def test_compiler_errors_carry_output_and_cache_is_reused(tmp_path):
     second = c_build.compile_source(src)
     assert first == second and second.stat().st_mtime_ns == mtime
     assert first.parent == c_build.cache_dir()
+
+
+def test_equations_key_is_the_same_in_any_process_and_tells_equations_apart():
+    """The lookup key of shipped libraries: the same for an equal but separately derived model, in
+    a process with another string-hash seed, and different when one constant or one symbol's
+    assumptions change."""
+    import os
+    import subprocess
+    import sys
+
+    from plants import library
+
+    eqs = library.build("pam").equations()
+    key = c_build.equations_key(eqs, "main")
+    assert key == c_build.equations_key(library.build("pam").equations(), "main")
+    assert key != c_build.equations_key(eqs, "jacobian")
+    code = ("from plants import library; from bondgraph.numerics import c_build; "
+            "print(c_build.equations_key(library.build('pam').equations(), 'main'))")
+    for seed in ("0", "12345"):
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                             env={**os.environ, "PYTHONHASHSEED": seed})
+        assert out.stdout.strip() == key
+    from dataclasses import replace
+
+    sink = kitchen_sink()
+    changed = replace(sink, f=(sink.f[0] + sp.Rational(1, 3),) + tuple(sink.f[1:]))
+    x = sink.states[0]
+    unreal = replace(sink, f=tuple(e.xreplace({x: sp.Symbol(x.name)}) for e in sink.f))
+    keys = {c_build.equations_key(e, "main") for e in (sink, changed, unreal)}
+    assert len(keys) == 3

@@ -376,13 +376,22 @@ def _delayed(u, t, tau):
 def _responses(lin, rows, blocks) -> dict:
     """Linearised responses of several blocks ``key -> (channel, sequences (n, m))`` in one pass
     along the run (the propagation loop over the samples dominates; its cost hardly grows with m):
-    ``key -> (rows, ny, m)``."""
+    ``key -> (rows, ny, m)``.  A sequences array shared by several blocks (the junctions' hat
+    basis) is passed once."""
     if not blocks:
         return {}
     keys = list(blocks)
+    bases, offset = [], {}
+    for k in keys:
+        seq = blocks[k][1]
+        if id(seq) not in offset:
+            offset[id(seq)] = sum(b.shape[1] for b in bases)
+            bases.append(seq)
     widths = [blocks[k][1].shape[1] for k in keys]
     channel = np.concatenate([np.full(w, blocks[k][0]) for k, w in zip(keys, widths)])
-    resp = lin.response(channel, np.concatenate([blocks[k][1] for k in keys], axis=1), rows)
+    columns = np.concatenate([offset[id(blocks[k][1])] + np.arange(w) for k, w in zip(keys, widths)])
+    base = bases[0] if len(bases) == 1 else np.concatenate(bases, axis=1)
+    resp = lin.response(channel, base, rows, columns)
     edges = np.cumsum([0] + widths)
     return {k: resp[:, :, a:b] for k, a, b in zip(keys, edges[:-1], edges[1:])}
 

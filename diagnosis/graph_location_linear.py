@@ -110,25 +110,43 @@ class LinearisedResponse:
         clean = lambda a: np.nan_to_num(a, nan=0.0, posinf=0.0, neginf=0.0)   # noqa: E731
         return clean((fp - fm) / (2 * delta)), clean((hp - hm) / (2 * delta))
 
-    def response(self, channel, sequences, rows):
+    def response(self, channel, sequences, rows, columns=None):
         """Output responses to perturbation sequences.
 
         Parameters
         ----------
         channel : ndarray of int, shape (m,)
             For each sequence, the index (in ``inputs``) of the input it perturbs.
-        sequences : ndarray, shape (n, m)
+        sequences : ndarray, shape (n, m) or (n, m_base)
             Perturbation of that input at each sample time (held over the interval).
         rows : ndarray of int, shape (n_rows,)
             Sample indices at which the responses are kept (increasing).
+        columns : ndarray of int, shape (m,), optional
+            Sequence c is ``sequences[:, columns[c]]`` (a basis shared by several inputs is
+            passed once); default ``0 .. m - 1``.
 
         Returns
         -------
         ndarray, shape (n_rows, n_outputs, m)
             :math:`\\delta y` at the kept samples, for each sequence.
         """
+        from .errors import DiagnosisError
+        from .graph_location_linear_c import propagate
+
         channel = np.asarray(channel, dtype=int)
         seq = np.asarray(sequences, dtype=float)
+        columns = np.arange(seq.shape[1]) if columns is None else np.asarray(columns, dtype=int)
+        rows = np.asarray(rows, dtype=int)
+        n = seq.shape[0]
+        if channel.shape != columns.shape:
+            raise DiagnosisError(f"one channel per sequence: {channel.size} channels, {columns.size} sequences")
+        if rows.size and (np.any(np.diff(rows) <= 0) or rows[0] < 0 or rows[-1] >= n):
+            raise DiagnosisError(f"rows must be increasing sample indices below {n}")
+        out = propagate(self.Phi, self.Gamma, self.C, self.D, channel, seq, columns, rows)
+        return out if out is not None else self._response_numpy(channel, seq[:, columns], rows)
+
+    def _response_numpy(self, channel, seq, rows):
+        """:meth:`response`'s loop in numpy (no C compiler)."""
         n, m = seq.shape
         ny, nx = len(self.output_names), self.n_states
         out = np.empty((len(rows), ny, m))

@@ -307,17 +307,27 @@ class _Context:
 
     def simulate_with(self, column: str, values) -> dict | None:
         """Outputs with input `column` replaced by `values` (None if the simulation fails)."""
-        from diagnosis.errors import BondcosimError
+        return self.simulate_each(column, [values])[0]
 
-        j = self.sim.model.input_index[column]
-        saved = self.sim.U[:, j].copy()
-        self.sim.U[:, j] = values
-        try:
-            return self.sim.run(None, self.x0).outputs
-        except (BondcosimError, FloatingPointError, np.linalg.LinAlgError):
-            return None
-        finally:
-            self.sim.U[:, j] = saved
+    def simulate_each(self, column: str, candidates) -> list:
+        """:meth:`simulate_with` for each of `candidates`, on as many threads as there are
+        cores (:func:`bondgraph.numerics.threads.worker_threads`; the C loop releases the GIL)."""
+        from concurrent.futures import ThreadPoolExecutor
+
+        from bondgraph.numerics.threads import worker_threads
+
+        def one(values):
+            from diagnosis.errors import BondcosimError
+            try:
+                return self.sim.with_input(column, values).run(None, self.x0).outputs
+            except (BondcosimError, FloatingPointError, np.linalg.LinAlgError):
+                return None
+
+        workers = min(len(candidates), worker_threads())
+        if workers <= 1:
+            return [one(v) for v in candidates]
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            return list(pool.map(one, candidates))
 
 
 #: quantiles of the simulated output at which a sensor's range may begin (hinges of the correction)
@@ -487,9 +497,9 @@ def _score_junction(ctx, place, d_input, hats, resp, graph) -> PlaceScore:
     best = PlaceScore(place, 0.0, np.zeros_like(ctx.t), unit, place.bond, 0.0)
     if not np.isfinite(resp).all():        # a linearisation that diverged: no estimate here
         return best
-    for theta, dof in _smooth_fits(resp, ctx.r_rows, ctx.w):
-        estimate = hats @ theta
-        simulated = ctx.simulate_with(d_input, estimate)
+    fits = _smooth_fits(resp, ctx.r_rows, ctx.w)
+    estimates = [hats @ theta for theta, _ in fits]
+    for (theta, dof), estimate, simulated in zip(fits, estimates, ctx.simulate_each(d_input, estimates)):
         e1 = ctx.energy(simulated) if simulated is not None else np.inf
         score = ctx.share(e1, dof)
         if score > best.explained or best.dof == 0.0:

@@ -24,6 +24,7 @@ NRMSE (the package's shared definition): :math:`\\mathrm{rms}(y - \\hat y) /
 """
 from __future__ import annotations
 
+import copy
 import numbers
 from dataclasses import dataclass
 
@@ -193,6 +194,24 @@ class OutputSimulator:
         other.t = np.ascontiguousarray(experiment.t, dtype=float)
         other.U = input_matrix(self.equations, other.t, experiment.inputs)
         other._dt = np.diff(other.t)
+        return other
+
+    def with_input(self, column: str, values) -> "OutputSimulator":
+        """The same compiled model and experiment with input `column` replaced by `values` (one
+        per sample, model units); this simulator is unchanged, so several can run at once.
+
+        Raises
+        ------
+        UnknownNameError
+            `column` is not an input of the model.
+        """
+        from diagnosis.errors import UnknownNameError
+
+        if column not in self.model.input_index:
+            raise UnknownNameError("input", column, self.model.input_names, self.equations.name)
+        other = copy.copy(self)
+        other.U = self.U.copy()
+        other.U[:, self.model.input_index[column]] = values
         return other
 
     def initial_state(self, x0=None) -> np.ndarray:

@@ -324,6 +324,13 @@ def run_chunk(runner, runs) -> list:
         ``started`` (s since the epoch), ``duration_s`` (s), ``worker``
         (``host:pid``), ``param.NAME`` and ``metric.NAME`` (or ``output.NAME``) columns.
     """
+    from bondgraph.numerics.threads import limited
+
+    with limited(1):            # a worker has one core; the compiled loops must not share it out
+        return _run_each(runner, runs)
+
+
+def _run_each(runner, runs) -> list:
     worker = f"{socket.gethostname()}:{os.getpid()}"
     rows = []
     for run in runs:

@@ -1,8 +1,15 @@
+import os
+
 import matplotlib
 import pytest
 from hypothesis import settings
 
 matplotlib.use("Agg")
+
+# pytest-xdist runs one worker per core already: the compiled loops stay on one thread there
+# (bondgraph.numerics.threads; tests of the threaded paths set their own count)
+if os.environ.get("PYTEST_XDIST_WORKER"):
+    os.environ.setdefault("BONDCOSIM_THREADS", "1")
 
 settings.register_profile("bondcosim", deadline=None, max_examples=25, derandomize=True)
 settings.load_profile("bondcosim")

@@ -118,6 +118,21 @@ def test_extra_effort_at_one_junction_ranks_first_and_follows_truth():
     assert np.sqrt(np.mean((best.estimate - d_true) ** 2)) < 0.1    # N, against a 0.3 N friction
 
 
+def test_scores_do_not_depend_on_the_threads(monkeypatch):
+    """The junctions' candidate estimates are simulated on several threads
+    (_Context.simulate_each): the same scores and estimates, to the last bit, as on one."""
+    truth = _msd_with_friction()
+    t = np.arange(0.0, 10.0, 0.01)
+    exp, _ = _record(truth, t, {"F": _msd_force(t)}, ["x", "v"], {"x": 2e-3, "v": 5e-3})
+    runs = []
+    for threads in ("1", "2"):
+        monkeypatch.setenv("BONDCOSIM_THREADS", threads)
+        runs.append(locate_on_graph(library.build("mass-spring-damper"), exp))
+    for one, two in zip(*runs):
+        assert str(one.place) == str(two.place) and one.explained == two.explained
+        assert np.array_equal(one.estimate, two.estimate)
+
+
 def test_extra_flow_at_a_zero_junction_ranks_first():
     """A linear leak out of tank 2 (0-junction P2) of the coupled tanks."""
     truth = library.build("coupled-tanks")

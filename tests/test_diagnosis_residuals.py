@@ -76,9 +76,11 @@ def test_batch_and_numpy_backend_agree(pam_run):
     np.testing.assert_allclose(slow, batch[0].outputs["psi"][:short.t.size], rtol=1e-9, atol=1e-9)
 
 
-def test_c_sample_loop_equals_the_python_loop_bit_for_bit(pam_run):
+def test_c_sample_loop_equals_the_python_loop_bit_for_bit(pam_run, monkeypatch):
     """The C driver of evaluate_samples_c makes the same bc_rk4 calls as the Python loop: equal
-    states and held values to the last bit, for a batch with different parameters."""
+    states and held values to the last bit, for a batch with different parameters, and also
+    when the batch's rows are shared out to three threads (one row each)."""
+    from bondgraph.numerics import evaluate_samples
     from bondgraph.numerics.evaluate_samples import rk4_samples
     from bondgraph.numerics.evaluate_samples_c import sample_driver
     exp, graph = pam_run
@@ -86,18 +88,27 @@ def test_c_sample_loop_equals_the_python_loop_bit_for_bit(pam_run):
     m = sim.model
     if m.backend != "c" or sample_driver() is None:
         pytest.skip("no C compiler")
-    P = np.vstack([m.param_vector(q) for q in (None, {"J": 1.3 * graph.equations().param_values["J"]})])
+    J = graph.equations().param_values["J"]
+    P = np.vstack([m.param_vector(q) for q in (None, {"J": 1.3 * J}, {"J": 0.8 * J})])
+    monkeypatch.setattr(evaluate_samples, "_THREAD_WORK", 0)
+    threads_used = []
+    real = evaluate_samples._threaded
+    monkeypatch.setattr(evaluate_samples, "_threaded",
+                        lambda args, chunks, *a: threads_used.append(len(chunks)) or real(args, chunks, *a))
     for every in (1, 2):          # bc_rk4 and bc_rk4_every (8 steps, friction held over 2 of them)
         subs = np.full(exp.t.size - 1, 4 * every)
         out = []
-        for use_driver in (False, True):
-            x, d = np.tile(m.default_state, (2, 1)), np.tile(m.default_held, (2, 1))
+        for use_driver, threads in ((False, "1"), (True, "1"), (True, "3")):
+            monkeypatch.setenv("BONDCOSIM_THREADS", threads)
+            x, d = np.tile(m.default_state, (3, 1)), np.tile(m.default_held, (3, 1))
             X, D = rk4_samples(m, sim.t, sim.U, subs, x, d, np.ascontiguousarray(P), use_driver=use_driver,
                                every=every)
             out.append((X, D, x, d))
-        for a, b in zip(*out):
-            assert np.array_equal(a, b)
+        for ref, other in ((out[0], out[1]), (out[0], out[2])):
+            for a, b in zip(ref, other):
+                assert np.array_equal(a, b)
         assert np.ptp(out[1][0][:, 0, -1]) > 0.01   # the joint moves
+    assert threads_used == [3, 3]
 
 
 def test_nrmse_definition():

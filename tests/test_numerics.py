@@ -223,6 +223,30 @@ def test_unsolvable_loop_names_the_unknown(backend):
 
 
 @needs_cc
+def test_threaded_sample_loop_reports_a_failed_loop_as_one_call(monkeypatch):
+    """A Newton failure in one thread's rows: the batch is run again in one call, so the error
+    names the batch's rows and time as it would without threads."""
+    from bondgraph.numerics import evaluate_samples
+
+    t, x, z = R("t"), R("x"), R("zhard")
+    # z^3 + z = x has one real root for every x; the loop fails where x is NaN (rows 3, 4)
+    eqs = StateEquations(name="hard", t=t, states=(x,), inputs=(), params=(), outputs=(),
+                         f=(-z,), h=(), algebraic=(z,), residuals=(z**3 + z - x,))
+    model = compile_model(eqs, backend="c")
+    times = np.linspace(0.0, 1.0, 11)
+    messages = []
+    for threads in ("1", "2"):
+        monkeypatch.setenv("BONDCOSIM_THREADS", threads)
+        monkeypatch.setattr(evaluate_samples, "_THREAD_WORK", 0)
+        x0 = np.array([[1.0], [2.0], [0.5], [np.nan], [np.nan]])
+        d0 = np.zeros((5, 0))
+        with pytest.raises(SimulationError, match="hard") as info:
+            model.rk4_samples(times, np.zeros((11, 0)), np.full(10, 2), x0, d0, np.zeros((1, 0)))
+        messages.append(str(info.value))
+    assert messages[0] == messages[1] and "row(s) 3, 4" in messages[0]
+
+
+@needs_cc
 def test_backends_take_the_same_newton_path():
     eqs = loop_model()
     mc, mn = compile_model(eqs, backend="c"), compile_model(eqs, backend="numpy")

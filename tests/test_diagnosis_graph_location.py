@@ -238,6 +238,44 @@ def test_lag_filter_matches_the_exact_recursion_uniform_and_uneven():
         np.testing.assert_allclose(_lagged(u, t, 0.01), ref, rtol=0, atol=1e-12)
 
 
+def test_delayed_input_is_the_interval_mean_of_the_late_held_input():
+    """_delayed against a brute-force mean of u(t - tau) on 2 000 points per interval (u held
+    from each sample, u[0] before the start): whole-sample and fractional delays, uniform and
+    uneven sampling."""
+    from diagnosis.graph_location import _delayed
+    rng = np.random.default_rng(RNG_SEED)
+    for t in (np.arange(60) * 0.01, np.cumsum(rng.uniform(0.005, 0.015, 60))):
+        u = rng.uniform(-1.0, 1.0, t.size)
+        for tau in (0.004, 0.01, 0.025, 0.3):
+            ref = np.empty_like(u)
+            for k in range(t.size - 1):
+                s = np.linspace(t[k], t[k + 1], 2001)[:-1] + 0.5 * (t[k + 1] - t[k]) / 2000 - tau
+                j = np.clip(np.searchsorted(t, s, side="right") - 1, 0, None)
+                ref[k] = np.mean(u[j])
+            got = _delayed(u, t, tau)
+            np.testing.assert_allclose(got[:-1], ref[:-1], rtol=0, atol=2e-3)
+        whole = _delayed(u, np.arange(60) * 0.01, 0.03) if t[1] == 0.01 else None
+        if whole is not None:
+            np.testing.assert_allclose(whole[3:-1], u[:-4], atol=1e-12)
+
+
+def test_a_delay_shorter_than_a_sample_is_located_at_its_input():
+    """A force acting 4 ms late on the mass-spring-damper, recorded at 100 Hz: only a fraction of
+    each 10 ms interval moves to the previous command, which whole-sample delays cannot say."""
+    truth = library.build("mass-spring-damper")
+    fine = np.arange(0.0, 20.0, 0.001)
+    steps = np.repeat(np.random.default_rng(RNG_SEED).uniform(-5.0, 5.0, 2000), 10)      # held 10 ms
+    late = np.concatenate([np.full(4, steps[0]), steps[:-4]])
+    exp = Experiment(fine, {"F": late}, {"v": np.zeros_like(fine)}, {}, "truth")
+    v = OutputSimulator(truth, exp, outputs=["v"])()["v"][::10]
+    t = fine[::10]
+    noisy = v + 2e-4 * np.random.default_rng(RNG_SEED + 1).standard_normal(t.size)
+    scores = locate_on_graph(library.build("mass-spring-damper"),
+                             Experiment(t, {"F": steps[::10]}, {"v": noisy}, {}, "truth"))
+    assert (scores[0].place.kind, scores[0].place.name) == ("input", "F")
+    assert scores[0].explained > 0.8
+
+
 def test_hat_basis_equals_interpolated_unit_vectors():
     """_hat_basis column j = np.interp(t, knots, e_j); rows sum to 1."""
     from diagnosis.graph_location import _hat_basis

@@ -55,6 +55,11 @@ def test_jump_at_start_is_an_intercept_beyond_four_standard_errors():
     assert not _jumps_at_start(noise + 0.05 * k ** 2, 1.0)       # grows from zero: a missing effort
     assert _jumps_at_start(noise + 8.0, 1.0)                      # starts elsewhere: a wrong state
     assert not _jumps_at_start(noise, 1.0)
+    # a load from rest on a fast mode (a 17.5-sample period) rings from zero within the window: the
+    # quadratic cannot follow it, and the first sample says no jump; a wrong state still jumps there
+    ring = 5.0 * np.sin(2 * np.pi * k / 17.5) * (1.0 - np.exp(-k / 3.0))
+    assert not _jumps_at_start(noise + ring, 1.0)
+    assert _jumps_at_start(noise + 8.0 + ring, 1.0)
 
 
 def _score(name, explained):

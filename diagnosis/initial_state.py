@@ -236,6 +236,10 @@ def start_inconsistent(res, diverged, n_train) -> bool:
 #: Samples at the start of the recording on which the residual's initial value is estimated.
 START_SAMPLES = 20
 
+#: RMS misfit of the quadratic, in noise standard deviations, beyond which the residual's start is
+#: too rough for it (white noise alone leaves about 0.9)
+_ROUGH = 2.0
+
 
 def _jumps_at_start(residual, sigma: float) -> bool:
     """Whether `residual` starts away from zero: the intercept of a quadratic least-squares fit
@@ -255,7 +259,3 @@ def _jumps_at_start(residual, sigma: float) -> bool:
     se = sigma * float(np.sqrt(np.linalg.inv(basis.T @ basis)[0, 0]))
     return abs(float(coef[0])) > 4.0 * se
 
-
-#: RMS misfit of the quadratic, in noise standard deviations, beyond which the residual's start is
-#: too rough for it (white noise alone leaves about 0.9)
-_ROUGH = 2.0

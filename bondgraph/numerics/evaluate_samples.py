@@ -127,7 +127,7 @@ def _row_chunks(n: int, nt: int) -> list:
 def _threaded(args, chunks, x, z, zinit, d, p, sp, check, X, D, every) -> bool:
     """Rows `chunks` of the batch integrated by one thread each (the C loop releases the GIL;
     rows never interact, so the numbers are those of one call).  True when every chunk ran to
-    the end; False, with `x` and `d` untouched, when one did not (a Newton failure or no memory:
+    the end; False, with `x`, `z` and `d` untouched, when one did not (a Newton failure or no memory:
     the caller runs the whole batch again to report it as one call would)."""
     from concurrent.futures import ThreadPoolExecutor
 

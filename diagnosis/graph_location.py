@@ -244,7 +244,7 @@ def locate_on_graph(model, experiment, *, places=None, progress=False, x0=None,
         # corrections act from its start.  On the window they would start from the nominal's
         # state there, which a junction's free effort corrects in its first knots and an input's
         # lag cannot (seed 5858, case 012: a 5 ms valve lag's input explained 15 % of the window,
-        # 75 % of the record)
+        # 76 % of the record)
         places, junctions = [p for p in places if p.kind != "junction"], []
     else:
         windowed = []
@@ -324,9 +324,9 @@ class _Context:
         from concurrent.futures import ThreadPoolExecutor
 
         from bondgraph.numerics.threads import worker_threads
+        from diagnosis.errors import BondcosimError
 
         def one(values):
-            from diagnosis.errors import BondcosimError
             try:
                 return self.sim.with_input(column, values).run(None, self.x0).outputs
             except (BondcosimError, FloatingPointError, np.linalg.LinAlgError):

@@ -134,13 +134,11 @@ def _threaded(args, chunks, x, z, zinit, d, p, sp, check, X, D, every) -> bool:
     nt = X.shape[0]
     parts = []
     for a, b in chunks:
-        rows = slice(a, b)
-        parts.append((np.ascontiguousarray(x[rows]), np.ascontiguousarray(z[rows]),
-                      np.ascontiguousarray(d[rows]), p if sp == 0 else np.ascontiguousarray(p[rows]),
-                      np.zeros(b - a, dtype=np.intc), np.empty((nt, b - a, x.shape[1])),
-                      np.empty((nt, b - a, d.shape[1]))))
-    for part in parts:
-        part[5][0], part[6][0] = part[0], part[2]
+        xc, zc, dc = (np.ascontiguousarray(v[a:b]) for v in (x, z, d))
+        pc = p if sp == 0 else np.ascontiguousarray(p[a:b])
+        Xc, Dc = np.empty((nt, *xc.shape)), np.empty((nt, *dc.shape))
+        Xc[0], Dc[0] = xc, dc
+        parts.append((xc, zc, dc, pc, np.zeros(b - a, dtype=np.intc), Xc, Dc))
 
     def one(part):
         xc, zc, dc, pc, sc, Xc, Dc = part

@@ -1,7 +1,8 @@
 """The sample loop of :func:`bondgraph.numerics.evaluate_samples.rk4_samples` in C.
 
 A model's ``bc_rk4_every`` (``bc_rk4`` of the C contract of :mod:`bondgraph.numerics.codegen_c`
-with the held values updated at every `every`-th sub-step) integrates one sample interval; called from Python once per sample, the call and the copies of the states
+with the held values updated at every `every`-th sub-step) integrates one sample interval;
+called from Python once per sample, the call and the copies of the states
 into the result cost about 3 us per sample on pam, more than the integration itself (about
 2 us for 4 RK4 sub-steps).  This driver makes the same calls, with the same arguments in the
 same order, from a C loop: the numbers are bit for bit those of the Python loop (tested in

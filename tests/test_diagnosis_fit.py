@@ -276,6 +276,23 @@ def test_a_sensor_clipped_on_both_sides_is_a_sensor_range(msd):
     assert max(fit.holdout_nrmse.values()) < 1e-3
 
 
+def test_a_sensor_range_ends_beyond_every_recorded_sample_but_the_noise(msd):
+    """A sensor reads nothing beyond its range but its noise, so a fitted range may not cut into
+    the recorded span: each limit may lie at most 6 noise standard deviations inside the recorded
+    extreme.  (A drifting model otherwise had a limit clip values the sensor did read, where the
+    drift left the data: seed 6868, case 042.)"""
+    rng = np.random.default_rng(3)
+    y = OutputSimulator(msd, Experiment(T, {"F": F}, {"x": T, "v": T}, UNITS))()
+    sigma = 0.01 * np.std(y["x"])
+    y["x"] = y["x"] + sigma * rng.standard_normal(T.size)
+    train, _ = Experiment(T, {"F": F}, y, UNITS).split(0.3)
+    low, high = _candidate(msd, Place("output", "x"), "saturation", train).params
+    recorded = train.outputs["x"]
+    assert recorded.min() + 5 * sigma < low.upper < recorded.min() + 7 * sigma
+    assert recorded.max() - 7 * sigma < high.lower < recorded.max() - 5 * sigma
+    assert low.lower < recorded.min() and high.upper > recorded.max()
+
+
 def test_a_soft_end_stop_is_recovered_with_its_stiffness(msd):
     """A rubber bumper engaging at x = 0.3 m, half as stiff as the spring: the fitted end stop has
     its position and its stiffness (a wall's fixed stiffness could not stand for it).  A rigid

@@ -124,14 +124,22 @@ class _StateProblem:
     """The weighted least squares of the module docstring on one window: residual vector of
     the scaled state offset ``theta`` (``x = prior + theta * scale``)."""
 
-    def __init__(self, w_sim, y, noise, prior, scale, params=None):
+    def __init__(self, w_sim, y, noise, prior, scale, params=None, free=None):
         self.sim, self.y, self.prior, self.scale, self.params = w_sim, y, prior, scale, params
+        # the states fitted (a mask); the others stay at the prior
+        self.free = np.ones(len(prior), dtype=bool) if free is None else np.asarray(free, dtype=bool)
         self.outputs = list(y)
         self.sig = {o: max(float(noise.get(o, 0.0)), 1e-9 * (float(np.std(v)) or 1.0)) for o, v in y.items()}
         self.size = len(next(iter(y.values()))) if y else 0
 
+    def state(self, theta) -> np.ndarray:
+        """The state of the free states' scaled offset `theta`."""
+        x = self.prior.copy()
+        x[self.free] += theta * self.scale[self.free]
+        return x
+
     def __call__(self, theta):
-        x = self.prior + theta * self.scale
+        x = self.state(theta)
         try:
             out = self.sim.run(self.params, x).outputs
         except BondcosimError:
@@ -142,7 +150,11 @@ class _StateProblem:
     def solve(self, with_jacobian=False):
         """``(state, cost)``, cost the weighted sum of squares; ``(None, inf)`` when it fails;
         with `with_jacobian` also the residual's Jacobian in the scaled offset (None on failure)."""
-        n = len(self.prior)
+        n = int(self.free.sum())
+        if not n:
+            r = self(np.zeros(0))
+            out = (self.prior.copy(), float(r @ r))
+            return out + (np.zeros((r.size, 0)),) if with_jacobian else out
         try:
             fit = least_squares(self, np.zeros(n), method="trf", x_scale=1.0, max_nfev=20 * n + 20,
                                 xtol=1e-6, ftol=1e-6)
@@ -150,11 +162,11 @@ class _StateProblem:
             fit = None
         if fit is None or not np.all(np.isfinite(fit.x)):
             return (None, np.inf, None) if with_jacobian else (None, np.inf)
-        out = (self.prior + fit.x * self.scale, 2.0 * float(fit.cost))
+        out = (self.state(fit.x), 2.0 * float(fit.cost))
         return out + (np.asarray(fit.jac, dtype=float),) if with_jacobian else out
 
 
-def fit_state(w_sim, y: dict, noise: dict, prior, scale=None, *, params=None, covariance=False):
+def fit_state(w_sim, y: dict, noise: dict, prior, scale=None, *, params=None, covariance=False, kept=()):
     """The state at the first sample of a window, fitted to its measured outputs.
 
     The same noise-weighted least squares with a weak pull towards `prior` as
@@ -179,6 +191,8 @@ def fit_state(w_sim, y: dict, noise: dict, prior, scale=None, *, params=None, co
         Also return the covariance of the estimate (SI), the Gauss-Newton
         :math:`S (J^T J)^{-1} S` at the solution (:math:`J` the noise-weighted residual's Jacobian,
         :math:`S` the diagonal of `scale`): what the measurement noise leaves uncertain.
+    kept : sequence of int
+        Indices of states not fitted: they stay at `prior` (their variance is 0).
 
     Returns
     -------
@@ -192,14 +206,17 @@ def fit_state(w_sim, y: dict, noise: dict, prior, scale=None, *, params=None, co
     if scale is None:
         scale = np.where(np.abs(prior) > 0, np.abs(prior), 1.0)
     scale = np.asarray(scale, dtype=float)
-    problem = _StateProblem(w_sim, y, noise, prior, scale, params)
+    free = np.ones(prior.size, dtype=bool)
+    free[list(kept)] = False
+    problem = _StateProblem(w_sim, y, noise, prior, scale, params, free)
     if not covariance:
         return problem.solve()[0]
     x, _, jac = problem.solve(with_jacobian=True)
     if x is None:
         return None, None
-    cov = np.linalg.pinv(jac.T @ jac)
-    return x, cov * np.outer(scale, scale)
+    cov = np.zeros((prior.size, prior.size))
+    cov[np.ix_(free, free)] = np.linalg.pinv(jac.T @ jac) * np.outer(scale[free], scale[free])
+    return x, cov
 
 
 def start_inconsistent(res, diverged, n_train) -> bool:

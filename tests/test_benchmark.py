@@ -272,6 +272,19 @@ def test_a_sensor_range_only_the_training_part_reaches_is_judged_there_under_the
     assert r["parameters"]["y_max_x"] == pytest.approx(top, abs=0.01)
 
 
+def test_an_input_saturation_is_not_read_as_a_slow_lag_restarted_by_the_segment_judge(tmp_path):
+    """Seed 4747, case 077: the drifting carriage's force is clipped above -1.5 N.  The segment
+    judge fitted a 3.5 s valve lag's state afresh at every restart, a free force per segment, and
+    the lag beat the saturation held out though its training error was 300 times larger.  The lag's
+    state now follows the command through the restarts (diagnosis.segments.input_driven_states)."""
+    spec = CaseSpec(77, 731321742, "carriage", "saturation", "input", "F", target_change=0.04188253229965152,
+                    ratio=3.7941010592527395, excitation="prbs")
+    r = run_case(spec, PLANTS, tmp_path, max_effects=1)
+    assert r["judge"] == "segments"
+    assert (r["answer_kind"], r["answer_place"]) == ("saturation", "input F"), r["answers"]
+    assert r["improvement"] >= 0.5
+
+
 def test_a_muscles_force_law_is_a_door_of_the_pam_truth():
     """Hysteresis may sit at a muscle's force law (the diagnosis's ``law muscle<i>``): only
     hysteresis draws there, so other kinds' draws are unchanged; its place is accepted at the

@@ -122,7 +122,8 @@ def estimate_initial_state(sim, experiment, noise: dict, *, scales=None) -> Init
 
 class _StateProblem:
     """The weighted least squares of the module docstring on one window: residual vector of
-    the scaled state offset ``theta`` (``x = prior + theta * scale``)."""
+    the scaled state offset ``theta`` of the `free` states (``x = prior + theta * scale`` there;
+    the others stay at the prior)."""
 
     def __init__(self, w_sim, y, noise, prior, scale, params=None, free=None):
         self.sim, self.y, self.prior, self.scale, self.params = w_sim, y, prior, scale, params

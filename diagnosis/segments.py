@@ -24,8 +24,8 @@ A segment whose simulation leaves the finite numbers counts as predicting the he
 Every model (the nominal and each candidate, with its own added states) is judged the same
 way, so the nominal reference and the candidates' numbers stay comparable.  Only a state a
 candidate adds that follows the inputs alone (an actuator's lag: :func:`input_driven_states`)
-is not fitted at a restart: it continues from the candidate's own run, which has it exactly.  This is the
-benchmark's convention for a drifting plant (:mod:`diagnosis.benchmark.draw` sizes an effect
+is not fitted at a restart: it continues from the candidate's own run, which has it exactly.
+This is the benchmark's convention for a drifting plant (:mod:`diagnosis.benchmark.draw` sizes an effect
 with the nominal restarted from the truth's state every tenth of the record).
 
 **The rule** (:func:`choose_judge`): segments when

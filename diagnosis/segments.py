@@ -232,8 +232,9 @@ class Judge:
         count = 0
         seg = {o: np.full(held.t.size, np.nan) for o in outputs}
         from .initial_state import fit_state
+        names = sim.model.state_names
         carried = ([] if self.nominal_states is None else
-                   [i for i in input_driven_states(sim.equations) if sim.model.state_names[i] not in self.nominal_states])
+                   [i for i in input_driven_states(sim.equations) if names[i] not in self.nominal_states])
         for a, b in plan.bounds():
             e = a + plan.estimation
             known = prior is not None and np.isfinite(prior[a]).all()

@@ -325,7 +325,7 @@ def _eliminate_dependent(dependent, resolver, x, rates, names, graph):
         resolver.residuals += equations
         return rates, stored_exprs, {}
     values = [b[0] / A[0, 0]] if len(unknowns) == 1 else list(A.LUsolve(b))
-    solution = {u: sp.together(v) for u, v in zip(unknowns, values)}
+    solution = {u: _rational(sp.together, v) for u, v in zip(unknowns, values)}
     rates = [_tidy(r.xreplace(solution)) if r.has(*unknowns) else r for r in rates]
     return rates, stored_exprs, solution
 
@@ -336,7 +336,21 @@ def _tidy(expr: sp.Expr, max_ops: int = 200) -> sp.Expr:
     instead of a difference of fractions).  Large expressions are left alone."""
     if sp.count_ops(expr) > max_ops:
         return expr
-    return sp.factor_terms(sp.cancel(expr))
+    return _rational(lambda e: sp.factor_terms(sp.cancel(e)), expr)
+
+
+def _rational(operation, expr: sp.Expr) -> sp.Expr:
+    """``operation(expr)`` (a rational simplification: together, cancel) with every function
+    application (exp, tanh, ...) held as an opaque symbol.  Otherwise the common denominator takes
+    ``exp(-u)`` as ``1/exp(u)`` and multiplies the other terms by ``exp(u)``: a Stribeck law's
+    ``exp(-(v/v_s)^2)`` in a gear's reduced inertia became ``(... exp(+(v/v_s)^2))/exp(+(v/v_s)^2)``,
+    which overflows to inf/inf = NaN once the speed passes about 27 v_s."""
+    calls = expr.atoms(sp.Function)
+    if not calls:
+        return operation(expr)
+    held = {call: sp.Dummy(f"call{i}") for i, call in enumerate(sorted(calls, key=sp.default_sort_key))}
+    back = {d: call for call, d in held.items()}
+    return operation(expr.xreplace(held)).xreplace(back)
 
 
 def _bonds_of(variables) -> tuple[str, ...]:

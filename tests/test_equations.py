@@ -3,6 +3,7 @@
 Hand derivations: Karnopp, Margolis & Rosenberg, *System Dynamics* (5th ed.),
 ch. 5 (SCAP), 7.3 (derivative causality); each stated in its test.
 """
+import numpy as np
 import sympy as sp
 import pytest
 
@@ -64,6 +65,23 @@ def test_derivative_causality_reflected_inertia():
     assert_same(eqs.h, [p / J1, n * p / J1])
     assert [e for e, _ in eqs.report.derivative_storage] == ["J2"]
     assert "derivative causality: J2" in str(eqs.report)
+
+
+def test_a_decaying_law_in_a_reduced_inertia_stays_finite_at_high_speed():
+    """A Stribeck-like friction exp(-(w/w_s)^2) on the load side of a rigid gear: the reduced
+    inertia's rate is solved over a common denominator, which must not take exp(-u) as 1/exp(u).
+    Otherwise the rate read (... exp(+u))/exp(+u): inf/inf = NaN past w = 27 w_s."""
+    from bondgraph.numerics import compile_model
+    g = library.build("geared-inertias")
+    g.add(R("peak", effort="Fs*exp(-(f/w_s)**2)", params={"Fs": 0.3, "w_s": 0.01}, domain="rotation"))
+    g.connect("w2", "peak")
+    model = compile_model(g.equations())
+    p_J1 = 0.01 * 50.0 / 0.2          # J1 w1, with w2 = n w1 = 50 rad/s = 5000 w_s
+    rate = model.f([p_J1], [0.0], p=model.param_vector(None))
+    jac = model.jac_x([p_J1], [0.0], p=model.param_vector(None))
+    assert np.all(np.isfinite(rate)) and np.all(np.isfinite(jac))
+    # the peak has decayed: the rate is the one without it, (J1 tau - b p)/(J1 + n^2 J2) at tau = 0
+    assert rate[0] == pytest.approx(-0.05 * p_J1 / (0.01 + 0.04 * 0.5), rel=1e-9)
 
 
 def test_two_masses_on_one_junction():

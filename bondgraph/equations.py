@@ -344,7 +344,8 @@ def _rational(operation, expr: sp.Expr) -> sp.Expr:
     application (exp, tanh, ...) held as an opaque symbol.  Otherwise the common denominator takes
     ``exp(-u)`` as ``1/exp(u)`` and multiplies the other terms by ``exp(u)``: a Stribeck law's
     ``exp(-(v/v_s)^2)`` in a gear's reduced inertia became ``(... exp(+(v/v_s)^2))/exp(+(v/v_s)^2)``,
-    which overflows to inf/inf = NaN once the speed passes about 27 v_s."""
+    which overflows to inf/inf = NaN once the speed passes about 27 v_s.  The calls are numbered
+    in sympy's sort order, so the result is the same in every process."""
     calls = expr.atoms(sp.Function)
     if not calls:
         return operation(expr)

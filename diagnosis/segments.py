@@ -25,8 +25,8 @@ Every model (the nominal and each candidate, with its own added states) is judge
 way, so the nominal reference and the candidates' numbers stay comparable.  Only a state a
 candidate adds that follows the inputs alone (an actuator's lag: :func:`input_driven_states`)
 is not fitted at a restart: it continues from the candidate's own run, which has it exactly.
-This is the benchmark's convention for a drifting plant (:mod:`diagnosis.benchmark.draw` sizes an effect
-with the nominal restarted from the truth's state every tenth of the record).
+This is the benchmark's convention for a drifting plant (:mod:`diagnosis.benchmark.draw` sizes an
+effect with the nominal restarted from the truth's state every tenth of the record).
 
 **The rule** (:func:`choose_judge`): segments when
 
@@ -60,8 +60,8 @@ import sympy as sp
 
 from .errors import BondcosimError
 
-__all__ = ["SegmentPlan", "Judged", "Judge", "plan_segments", "choose_judge", "drifting_mode", "input_driven_states",
-           "SEGMENTS", "MIN_SEGMENT_SAMPLES", "ESTIMATION_SHARE", "MIN_ESTIMATION_SAMPLES",
+__all__ = ["SegmentPlan", "Judged", "Judge", "plan_segments", "choose_judge", "drifting_mode",
+           "input_driven_states", "SEGMENTS", "MIN_SEGMENT_SAMPLES", "ESTIMATION_SHARE", "MIN_ESTIMATION_SAMPLES",
            "MAX_ESTIMATION_SAMPLES", "DRIFT_RATIO", "SLOW_MODE", "FLOOR_MARGIN"]
 
 #: segments the held-out part is cut into (fewer when it is short)
@@ -232,9 +232,10 @@ class Judge:
         count = 0
         seg = {o: np.full(held.t.size, np.nan) for o in outputs}
         from .initial_state import fit_state
-        names = sim.model.state_names
-        carried = ([] if self.nominal_states is None else
-                   [i for i in input_driven_states(sim.equations) if names[i] not in self.nominal_states])
+        # the candidate's own states (none for the nominal) that follow the inputs alone
+        own = ({i for i, name in enumerate(sim.model.state_names) if name not in self.nominal_states}
+               if self.nominal_states is not None else set())
+        carried = [i for i in input_driven_states(sim.equations) if i in own] if own else []
         for a, b in plan.bounds():
             e = a + plan.estimation
             known = prior is not None and np.isfinite(prior[a]).all()

@@ -108,6 +108,27 @@ def _with_values(graph, values: dict):
         raise DiagnosisError(f"cannot set fitted parameter(s) {', '.join(wrong)} in graph {graph.name!r}") from None
 
 
+def _start_estimator(train, noise, scales, states):
+    """``start(simulator, params)``: the initial state of `states` (the nominal model's) estimated in
+    a candidate's compiled model at `params` on the first samples of `train`, as the nominal's was
+    (:func:`diagnosis.initial_state.estimate_initial_state`; its added states stay at theirs)."""
+    from .initial_state import estimate_initial_state
+
+    def start(simulator, params):
+        est = estimate_initial_state(simulator, train, noise, scales=scales, params=params, states=states)
+        return {name: est.values[name] for name in states}
+    return start
+
+
+def _chosen_start(chosen, x0, start):
+    """``(x0, description)``: the chosen fit's own start state (``extra["x0"]``, estimated in its
+    model) where it has one, else `x0` and `start` as they were."""
+    own = chosen.extra.get("x0")
+    if not own:
+        return x0, start
+    return own, f"{start}, re-estimated with {chosen.candidate} (it acts on those samples)"
+
+
 def _fit_window(train, run, x0):
     """The training samples the fits use: all, or the first :data:`MAX_FIT_SAMPLES`.
 
@@ -292,6 +313,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     res.noise.update(_noise_overrides(noise, exp))
     n_train = train.t.size
     start = "the given initial state" if x0 is not None else "the model's initial state"
+    estimated = None                 # (the states' scales,) where the start was estimated
     if x0 is None and start_inconsistent(res, diverged, n_train):
         say("initial state", "fitted to the first samples")
         scales = ({nm: float(np.std(res.run.states[:, i])) for i, nm in enumerate(res.run.state_names)}
@@ -300,6 +322,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         start = est.description
         if est.samples:
             x0 = est.values
+            estimated = (scales,)
             res, diverged = _nominal_residuals(sim, graph, exp, x0)
             res.noise.update(_noise_overrides(noise, exp))
     # a diverging nominal has no run to refine (settle_substeps would find it diverge again)
@@ -313,6 +336,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         res.noise.update(_noise_overrides(noise, exp))
     floor = noise_floor(held, res.noise)
     measurement_floor = dict(floor)
+    # a candidate's model re-estimates the start where the nominal's was estimated
+    own_start = _start_estimator(train, res.noise, estimated[0], list(x0)) if estimated else None
     say("held-out judge")
     judge, nominal_judged = choose_judge(sim, exp, held, res, diverged, floor, x0)
     nominal = dict(nominal_judged.nrmse)
@@ -358,7 +383,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     def fit_one(cand, abandon_above):
         # every fit starts at the recording's first sample, where an added actuator still rested
         return fit_candidate(graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0, through=train,
-                             mid_run=False, abandon_above=abandon_above, judge=judge)
+                             mid_run=False, abandon_above=abandon_above, judge=judge, start=own_start)
 
     fits, best = fit_in_turn(cands, fit_one, say, "fitting")
     fits += _companion_fits(graph, fits, place_list, cand_part, rv, fit_one, say, "fitting", best, x0)
@@ -384,6 +409,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         base = (chosen.candidate.build(graph, {k: v for k, v in chosen.values.items() if k in cand_names})
                 if chosen.candidate is not None else graph)
         improved_graph = _with_values(base, {k: v for k, v in chosen.values.items() if k not in cand_names})
+        x0, start = _chosen_start(chosen, x0, start)
         improved, y_imp, improved_judged = _holdout_nrmse(OutputSimulator(improved_graph, exp), None, x0, judge)
     rounds = [Round(chosen, fits, dict(nominal), dict(improved), seconds=_time.perf_counter() - say.start,
                     diverged=diverged, window=[float(fit_part.t[0]), float(fit_part.t[-1])], floor=floor,
@@ -394,11 +420,12 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         while len(rounds) < int(max_effects):
             start = _time.perf_counter()
             found = _further_round(improved_graph, exp, train, held, judge, x0, improved, floor,
-                                   rounds, top=int(top), say=say, label=f"round {len(rounds) + 1}")
+                                   rounds, top=int(top), say=say, label=f"round {len(rounds) + 1}", start=own_start)
             found.seconds = _time.perf_counter() - start
             rounds.append(found)
             if found.chosen is None:
                 break
+            x0 = found.chosen.extra.get("x0") or x0
             improved_graph, improved, y_imp, improved_judged = found.graph, found.improved, found.y, found.judged
         effects = [r.chosen for r in rounds if r.chosen is not None]
         if len(effects) >= 2:
@@ -522,7 +549,7 @@ def _twin_fits(graph, fits, train, rv, fit, say, label, best, x0=None, n_places:
     return fit_in_turn(groups, fit, say, label, best=best, suffix=", twins")[0]
 
 
-def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds, *, top, say, label):
+def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds, *, top, say, label, start=None):
     """One more effect on `graph` (the improved graph so far) against its own residual.
 
     Location, candidates at the ``top`` places (minus the kinds already added at
@@ -530,7 +557,8 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     and :func:`~diagnosis.fit.choose` against `reference` (the held-out NRMSE of
     `graph`) with the noise floor `floor`.  Returns a :class:`~diagnosis.rounds.Round`:
     ``chosen`` (CandidateFit or None), ``fits``, ``reference``, ``improved``, ``scores`` and,
-    when something was kept, ``graph`` and ``y`` (its simulated outputs).
+    when something was kept, ``graph`` and ``y`` (its simulated outputs).  `start`: as
+    :func:`~diagnosis.fit.fit_candidate`'s, where the recording's start state was estimated.
     """
     from .catalogue import candidates
     from .fit import fit_candidate
@@ -570,7 +598,7 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
 
     def fit_one(cand, abandon_above):
         return fit_candidate(graph, cand, fit_part, held, x0=fit_x0, through=train, mid_run=False,
-                             abandon_above=abandon_above, judge=judge)
+                             abandon_above=abandon_above, judge=judge, start=start)
 
     fits, best = fit_in_turn(cands, fit_one, say, f"{label}: fitting")
     fits += _companion_fits(graph, fits, [s.place for s in places], train, rv, fit_one, say, f"{label}: fitting",
@@ -584,7 +612,8 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     if chosen is not None:
         names = {p.name for p in chosen.candidate.params}
         better = chosen.candidate.build(graph, {k: v for k, v in chosen.values.items() if k in names})
-        out.improved, out.y, out.judged = _holdout_nrmse(OutputSimulator(better, exp), None, x0, judge)
+        out.improved, out.y, out.judged = _holdout_nrmse(OutputSimulator(better, exp), None,
+                                                         chosen.extra.get("x0") or x0, judge)
         out.graph = better
     return out
 

@@ -274,11 +274,33 @@ def _release_unsupported_limits(objective, specs, theta, lower, upper):
     return theta, released
 
 
-def _best_start(objective, candidate, theta0):
+def _own_start(objective, theta, start):
+    """``(cost, state)``: the training cost at `theta` from the initial state `start` estimates in
+    the candidate's own model there, or ``(inf, None)`` where that state is the objective's own."""
+    x = start(objective.sim, objective.params(theta))
+    if x is None or x == objective.x0:
+        return np.inf, None
+    kept, objective.x0, objective._last = objective.x0, x, (None, None)
+    try:
+        r = objective._residual(theta)
+    finally:
+        objective.x0, objective._last = kept, (None, None)
+    objective.n_runs += 1
+    return float(r @ r), x
+
+
+def _best_start(objective, candidate, theta0, start=None):
     """The guess or the candidate's alternative start with the smallest training cost (one batch),
     then the starts its kind combines from those costs (:meth:`Candidate.combined_starts
-    <diagnosis.catalogue.Candidate.combined_starts>`, a second batch)."""
-    if candidate is None or not candidate.starts:
+    <diagnosis.catalogue.Candidate.combined_starts>`, a second batch).
+
+    With `start` (see :func:`fit_candidate`), each of the guess and the kind's own starts is also
+    tried from the initial state estimated in the candidate's model at it; where one of those
+    wins, the objective's start state becomes it.  An effect that acts on the first samples (a
+    sensor's range that clips them) made the nominal's estimate absorb it: a force-driven
+    carriage read at a clipped position started there, and no range could then explain the
+    rest of the record, which read a constant offset (seed 7171, case 035)."""
+    if candidate is None or (not candidate.starts and start is None):
         return theta0
     guess = objective.params(theta0)
 
@@ -287,6 +309,12 @@ def _best_start(objective, candidate, theta0):
 
     trials = [theta0] + scaled(candidate.starts)
     costs = [float(r @ r) for r in objective.batch(trials)]
+    if start is not None:
+        own = [_own_start(objective, theta, start) for theta in trials]
+        i = int(np.argmin([c for c, _ in own]))
+        if own[i][0] < min(costs):
+            objective.x0, objective._last = own[i][1], (None, None)
+            return trials[i]
     combine = getattr(candidate, "combined_starts", None)       # a group of twins has none
     if combine is not None:
         more = combine([(objective.params(t), c) for t, c in zip(trials, costs)])
@@ -326,7 +354,7 @@ def _shrink_magnitudes(objective, theta0) -> None:
 
 def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, max_nfev: int = 40,
                   abandon_above: float | None = None, through=None, judge=None,
-                  mid_run: bool | None = None, within=None) -> CandidateFit:
+                  mid_run: bool | None = None, within=None, start=None) -> CandidateFit:
     """Fit a candidate's parameters (and uncertain nominal ones) by simulation-error least squares.
 
     Parameters
@@ -372,6 +400,12 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
         start; default: whenever `x0` is given.  :func:`diagnosis.diagnose.diagnose` fits from
         the recording's first sample and says False: there `x0` is the state the recording
         starts in (given or estimated), at which the actuator still rested.
+    start : callable, optional
+        ``start(simulator, params)`` -> dict state name -> value (SI) or None: the initial state
+        estimated in the candidate's own model at `params` (a compiled simulator of it) from the
+        training part's first samples, where `x0` was itself estimated in the nominal model.  The
+        fit then starts from whichever of the two its best start runs better from, and keeps
+        that state (``extra["x0"]`` when it is the candidate's own).
 
     Returns
     -------
@@ -406,7 +440,7 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     lower, upper = _scaled_bounds(objective)
     theta0 = np.array([s.guess for s in specs]) / objective.scale
     if specs:
-        theta0 = _best_start(objective, candidate, theta0)
+        theta0 = _best_start(objective, candidate, theta0, start)
         r0 = objective(theta0)
         if np.all(r0 == _WALL):
             _shrink_magnitudes(objective, theta0)
@@ -436,6 +470,8 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     values = {**objective.params(theta), **released}
     if candidate is not None:
         values = candidate.settle(values, train)
+    own_start = objective.x0 if objective.x0 != x0 else None
+    x0 = objective.x0
     lead = train if through is None else through
     full = _joined(lead, holdout) if holdout is not None else lead
     n = train.t.size
@@ -468,7 +504,7 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
                         message if converged else f"{label} did not converge: {message}", model,
                         objective.n_runs + 1,
                         {"train_cost": 0.5 * float(sum(v ** 2 for v in train_nrmse.values())),
-                         "open_loop": open_loop,
+                         "open_loop": open_loop, "x0": own_start,
                          "holdout_y": held_out_prediction(scored) if scored is not None else None},
                         y)
 

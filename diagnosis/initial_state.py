@@ -67,7 +67,7 @@ def window_length(n: int) -> int:
     return int(max(20, min(2000, n // 20)))
 
 
-def estimate_initial_state(sim, experiment, noise: dict, *, scales=None) -> InitialState:
+def estimate_initial_state(sim, experiment, noise: dict, *, scales=None, params=None, states=None) -> InitialState:
     """Fit the initial state of `sim`'s model to the first samples of `experiment`.
 
     Parameters
@@ -80,6 +80,10 @@ def estimate_initial_state(sim, experiment, noise: dict, *, scales=None) -> Init
         Noise standard deviation of each measured output (model units).
     scales : dict str -> float, optional
         Typical magnitude of each state (default: its default value's magnitude, else 1).
+    params : dict str -> float, optional
+        Parameter values of the model (SI; default: its own).
+    states : iterable of str, optional
+        The states fitted (default: all); the others stay at their default values.
 
     Returns
     -------
@@ -87,8 +91,10 @@ def estimate_initial_state(sim, experiment, noise: dict, *, scales=None) -> Init
     """
     x_def = sim.initial_state(None)
     names = list(sim.model.state_names)
-    if not names:
-        return InitialState({}, 0, 0.0, "the model's initial state (it has no states)")
+    free = None if states is None else np.array([nm in set(states) for nm in names])
+    if not names or (free is not None and not free.any()):
+        return InitialState(dict(zip(names, map(float, x_def))), 0, 0.0,
+                            "the model's initial state (it has no states to fit)")
     s = np.array([abs(v) if v != 0 else 1.0 for v in x_def], float)
     if scales:
         s = np.array([max(float(scales.get(nm, 0.0)), si) for nm, si in zip(names, s)])
@@ -97,9 +103,10 @@ def estimate_initial_state(sim, experiment, noise: dict, *, scales=None) -> Init
     while n >= 20:
         part = experiment.window(float(experiment.t[0]), float(experiment.t[min(n, experiment.t.size) - 1]))
         y = {o: np.asarray(part.outputs[o], float) for o in outputs}
-        problem = _StateProblem(sim.on(part), y, noise, x_def, s)
-        r0 = problem(np.zeros(len(names)))
-        if np.all(r0[:-len(names)] < 1e6):
+        problem = _StateProblem(sim.on(part), y, noise, x_def, s, params, free)
+        k = int(problem.free.sum())
+        r0 = problem(np.zeros(k))
+        if np.all(r0[:-k] < 1e6):
             break
         n //= 2                                   # the default start diverges in the window
     else:

@@ -517,11 +517,19 @@ def prefer_by_evidence(default, near: list, lookup):
     Another kind is preferred only when both have evidence, its features are significant,
     leave at most :data:`PREFER_RATIO` of what `default`'s leave unexplained beyond the
     noise and drop the weighted SSE by :data:`MIN_DROP_PER_COLUMN` noise variances more;
-    among such, the lowest penalised feature score.
+    among such, the lowest penalised feature score.  `default`'s kind is credited with the best
+    evidence (lowest score) it has at any place among `near`: the question is which kind, and
+    series springs are located alike.  A cubic spring in the exoskeleton's gear, fitted there,
+    had features explaining 64 % at the gear, while the same kind at the trunk coupling, as
+    near in held-out error, explained 99 %; an end stop at the coupling (97 %) was preferred to
+    it (seed 6060, case 037).
     """
-    base = lookup(default)
-    if base is None:
+    own = [lookup(f) for f in [default] + list(near)
+           if f.candidate is not None and f.candidate.kind == default.candidate.kind]
+    own = [ev for ev in own if ev is not None]
+    if not own:
         return default
+    base = min(own, key=lambda ev: ev.score)
     better = []
     for f in near:
         ev = lookup(f)

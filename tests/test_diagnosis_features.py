@@ -225,3 +225,27 @@ def test_a_richer_law_fitted_to_nothing_is_not_preferred_by_its_features():
         pressure = fit("pressure_dependent_friction", 0.098, 2, truth + bump)
         chosen = choose({"x": 0.5}, [coulomb, pressure], noise=floor, evidence=evidence, measured=measured)
         assert chosen is (pressure if preferred else coulomb)
+
+
+def test_a_near_tie_credits_the_winners_kind_with_its_best_place():
+    """The winner's kind is judged by its best evidence among the near fits, wherever its place:
+    a cubic spring fitted at the gear (features 64 % there) is not overturned by an end stop at the
+    trunk coupling (97 %) when the cubic spring at the coupling, as near, explains 99 % (seed 6060,
+    case 037)."""
+    from diagnosis.features import FEATURE_PRICE, KIND_FEATURES, KindEvidence, evidence_lookup
+    from diagnosis.fit import choose
+    gear, coupling = Place("junction", "dw_g"), Place("junction", "dw_eh")
+
+    def evidence_at(place, shares):
+        kinds = [KindEvidence(k, None, "", s, (1 - s) * (1 + FEATURE_PRICE) ** KIND_FEATURES[k][2], {}, True,
+                              s, 1000.0 * s) for k, s in shares.items()]
+        return FeatureEvidence(place, sorted(kinds, key=lambda k: k.score))
+
+    cubic = _fit("nonlinear_stiffness", 0.0195, 2, place=gear)
+    cubic_there = _fit("nonlinear_stiffness", 0.0196, 2, place=coupling)
+    stop = _fit("saturation", 0.0200, 2, place=coupling)
+    evidence = {gear: evidence_at(gear, {"nonlinear_stiffness": 0.64}),
+                coupling: evidence_at(coupling, {"nonlinear_stiffness": 0.99, "saturation": 0.97})}
+    assert choose({"x": 0.5}, [cubic, cubic_there, stop], evidence=evidence_lookup(evidence)) is cubic
+    # without the same kind at the coupling, the end stop's evidence there decides as before
+    assert choose({"x": 0.5}, [cubic, stop], evidence=evidence_lookup(evidence)) is stop

@@ -619,8 +619,9 @@ def test_a_guess_that_does_not_run_starts_from_one_that_does(starts):
 def test_a_lag_hundreds_of_samples_long_is_started_near():
     """A 3 s actuator lag on a force-driven carriage (20 kg) recorded at 200 Hz, commands held
     0.1-0.5 s: 600 samples, far beyond the old starts (at most 32 samples, 0.16 s), from which the
-    fit did not reach it (seed 8282, case 000).  The lagged force is the exact zero-order-hold response of the lag, computed
-    here, and drives the nominal carriage."""
+    diagnosis gave its fit up, its training error far above the best fit's (seed 8282, case 000).
+    The lagged force is the exact zero-order-hold response of the lag, computed here, and drives
+    the nominal carriage."""
     carriage = library.build("carriage")
     rng = np.random.default_rng(4)
     t = np.arange(0.0, 10.0, 0.005)

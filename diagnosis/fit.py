@@ -207,10 +207,11 @@ class _Objective:
             raise _Abandoned(self.best_cost)
         return r
 
-    def _residual(self, theta):
-        """The walled residual of one simulation at `theta` (not counted as a run here)."""
+    def _residual(self, theta, x0=None):
+        """The walled residual of one simulation at `theta` from `x0` (default: the objective's start
+        state; not counted as a run here)."""
         try:
-            return self._walled(self._vector(self.sim(self.params(theta), self.x0)))
+            return self._walled(self._vector(self.sim(self.params(theta), self.x0 if x0 is None else x0)))
         except BondcosimError:
             return self._walled(None)
 
@@ -280,11 +281,7 @@ def _own_start(objective, theta, start):
     x = start(objective.sim, objective.params(theta))
     if x is None or x == objective.x0:
         return np.inf, None
-    kept, objective.x0, objective._last = objective.x0, x, (None, None)
-    try:
-        r = objective._residual(theta)
-    finally:
-        objective.x0, objective._last = kept, (None, None)
+    r = objective._residual(theta, x)
     objective.n_runs += 1
     return float(r @ r), x
 

@@ -91,7 +91,8 @@ def estimate_initial_state(sim, experiment, noise: dict, *, scales=None, params=
     """
     x_def = sim.initial_state(None)
     names = list(sim.model.state_names)
-    free = None if states is None else np.array([nm in set(states) for nm in names])
+    wanted = None if states is None else set(states)
+    free = None if wanted is None else np.array([nm in wanted for nm in names])
     if not names or (free is not None and not free.any()):
         return InitialState(dict(zip(names, map(float, x_def))), 0, 0.0,
                             "the model's initial state (it has no states to fit)")

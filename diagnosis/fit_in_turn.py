@@ -19,7 +19,14 @@ fit is fitted again from where the best richer fit at its place ended, the riche
 dropped (:func:`simpler_refits`), when that richer fit reached a lower training cost: the two
 optimisers' paths then do not decide between them (seed 8888, case 076: a pressure-dependent
 friction whose pressure term stayed at 0 beat the Coulomb fit by a sharper smoothing of its sign
-alone, which the Coulomb fit had not reached from its own start).
+alone, which the Coulomb fit had not reached from its own start).  And once more the first way
+round: a richer fit that still ends above the training cost of a simpler fit it extends is fitted
+again from where that simpler fit ended (:func:`richer_refits`).  Its nested start came from the
+simpler fit as it was when the richer one was fitted, and the simpler one may have been refitted
+lower since; the choice then drops the richer fit as one whose extra terms explain nothing
+(:func:`diagnosis.fit._no_idle_terms`), on a comparison the optimisers' order made (seed 4141,
+case 034: a Stribeck friction on the pam seesaw ended at a training cost 8 % above the refitted
+Coulomb fit's, with the lower held-out error, and the answer was Coulomb).
 
 Why a factor 10 and the stall: the choice (:func:`diagnosis.fit.choose`) is made on held-out
 error, not training error, so the margin must be wide.  Every fit's best training cost after
@@ -36,7 +43,7 @@ import numpy as np
 
 from .kinds.base import extends
 
-__all__ = ["HOPELESS", "fit_in_turn", "nested_starts", "simpler_refits"]
+__all__ = ["HOPELESS", "fit_in_turn", "nested_starts", "simpler_refits", "richer_refits"]
 
 #: a fit whose training cost stays above this many times the best one's so far is given up
 HOPELESS = 10.0
@@ -72,7 +79,7 @@ def fit_in_turn(candidates, fit, say, label: str, *, best: float = np.inf, suffi
         result = _fit_and_say(fit, cand, HOPELESS * best if np.isfinite(best) else None, say, label)
         fits.append(result)
         best = min(best, _train_cost(result))
-    return simpler_refits(fits, fit, say, label), best
+    return richer_refits(simpler_refits(fits, fit, say, label), fit, say, label), best
 
 
 def nested_starts(cand, fits):
@@ -94,19 +101,35 @@ def simpler_refits(fits, fit, say, label: str) -> list:
     refit from where the richer fit with the lowest training cost ended, when that cost is lower
     than its own (:meth:`Kind.reduced_start <diagnosis.kinds.base.Kind.reduced_start>`), and the
     refit's is lower still.  `fit` and `say` as for :func:`fit_in_turn`."""
+    return _refits(fits, fit, say, label, lambda this, other: extends(other, this),
+                   lambda this, by: [by.candidate.definition.reduced_start(by.candidate, this.candidate, by.values)])
+
+
+def richer_refits(fits, fit, say, label: str) -> list:
+    """`fits` with each successful fit of a kind that extends a simpler one (same place) replaced by
+    its refit from where the simpler fit with the lowest training cost ended
+    (:meth:`Kind.starts_from <diagnosis.kinds.base.Kind.starts_from>`), when that cost is lower than
+    its own, and the refit's is lower still.  `fit` and `say` as for :func:`fit_in_turn`."""
+    return _refits(fits, fit, say, label, extends,
+                   lambda this, by: this.candidate.definition.starts_from(this.candidate, by.candidate, by.values))
+
+
+def _refits(fits, fit, say, label: str, related, starts) -> list:
+    """`fits` with each successful fit replaced by its refit from ``starts(it, by)``, `by` the fit
+    with the lowest training cost among those below its own whose candidate is ``related(its
+    candidate, by's)``, where the refit's training cost is lower still."""
     out = list(fits)
-    for k, simple in enumerate(fits):
-        own = _train_cost(simple)
-        if not (own < np.inf and hasattr(getattr(simple, "candidate", None), "definition")):
+    for k, this in enumerate(fits):
+        own = _train_cost(this)
+        if not (own < np.inf and hasattr(getattr(this, "candidate", None), "definition")):
             continue
-        richer = [(cost, f) for f in fits if f is not simple and (cost := _train_cost(f)) < own
-                  and extends(getattr(f, "candidate", None), simple.candidate)]
-        if not richer:
+        donors = [(cost, f) for f in fits if f is not this and (cost := _train_cost(f)) < own
+                  and related(this.candidate, getattr(f, "candidate", None))]
+        if not donors:
             continue
-        best = min(richer, key=lambda pair: pair[0])[1]
-        start = best.candidate.definition.reduced_start(best.candidate, simple.candidate, best.values)
-        cand = simple.candidate.with_starts([start])
-        say(label, f"{cand} again, from the end of {best.candidate}")
+        by = min(donors, key=lambda pair: pair[0])[1]
+        cand = this.candidate.with_starts(starts(this, by))
+        say(label, f"{cand} again, from the end of {by.candidate}")
         refit = _fit_and_say(fit, cand, None, say, label)
         if _train_cost(refit) < own:
             out[k] = refit

@@ -131,3 +131,42 @@ def test_a_simpler_fit_is_refitted_from_where_a_richer_one_ended():
     assert out[1] is richer and out[2] is other and out[0] is not short
     assert out[0].values["Fc_v_mass"] == pytest.approx(0.3, rel=1e-3)
     assert out[0].values["v_eps_v_mass"] == pytest.approx(0.02, rel=1e-2)
+
+
+def test_a_richer_fit_is_refitted_from_where_a_simpler_one_it_extends_ended():
+    """A Coulomb + viscous fit stopped early (two evaluations from its own guess, taken as converged)
+    ends above the Coulomb fit's training cost, so the choice would drop it as idle terms.  Refitted
+    from the Coulomb fit's level and smoothing with no viscous term, it ends no worse than that fit
+    (the truth is a Coulomb friction of 0.3 N); the Coulomb fit and a fit of another place are left
+    as they were, and a richer fit already below the simpler one is not refitted."""
+    from dataclasses import replace
+
+    from diagnosis.catalogue import candidates
+    from diagnosis.fit import fit_candidate
+    from diagnosis.place import Place
+    from plants.library.textbook import mass_spring_damper
+    from test_diagnosis_fit import _record, coulomb_truth
+
+    msd = mass_spring_damper()
+    train, hold = _record(coulomb_truth()).split(0.3)
+    at = {c.kind: c for c in candidates(msd, Place("junction", "v_mass"), experiment=train)}
+    sensor = next(c for c in candidates(msd, Place("output", "x"), experiment=train) if c.kind == "sensor_offset")
+    coulomb = fit_candidate(msd, at["coulomb_friction"], train, hold)
+    short = replace(fit_candidate(msd, at["coulomb_viscous_friction"], train, hold, max_nfev=2), success=True)
+    other = fit_candidate(msd, sensor, train, hold)
+    assert short.extra["train_cost"] > 2 * coulomb.extra["train_cost"]
+    calls = []
+
+    def fit(cand, abandon_above):
+        calls.append(cand)
+        return fit_candidate(msd, cand, train, hold)
+
+    out = fit_in_turn.richer_refits([coulomb, short, other], fit, lambda *a: None, "fitting")
+    assert len(calls) == 1 and calls[0].kind == "coulomb_viscous_friction"
+    assert calls[0].starts[-1] == {"Fc_v_mass": coulomb.values["Fc_v_mass"], "b_visc_v_mass": 0.0,
+                                   "v_eps_v_mass": coulomb.values["v_eps_v_mass"]}
+    assert out[0] is coulomb and out[2] is other and out[1] is not short
+    assert out[1].extra["train_cost"] <= coulomb.extra["train_cost"] * (1 + 1e-6)
+    assert out[1].values["Fc_v_mass"] == pytest.approx(0.3, rel=1e-2)
+    # the refit in place: nothing more to do
+    assert fit_in_turn.richer_refits(out, fit, lambda *a: None, "fitting") == out and len(calls) == 1

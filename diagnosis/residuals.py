@@ -291,7 +291,9 @@ class OutputSimulator:
         """Simulate several parameter sets in the same compiled calls.
 
         A finite-difference Jacobian of a fit needs one run per parameter
-        plus one; as a batch they cost about a third of separate runs.
+        plus one; as a batch they cost about a third of separate runs.  Each run takes the
+        integrator it would take alone: the runs that need ROS2 (more than ``_STIFF_SUBSTEPS``
+        RK4 sub-steps per sample) are batched apart from the others.
 
         Parameters
         ----------

@@ -314,7 +314,7 @@ class OutputSimulator:
         runs = [None] * P.shape[0]
         # a run takes the integrator it takes alone (RK4, or ROS2 past _STIFF_SUBSTEPS): a stiff
         # run batched with others must not put them on ROS2 (seed 4141, case 034: a Stribeck fit's
-        # starts, batched with its guess 1000 times the fitted level, trained 4-9 times worse than alone)
+        # starts, batched with its guess 1000 times the fitted level, cost 2-9 times what they cost alone)
         stiff = np.ceil(float(np.max(self._dt)) / h - 1e-9) > _STIFF_SUBSTEPS
         for group in (np.flatnonzero(~stiff), np.flatnonzero(stiff)):
             if group.size:

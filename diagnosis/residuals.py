@@ -315,17 +315,23 @@ class OutputSimulator:
         # a run takes the integrator it takes alone (RK4, or ROS2 past _STIFF_SUBSTEPS): a stiff
         # run batched with others must not put them on ROS2 (seed 4141, case 034: a Stribeck fit's
         # starts, batched with its guess 1000 times the fitted level, cost 2-9 times what they cost alone)
-        stiff = np.ceil(float(np.max(self._dt)) / h - 1e-9) > _STIFF_SUBSTEPS
+        stiff = np.array([self._substeps(h_row)[0].max() > _STIFF_SUBSTEPS for h_row in h])
         for group in (np.flatnonzero(~stiff), np.flatnonzero(stiff)):
             if group.size:
                 self._run_group(group, P, h, x_init, runs)
         return runs
 
+    def _substeps(self, h_max: float):
+        """``(subs, every)`` of :meth:`_nesting` for RK4 sub-steps of at most `h_max` s (and at
+        least the experiment's ``substeps``) per sample interval; :meth:`_integrate` runs ROS2
+        where ``subs`` exceeds ``_STIFF_SUBSTEPS``."""
+        subs = np.maximum(getattr(self.experiment, "substeps", 1), np.ceil(self._dt / h_max - 1e-9)).astype(int)
+        return self._nesting(subs)
+
     def _run_group(self, group, P, h, x_init, runs) -> None:
         """Simulate the rows `group` of `P` together (sub-step `h` per row), into `runs`."""
         h_max = float(np.min(h[group]))
-        subs = np.maximum(getattr(self.experiment, "substeps", 1), np.ceil(self._dt / h_max - 1e-9)).astype(int)
-        subs, every = self._nesting(subs)
+        subs, every = self._substeps(h_max)
         # runs whose delayed inputs are late by the same times share their grid and inputs
         for delays, members in self._inputs_by_delay(P[group]).items():
             rows = group[np.asarray(members)]

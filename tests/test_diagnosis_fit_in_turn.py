@@ -96,12 +96,12 @@ def test_a_richer_friction_starts_where_the_coulomb_fit_it_extends_ended():
     assert other.kind == "coulomb_friction" and fit_in_turn.nested_starts(other, elsewhere) is other
 
 
-def test_a_simpler_fit_is_refitted_from_where_a_richer_one_ended():
-    """A Coulomb fit stopped early (two evaluations, taken as converged: a local minimum) ends far
-    from the truth; the Coulomb + viscous fit
-    reaches it with its viscous term near 0. Refitted from the richer fit's level and smoothing,
-    the Coulomb law matches it (the truth's 0.3 N, smoothed over 0.02 m/s) and replaces the short
-    fit; the richer fit and a fit of another place are left as they were."""
+def _msd_coulomb_fits():
+    """The mass-spring-damper under a 0.3 N Coulomb friction: ``(fit_at, calls, fit)``.
+    ``fit_at(kind, max_nfev=None)`` fits the candidate of `kind` at the mass's junction (a sensor
+    offset at output x), one stopped after `max_nfev` evaluations taken as converged;
+    ``fit(cand, abandon_above)``, as fit_in_turn calls it, fits fully and appends each candidate to
+    `calls`."""
     from dataclasses import replace
 
     from diagnosis.catalogue import candidates
@@ -113,17 +113,32 @@ def test_a_simpler_fit_is_refitted_from_where_a_richer_one_ended():
     msd = mass_spring_damper()
     train, hold = _record(coulomb_truth()).split(0.3)
     at = {c.kind: c for c in candidates(msd, Place("junction", "v_mass"), experiment=train)}
-    sensor = next(c for c in candidates(msd, Place("output", "x"), experiment=train) if c.kind == "sensor_offset")
-    short = replace(fit_candidate(msd, at["coulomb_friction"], train, hold, max_nfev=2), success=True)
-    richer = fit_candidate(msd, at["coulomb_viscous_friction"], train, hold)
-    other = fit_candidate(msd, sensor, train, hold)
-    assert richer.extra["train_cost"] < short.extra["train_cost"]
+    at["sensor_offset"] = next(c for c in candidates(msd, Place("output", "x"), experiment=train)
+                               if c.kind == "sensor_offset")
     calls = []
+
+    def fit_at(kind, max_nfev=None):
+        if max_nfev is None:
+            return fit_candidate(msd, at[kind], train, hold)
+        return replace(fit_candidate(msd, at[kind], train, hold, max_nfev=max_nfev), success=True)
 
     def fit(cand, abandon_above):
         calls.append(cand)
         return fit_candidate(msd, cand, train, hold)
 
+    return fit_at, calls, fit
+
+
+def test_a_simpler_fit_is_refitted_from_where_a_richer_one_ended():
+    """A Coulomb fit stopped early (two evaluations, taken as converged: a local minimum) ends far
+    from the truth; the Coulomb + viscous fit
+    reaches it with its viscous term near 0. Refitted from the richer fit's level and smoothing,
+    the Coulomb law matches it (the truth's 0.3 N, smoothed over 0.02 m/s) and replaces the short
+    fit; the richer fit and a fit of another place are left as they were."""
+    fit_at, calls, fit = _msd_coulomb_fits()
+    short = fit_at("coulomb_friction", max_nfev=2)
+    richer, other = fit_at("coulomb_viscous_friction"), fit_at("sensor_offset")
+    assert richer.extra["train_cost"] < short.extra["train_cost"]
     out = fit_in_turn.simpler_refits([short, richer, other], fit, lambda *a: None, "fitting")
     assert len(calls) == 1 and calls[0].kind == "coulomb_friction"
     assert calls[0].starts[-1] == {"Fc_v_mass": richer.values["Fc_v_mass"],
@@ -139,28 +154,10 @@ def test_a_richer_fit_is_refitted_from_where_a_simpler_one_it_extends_ended():
     from the Coulomb fit's level and smoothing with no viscous term, it ends no worse than that fit
     (the truth is a Coulomb friction of 0.3 N); the Coulomb fit and a fit of another place are left
     as they were, and a richer fit already below the simpler one is not refitted."""
-    from dataclasses import replace
-
-    from diagnosis.catalogue import candidates
-    from diagnosis.fit import fit_candidate
-    from diagnosis.place import Place
-    from plants.library.textbook import mass_spring_damper
-    from test_diagnosis_fit import _record, coulomb_truth
-
-    msd = mass_spring_damper()
-    train, hold = _record(coulomb_truth()).split(0.3)
-    at = {c.kind: c for c in candidates(msd, Place("junction", "v_mass"), experiment=train)}
-    sensor = next(c for c in candidates(msd, Place("output", "x"), experiment=train) if c.kind == "sensor_offset")
-    coulomb = fit_candidate(msd, at["coulomb_friction"], train, hold)
-    short = replace(fit_candidate(msd, at["coulomb_viscous_friction"], train, hold, max_nfev=2), success=True)
-    other = fit_candidate(msd, sensor, train, hold)
+    fit_at, calls, fit = _msd_coulomb_fits()
+    coulomb, other = fit_at("coulomb_friction"), fit_at("sensor_offset")
+    short = fit_at("coulomb_viscous_friction", max_nfev=2)
     assert short.extra["train_cost"] > 2 * coulomb.extra["train_cost"]
-    calls = []
-
-    def fit(cand, abandon_above):
-        calls.append(cand)
-        return fit_candidate(msd, cand, train, hold)
-
     out = fit_in_turn.richer_refits([coulomb, short, other], fit, lambda *a: None, "fitting")
     assert len(calls) == 1 and calls[0].kind == "coulomb_viscous_friction"
     assert calls[0].starts[-1] == {"Fc_v_mass": coulomb.values["Fc_v_mass"], "b_visc_v_mass": 0.0,

@@ -12,7 +12,8 @@ them), and each interval is integrated by the compiled classic RK4 of
   initial point (RK4 stays accurate for :math:`h|\\lambda| \\le 0.5`).
 
 A smooth model that would need more than ``_STIFF_SUBSTEPS`` (1000) such sub-steps per sample
-runs on the L-stable linearly implicit ROS2 of :mod:`bondgraph.numerics.evaluate_stiff` instead.
+runs on the L-stable linearly implicit Rosenbrock W-method ROS34PW2 of
+:mod:`bondgraph.numerics.evaluate_stiff` instead.
 
 This is the fixed-step scheme of :func:`bondgraph.numerics.simulate` with the sample
 intervals of the recording as output intervals, uneven sampling included;
@@ -44,7 +45,7 @@ _RK4_ACCURACY = 0.5       # h * |lambda_max| per sub-step for smooth models
 #: 3535 case 019's truth values the model is 3.8 noise sigmas of tau off that truth with either)
 _HELD_RK4_REACH = 2.0
 #: RK4 sub-steps per sample interval beyond which a smooth model is integrated by the
-#: linearly implicit ROS2 instead (:mod:`bondgraph.numerics.evaluate_stiff`)
+#: linearly implicit Rosenbrock method instead (:mod:`bondgraph.numerics.evaluate_stiff`)
 _STIFF_SUBSTEPS = 1000
 
 
@@ -62,7 +63,7 @@ class SimRun:
     outputs : dict str -> ndarray, shape (n,)
     state_names, input_names : tuple of str
     substeps : int
-        Most sub-steps of a sample interval (RK4, or ROS2 for a stiff smooth model).
+        Most sub-steps of a sample interval (RK4, or the Rosenbrock method for a stiff smooth model).
     """
 
     t: np.ndarray
@@ -292,7 +293,7 @@ class OutputSimulator:
 
         A finite-difference Jacobian of a fit needs one run per parameter
         plus one; as a batch they cost about a third of separate runs.  Each run takes the
-        integrator it would take alone: the runs that need ROS2 (more than ``_STIFF_SUBSTEPS``
+        integrator it would take alone: the runs that need the Rosenbrock method (more than ``_STIFF_SUBSTEPS``
         RK4 sub-steps per sample) are batched apart from the others.
 
         Parameters
@@ -312,8 +313,8 @@ class OutputSimulator:
         x_init = self.initial_state(x0)
         h = np.array([self._sub_step(x_init, P[i:i + 1]) for i in range(P.shape[0])])
         runs = [None] * P.shape[0]
-        # a run takes the integrator it takes alone (RK4, or ROS2 past _STIFF_SUBSTEPS): a stiff
-        # run batched with others must not put them on ROS2 (seed 4141, case 034: a Stribeck fit's
+        # a run takes the integrator it takes alone (RK4, or Rosenbrock past _STIFF_SUBSTEPS): a stiff
+        # run batched with others must not put them on the stiff path (seed 4141, case 034: a Stribeck fit's
         # starts, batched with its guess 1000 times the fitted level, cost 2-9 times what they cost alone)
         stiff = np.array([self._substeps(h_row)[0].max() > _STIFF_SUBSTEPS for h_row in h])
         for group in (np.flatnonzero(~stiff), np.flatnonzero(stiff)):
@@ -323,7 +324,7 @@ class OutputSimulator:
 
     def _substeps(self, h_max: float):
         """``(subs, every)`` of :meth:`_nesting` for RK4 sub-steps of at most `h_max` s (and at
-        least the experiment's ``substeps``) per sample interval; :meth:`_integrate` runs ROS2
+        least the experiment's ``substeps``) per sample interval; :meth:`_integrate` runs Rosenbrock
         where ``subs`` exceeds ``_STIFF_SUBSTEPS``."""
         subs = np.maximum(getattr(self.experiment, "substeps", 1), np.ceil(self._dt / h_max - 1e-9)).astype(int)
         return self._nesting(subs)
@@ -381,9 +382,9 @@ class OutputSimulator:
             return X, D, int(subs.max())
         if self.equations.is_smooth:
             # a fast mode RK4 would have to resolve (a smoothed Coulomb friction at rest, a
-            # damper across a stiff gear): the L-stable linearly implicit ROS2 steps over it
-            from bondgraph.numerics.evaluate_stiff import ros2_samples
-            return ros2_samples(m, grid, U, x, d, P)
+            # damper across a stiff gear): the L-stable linearly implicit Rosenbrock method steps over it
+            from bondgraph.numerics.evaluate_stiff import rosenbrock_samples
+            return rosenbrock_samples(m, grid, U, x, d, P)
         raise SimulationError(f"model {self.equations.name!r}: {subs.max()} RK4 sub-steps of "
                               f"{h_max:.3g} s per sample interval needed (stiff model with held "
                               "variables, or sparse samples); resample the recording",

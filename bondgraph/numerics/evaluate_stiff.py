@@ -1,26 +1,44 @@
-"""A stiff model over many sample intervals: the linearly implicit ROS2 method.
+"""A stiff model over many sample intervals: the linearly implicit Rosenbrock W-method ROS34PW2.
 
 Classic RK4 (:mod:`bondgraph.numerics.evaluate_samples`) must take sub-steps shorter than
 about :math:`0.5/|\\lambda_{max}|`.  A model with a fast mode it does not need to resolve -- a
 smoothed Coulomb friction near zero speed (slope :math:`F_c/v_\\varepsilon`), a damper across a
 stiff gear -- would then need thousands of sub-steps per sample.  This module integrates such a
-model with the two-stage Rosenbrock method ROS2 (Verwer, Spee, Blom and Hundsdorfer 1999,
-SIAM J. Sci. Comput. 20(4), eq. 2.5), L-stable, with :math:`\\gamma = 1 + 1/\\sqrt 2` and
-:math:`W = I - \\gamma h J`:
+model with ROS34PW2 (Rang and Angermann 2005, BIT Numer. Math. 45, 761-787, method "ROS34PW2"):
+four stages, third order, L-stable, :math:`\\gamma = 0.43586652150845900`.  With
+:math:`W = I - \\gamma h J` and the stage increments :math:`u_i = \\sum_{j \\le i} \\Gamma_{ij} k_j`
+(the usual change of variables, Hairer and Wanner, Solving ODEs II, section IV.7):
 
 .. math::
 
-    W k_1 = f(x_n), \\qquad W k_2 = f(x_n + h k_1) - 2 k_1, \\qquad
-    x_{n+1} = x_n + \\tfrac32 h k_1 + \\tfrac12 h k_2 .
+    W u_i = \\gamma h f\\Big(x_n + \\sum_{j<i} a_{ij} u_j\\Big) + \\sum_{j<i} c_{ij} u_j, \\qquad
+    x_{n+1} = x_n + \\sum_i m_i u_i,
 
-ROS2 keeps order 2 with any :math:`W` (it is a W-method), so :math:`J = \\partial f/\\partial x`
-is evaluated once per sample interval, at its start, and :math:`W^{-1}` serves all of its
-sub-steps.  Inputs are held over each interval (zero-order hold), as in the RK4 path.
+    a = \\alpha \\Gamma^{-1}, \\quad c = -\\gamma\\,L(\\Gamma^{-1}), \\quad m = b^T \\Gamma^{-1}
 
-Sub-steps: each interval takes ``m`` equal sub-steps of :math:`h \\le 0.1/|\\lambda|`
-(:data:`ACCURACY`; RK4, of fourth order, takes 0.5) for every eigenvalue :math:`\\lambda` of
-:math:`J` there that grows (:math:`\\mathrm{Re}\\,\\lambda > 0`: L-stability would damp it,
-and a diverging model must diverge) or that a sampled recording can show: one that turns
+from the paper's tables :math:`\\alpha, \\Gamma, b` (:data:`ALPHA`, :data:`GAMMA_TABLE`, :data:`B`),
+:math:`L` the strictly lower triangle.
+It keeps order 3 with any :math:`W` (a W-method), so :math:`J = \\partial f/\\partial x` is
+evaluated once per sample interval, at its start, and :math:`W^{-1}` serves all of its
+sub-steps.  Inputs are held over each interval (zero-order hold), as in the RK4 path.  (Until
+2026-11 this was the second-order ROS2 of Verwer et al. 1999: see "Sub-steps" for why it went.)
+
+Sub-steps: each interval takes ``m`` equal sub-steps of length :math:`h`.  A followed mode
+:math:`\\lambda` of :math:`J` there takes, per step, an error of about
+:data:`ERROR_CONSTANT` :math:`|h\\lambda|^4` of itself (the stability function's, measured in
+``tests/test_numerics_stiff.py``), and a mode keeps its errors for its memory
+:math:`\\min(1/|\\mathrm{Re}\\,\\lambda|, T)`, :math:`T` the record's span.  A lightly damped
+oscillation so sums its phase errors over hundreds of periods: the pam's frictionless seesaw
+(150 rad/s, :math:`|\\mathrm{Re}\\,\\lambda| \\approx 0.1` 1/s) took ROS2's rule, :math:`h|\\lambda|
+\\le 0.1`, to 74 % of the joint torque's span off RK4 over 10 s.  So each step keeps the error
+a mode sums over its memory under :data:`TOLERANCE`:
+
+.. math::
+
+    C\\,|h\\lambda|^3\\,\\max\\big(1, |\\lambda| \\min(1/|\\mathrm{Re}\\,\\lambda|, T)\\big) \\le \\mathrm{tol}.
+
+The modes followed are those that grow (:math:`\\mathrm{Re}\\,\\lambda > 0`: L-stability would damp
+them, and a diverging model must diverge) or that a sampled recording can show: one that turns
 (:math:`|\\mathrm{Im}\\,\\lambda| \\ge \\tfrac12 |\\mathrm{Re}\\,\\lambda|`) below the Nyquist
 frequency of the samples (:math:`|\\lambda| \\le \\pi/\\Delta t`), or that decays slowly enough to
 show in the next sample (:math:`|\\lambda| \\Delta t \\le` :data:`VISIBLE`: down to
@@ -36,12 +54,30 @@ import numpy as np
 
 from ..errors import SimulationError
 
-__all__ = ["ros2_samples", "MAX_SUBSTEPS", "ACCURACY"]
+__all__ = ["rosenbrock_samples", "MAX_SUBSTEPS", "TOLERANCE", "ERROR_CONSTANT"]
 
-#: ROS2's gamma: 1 + 1/sqrt(2) makes it L-stable
-GAMMA = 1.0 + 1.0 / np.sqrt(2.0)
-#: h |lambda| per sub-step for the modes a step follows (second order: a fifth of RK4's 0.5)
-ACCURACY = 0.1
+#: ROS34PW2's tables alpha_ij, gamma_ij, b_i as the paper gives them (checked in tests/test_numerics_stiff.py:
+#: order 3 with an exact, a frozen and a wrong J; L-stable)
+GAMMA = 0.43586652150845900
+ALPHA = np.array([[0.0, 0.0, 0.0, 0.0],
+                  [0.87173304301691801, 0.0, 0.0, 0.0],
+                  [0.84457060015369423, -0.11299064236484185, 0.0, 0.0],
+                  [0.0, 0.0, 1.0, 0.0]])
+GAMMA_TABLE = np.array([[GAMMA, 0.0, 0.0, 0.0],
+                        [-0.87173304301691801, GAMMA, 0.0, 0.0],
+                        [-0.90338057013044082, 0.054180672388095326, GAMMA, 0.0],
+                        [0.24212380706095346, -1.2232505839045147, 0.54526025533510214, GAMMA]])
+B = np.array([0.24212380706095346, -1.2232505839045147, 1.5452602553351020, GAMMA])
+_GAMMA_INV = np.linalg.inv(GAMMA_TABLE)
+#: the stages' coefficients in the increments u (module docstring): a_ij, c_ij (i > j) and m_i
+STAGE_A = ALPHA @ _GAMMA_INV
+STAGE_C = -GAMMA * np.tril(_GAMMA_INV, -1)
+STAGE_M = B @ _GAMMA_INV
+#: |R(z) - e^z| / |z|^4 of ROS34PW2's stability function R for small |z| (0.0255-0.0259 from the
+#: imaginary to the negative real axis): the error per step of a mode, as a share of it
+ERROR_CONSTANT = 0.026
+#: the error a followed mode may sum over its memory, as a share of it (module docstring)
+TOLERANCE = 0.003
 #: most sub-steps of one sample interval
 MAX_SUBSTEPS = 4096
 #: |lambda| dt up to which a decaying mode is followed: it leaves e^-5 of itself at the next sample.
@@ -51,17 +87,22 @@ MAX_SUBSTEPS = 4096
 VISIBLE = 5.0
 
 
-def _sub_step_count(J, dt: float) -> int:
-    """Sub-steps of an interval of `dt` s from the Jacobians `J` (n_batch, n, n)."""
+def _sub_step_count(J, dt: float, span: float) -> int:
+    """Sub-steps of an interval of `dt` s in a record of `span` s from the Jacobians `J`
+    (n_batch, n, n): the error each followed mode sums over its memory stays under TOLERANCE."""
     lam = np.linalg.eigvals(J).ravel()
     turning = (np.abs(lam.imag) >= 0.5 * np.abs(lam.real)) & (np.abs(lam) <= np.pi / dt)
-    followed = lam[turning | (lam.real > 0) | (np.abs(lam) * dt <= VISIBLE)]
-    fastest = float(np.max(np.abs(followed))) if followed.size else 0.0
-    return int(min(max(np.ceil(dt * fastest / ACCURACY - 1e-9), 1), MAX_SUBSTEPS))
+    lam = lam[turning | (lam.real > 0) | (np.abs(lam) * dt <= VISIBLE)]
+    if not lam.size:
+        return 1
+    with np.errstate(divide="ignore"):
+        memory = np.minimum(1.0 / np.abs(lam.real), max(span, dt))
+    reach = np.cbrt(TOLERANCE / (ERROR_CONSTANT * np.maximum(1.0, np.abs(lam) * memory)))   # |h lambda|
+    return int(min(max(np.ceil(float(np.max(dt * np.abs(lam) / reach)) - 1e-9), 1), MAX_SUBSTEPS))
 
 
-def ros2_samples(model, t, U, x, d, p, *, use_c: bool = True):
-    """Integrate a batch over the sample intervals of `t` with ROS2 (module docstring).
+def rosenbrock_samples(model, t, U, x, d, p, *, use_c: bool = True):
+    """Integrate a batch over the sample intervals of `t` with ROS34PW2 (module docstring).
 
     Parameters
     ----------
@@ -101,7 +142,7 @@ def ros2_samples(model, t, U, x, d, p, *, use_c: bool = True):
     X = np.empty((t.size, *x.shape))
     D = np.broadcast_to(np.asarray(d, dtype=float), (t.size, *np.shape(d))).copy()
     X[0] = x
-    eye, most = np.eye(x.shape[1]), 1
+    eye, most, span = np.eye(x.shape[1]), 1, float(t[-1] - t[0])
     sub_steps = _c_sub_steps(model, n, d, p_rows) if use_c else None
     U = np.ascontiguousarray(U, dtype=float)
     for k in range(t.size - 1):
@@ -111,25 +152,43 @@ def ros2_samples(model, t, U, x, d, p, *, use_c: bool = True):
             J = model.jac_x(x, u, t=tk, p=p, d=d)
             if not np.isfinite(J).all():
                 raise SimulationError(f"model {model.equations.name!r}: non-finite Jacobian of the state "
-                                      f"derivatives at t = {tk:.6g} s (linearly implicit ROS2)", time=tk)
-            m = _sub_step_count(J, dt)
+                                      f"derivatives at t = {tk:.6g} s (linearly implicit ROS34PW2)", time=tk)
+            m = _sub_step_count(J, dt, span)
             h = dt / m
             Winv = np.linalg.inv(eye - (GAMMA * h) * J)
             if sub_steps is not None:
                 sub_steps(x, U[k], tk, h, m, Winv)
             else:
                 for _ in range(m):
-                    k1 = np.einsum("nij,nj->ni", Winv, model.f(x, u, t=tk, p=p, d=d))
-                    k2 = np.einsum("nij,nj->ni", Winv, model.f(x + h * k1, u, t=tk, p=p, d=d) - 2.0 * k1)
-                    x = x + 1.5 * h * k1 + 0.5 * h * k2
+                    x = _python_sub_step(model, x, u, tk, p, d, h, Winv)
                     tk += h
         if not np.isfinite(x).all():
             bad = [nm for nm, v in zip(model.state_names, x.T) if not np.isfinite(v).all()]
             raise SimulationError(f"model {model.equations.name!r}: non-finite state(s) {', '.join(bad)} "
-                                  f"at t = {t[k + 1]:.6g} s (linearly implicit ROS2)", time=float(t[k + 1]))
+                                  f"at t = {t[k + 1]:.6g} s (linearly implicit ROS34PW2)", time=float(t[k + 1]))
         X[k + 1] = x
         most = max(most, m)
     return X, D, most
+
+
+def _python_sub_step(model, x, u, t, p, d, h, Winv):
+    """One ROS34PW2 sub-step of length `h` on the batch `x` (module docstring), its sums in the C
+    driver's order; every stage sees the time `t` at the sub-step's start (inputs are held)."""
+    stages = []
+    for i in range(B.size):
+        xs = x.copy()
+        for j in range(i):
+            if STAGE_A[i, j] != 0.0:
+                xs += STAGE_A[i, j] * stages[j]
+        rhs = model.f(xs, u, t=t, p=p, d=d) * (GAMMA * h)
+        for j in range(i):
+            if STAGE_C[i, j] != 0.0:
+                rhs += STAGE_C[i, j] * stages[j]
+        stages.append(np.einsum("nij,nj->ni", Winv, rhs))
+    x = x.copy()
+    for m_i, u_i in zip(STAGE_M, stages):
+        x += m_i * u_i
+    return x
 
 
 def _c_sub_steps(model, n, d, p_rows):
@@ -141,11 +200,13 @@ def _c_sub_steps(model, n, d, p_rows):
         return None
     driver, nx = steps_driver(), len(model.state_names)
     d = np.ascontiguousarray(np.broadcast_to(np.asarray(d, dtype=float), (n, np.shape(d)[-1])))
-    z, work = np.zeros(1), np.empty(4 * n * nx)
+    z, work = np.zeros(1), np.empty((2 + B.size) * n * nx)
+    a, c, mw = (np.ascontiguousarray(v, dtype=float) for v in (STAGE_A, STAGE_C, STAGE_M))
     sp = 0 if p_rows.shape[0] == 1 and n != 1 else p_rows.shape[1]
 
     def steps(x, u_row, t0, h, m, Winv):
         u_row, Winv = np.ascontiguousarray(u_row, dtype=float), np.ascontiguousarray(Winv)
-        driver(fn, n, nx, t0, h, m, x.ctypes.data, u_row.ctypes.data, z.ctypes.data, d.ctypes.data,
-               d.shape[1], p_rows.ctypes.data, sp, Winv.ctypes.data, work.ctypes.data)
+        driver(fn, n, nx, t0, h, m, B.size, a.ctypes.data, c.ctypes.data, mw.ctypes.data, GAMMA,
+               x.ctypes.data, u_row.ctypes.data, z.ctypes.data, d.ctypes.data, d.shape[1], p_rows.ctypes.data, sp,
+               Winv.ctypes.data, work.ctypes.data)
     return steps

@@ -1,9 +1,9 @@
-"""The sub-step loop of :func:`bondgraph.numerics.evaluate_stiff.ros2_samples` in C.
+"""The sub-step loop of :func:`bondgraph.numerics.evaluate_stiff.rosenbrock_samples` in C.
 
-ROS2 evaluates :math:`J` and :math:`W^{-1}` once per sample interval, then takes up to
-thousands of sub-steps with them.  In Python each sub-step costs two calls of
-``CompiledModel.f`` (argument normalisation included) and two batched matrix products, about
-40 us on the exoskeleton, where the model's generated ``bc_f`` takes about 1 us.  This driver
+The Rosenbrock W-method evaluates :math:`J` and :math:`W^{-1}` once per sample interval, then
+takes up to thousands of sub-steps with them.  In Python each sub-step costs four calls of
+``CompiledModel.f`` (argument normalisation included) and four batched matrix products (two of
+each took about 40 us on the exoskeleton), where the model's generated ``bc_f`` takes about 1 us.  This driver
 runs the sub-steps of one interval in C, calling the model's ``bc_f`` (the C contract of
 :mod:`bondgraph.numerics.codegen_c`) through a function pointer, so, as the RK4 sample driver of
 :mod:`bondgraph.numerics.evaluate_samples_c`, it is compiled once per machine and the model's
@@ -37,26 +37,39 @@ static void bc_rows_product(int n, int nx, const double *W, const double *x, dou
   }
 }
 
-/* m ROS2 sub-steps of length h from t0 on the n rows of x (n, nx), in place:
-     W k1 = f(x),  W k2 = f(x + h k1) - 2 k1,  x += 3/2 h k1 + 1/2 h k2,
-   with Winv (n, nx, nx) each row's W^-1.  The inputs u are one row shared by the batch; d and
-   p have row strides sd, sp (0: one row shared); z is the (empty) algebraic vector.  Both
-   stages see the time at the sub-step's start.  work holds 4 n nx doubles. */
-void bc_ros2_steps(void *fn, int n, int nx, double t0, double h, int m, double *x, const double *u,
+/* m Rosenbrock W sub-steps of length h from t0 on the n rows of x (n, nx), in place, in the
+   increments u_i of an s-stage method (bondgraph.numerics.evaluate_stiff):
+     u_i = Winv (gamma h f(x + sum_{j<i} a_ij u_j) + sum_{j<i} c_ij u_j),  x += sum_i mw_i u_i,
+   a and c (s, s) row-major, Winv (n, nx, nx) each row's W^-1.  The inputs u are one row shared by
+   the batch; d and p have row strides sd, sp (0: one row shared); z is the (empty) algebraic vector.
+   Every stage sees the time at the sub-step's start.  work holds (2 + s) n nx doubles. */
+void bc_rosw_steps(void *fn, int n, int nx, double t0, double h, int m, int s, const double *a,
+                   const double *c, const double *mw, double gamma, double *x, const double *u,
                    const double *z, const double *d, int sd, const double *p, int sp,
                    const double *Winv, double *work) {
   bc_f_fn f = (bc_f_fn)fn;
   size_t nn = (size_t)n * nx;
-  double *fv = work, *k1 = work + nn, *xs = work + 2 * nn, *k2 = work + 3 * nn;
+  double *fv = work, *xs = work + nn, *stage = work + 2 * nn;
   double t = t0;
-  for (int s = 0; s < m; ++s) {
-    f(n, &t, 0, x, u, 0, z, d, sd, p, sp, 0.0, fv);
-    bc_rows_product(n, nx, Winv, fv, k1);
-    for (size_t i = 0; i < nn; ++i) xs[i] = x[i] + h * k1[i];
-    f(n, &t, 0, xs, u, 0, z, d, sd, p, sp, 0.0, fv);
-    for (size_t i = 0; i < nn; ++i) fv[i] -= 2.0 * k1[i];
-    bc_rows_product(n, nx, Winv, fv, k2);
-    for (size_t i = 0; i < nn; ++i) x[i] += 1.5 * h * k1[i] + 0.5 * h * k2[i];
+  for (int step = 0; step < m; ++step) {
+    for (int i = 0; i < s; ++i) {
+      for (size_t q = 0; q < nn; ++q) xs[q] = x[q];
+      for (int j = 0; j < i; ++j) {
+        const double aij = a[i * s + j], *uj = stage + (size_t)j * nn;
+        if (aij != 0.0) for (size_t q = 0; q < nn; ++q) xs[q] += aij * uj[q];
+      }
+      f(n, &t, 0, xs, u, 0, z, d, sd, p, sp, 0.0, fv);
+      for (size_t q = 0; q < nn; ++q) fv[q] *= gamma * h;
+      for (int j = 0; j < i; ++j) {
+        const double cij = c[i * s + j], *uj = stage + (size_t)j * nn;
+        if (cij != 0.0) for (size_t q = 0; q < nn; ++q) fv[q] += cij * uj[q];
+      }
+      bc_rows_product(n, nx, Winv, fv, stage + (size_t)i * nn);
+    }
+    for (int i = 0; i < s; ++i) {
+      const double *ui = stage + (size_t)i * nn;
+      for (size_t q = 0; q < nn; ++q) x[q] += mw[i] * ui[q];
+    }
     t += h;
   }
 }
@@ -64,11 +77,11 @@ void bc_ros2_steps(void *fn, int n, int nx, double t0, double h, int m, double *
 
 
 def steps_driver():
-    """The compiled ``bc_ros2_steps`` (ctypes function), or None without a C compiler."""
+    """The compiled ``bc_rosw_steps`` (ctypes function), or None without a C compiler."""
     from .c_build import driver_function
     vp, i, dbl = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
-    return driver_function(STEPS_SOURCE, "bc_ros2_steps", [vp, i, i, dbl, dbl, i, vp, vp, vp, vp, i, vp, i, vp, vp],
-                           None)
+    return driver_function(STEPS_SOURCE, "bc_rosw_steps",
+                           [vp, i, i, dbl, dbl, i, i, vp, vp, vp, dbl, vp, vp, vp, vp, i, vp, i, vp, vp], None)
 
 
 def c_derivative(model):

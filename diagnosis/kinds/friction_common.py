@@ -15,7 +15,7 @@ a small viscous term absorbed, and the held-out samples then resolved the richer
 friction smoothed over about 10 % of the speed read as Coulomb + viscous friction,
 ``tests/test_diagnosis_segments.py``).  At 20 % the law still reaches its level within the
 typical speed (:math:`\\tanh 5`), a dry friction that a viscous law cannot pass for.  The slope
-at rest a sharp sign costs is a real decaying mode, which the ROS2 path
+at rest a sharp sign costs is a real decaying mode, which the linearly implicit Rosenbrock path
 (:mod:`bondgraph.numerics.evaluate_stiff`) steps over.
 """
 from __future__ import annotations

@@ -11,7 +11,7 @@ them), and each interval is integrated by the compiled classic RK4 of
   the largest eigenvalue modulus of :math:`\\partial f/\\partial x` at the
   initial point (RK4 stays accurate for :math:`h|\\lambda| \\le 0.5`).
 
-A smooth model that would need more than ``_STIFF_SUBSTEPS`` (1000) such sub-steps per sample
+A smooth model that would need more than ``_STIFF_SUBSTEPS`` (150) such sub-steps per sample
 runs on the L-stable linearly implicit Rosenbrock W-method ROS34PW2 of
 :mod:`bondgraph.numerics.evaluate_stiff` instead.
 
@@ -45,8 +45,14 @@ _RK4_ACCURACY = 0.5       # h * |lambda_max| per sub-step for smooth models
 #: 3535 case 019's truth values the model is 3.8 noise sigmas of tau off that truth with either)
 _HELD_RK4_REACH = 2.0
 #: RK4 sub-steps per sample interval beyond which a smooth model is integrated by the
-#: linearly implicit Rosenbrock method instead (:mod:`bondgraph.numerics.evaluate_stiff`)
-_STIFF_SUBSTEPS = 1000
+#: linearly implicit Rosenbrock method instead (:mod:`bondgraph.numerics.evaluate_stiff`): where
+#: they cost the same.  On the pam (10.5 s at 1 kHz) one run took 0.8 s on RK4 at 118 sub-steps and
+#: 1.1 s on Rosenbrock, whose cost is mostly per interval (five runs batched: 2.5 s and 1.3 s), and
+#: both were within 1e-5 of tau's span of scipy's Radau (session 22).  Until then 1000, when the
+#: stiff path was the less accurate ROS2
+_STIFF_SUBSTEPS = 150
+#: most RK4 sub-steps per sample interval of a model with held variables (it has no stiff path)
+_HELD_MOST_SUBSTEPS = 1000
 
 
 @dataclass
@@ -316,7 +322,7 @@ class OutputSimulator:
         # a run takes the integrator it takes alone (RK4, or Rosenbrock past _STIFF_SUBSTEPS): a stiff
         # run batched with others must not put them on the stiff path (seed 4141, case 034: a Stribeck fit's
         # starts, batched with its guess 1000 times the fitted level, cost 2-9 times what they cost alone)
-        stiff = np.array([self._substeps(h_row)[0].max() > _STIFF_SUBSTEPS for h_row in h])
+        stiff = np.array([self._stiff(self._substeps(h_row)[0]) for h_row in h])
         for group in (np.flatnonzero(~stiff), np.flatnonzero(stiff)):
             if group.size:
                 self._run_group(group, P, h, x_init, runs)
@@ -325,9 +331,14 @@ class OutputSimulator:
     def _substeps(self, h_max: float):
         """``(subs, every)`` of :meth:`_nesting` for RK4 sub-steps of at most `h_max` s (and at
         least the experiment's ``substeps``) per sample interval; :meth:`_integrate` runs Rosenbrock
-        where ``subs`` exceeds ``_STIFF_SUBSTEPS``."""
+        where they are :meth:`_stiff`."""
         subs = np.maximum(getattr(self.experiment, "substeps", 1), np.ceil(self._dt / h_max - 1e-9)).astype(int)
         return self._nesting(subs)
+
+    def _stiff(self, subs) -> bool:
+        """Whether a run needing `subs` RK4 sub-steps per sample interval takes the Rosenbrock
+        path: a smooth model past ``_STIFF_SUBSTEPS``."""
+        return bool(self.equations.is_smooth and subs.max() > _STIFF_SUBSTEPS)
 
     def _run_group(self, group, P, h, x_init, runs) -> None:
         """Simulate the rows `group` of `P` together (sub-step `h` per row), into `runs`."""
@@ -377,14 +388,14 @@ class OutputSimulator:
         x = np.ascontiguousarray(np.tile(x_init, (n, 1)))
         d = np.ascontiguousarray(np.tile(m.default_held, (n, 1)))
         P = np.ascontiguousarray(P)
-        if subs.max() <= _STIFF_SUBSTEPS:
-            X, D = m.rk4_samples(grid, U, subs, x, d, P, every=every)
-            return X, D, int(subs.max())
-        if self.equations.is_smooth:
+        if self._stiff(subs):
             # a fast mode RK4 would have to resolve (a smoothed Coulomb friction at rest, a
             # damper across a stiff gear): the L-stable linearly implicit Rosenbrock method steps over it
             from bondgraph.numerics.evaluate_stiff import rosenbrock_samples
             return rosenbrock_samples(m, grid, U, x, d, P)
+        if subs.max() <= _HELD_MOST_SUBSTEPS:
+            X, D = m.rk4_samples(grid, U, subs, x, d, P, every=every)
+            return X, D, int(subs.max())
         raise SimulationError(f"model {self.equations.name!r}: {subs.max()} RK4 sub-steps of "
                               f"{h_max:.3g} s per sample interval needed (stiff model with held "
                               "variables, or sparse samples); resample the recording",

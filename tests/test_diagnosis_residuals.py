@@ -231,9 +231,9 @@ def test_a_stiff_law_on_a_held_variable_model_nests_finer_steps_in_the_held_laws
 
 
 def test_a_run_takes_the_integrator_it_takes_alone_whatever_it_is_batched_with():
-    """A smoothed Coulomb friction so sharp that its slope at rest needs more than 1000 RK4
-    sub-steps per sample runs on ROS2; a blunt one runs on RK4.  Batched together, each gives the
-    outputs it gives alone (before, the sharp run put the whole batch on ROS2 at the sub-steps of
+    """A smoothed Coulomb friction so sharp that its slope at rest needs more than 150 RK4
+    sub-steps per sample runs on the Rosenbrock path; a blunt one runs on RK4.  Batched together,
+    each gives the outputs it gives alone (before, the sharp run put the whole batch on ROS2 at the sub-steps of
     both: the blunt run's speed moved by 0.2 % of its spread, the sharp run's by 25 %)."""
     from test_diagnosis_fit import F, T, UNITS, coulomb_truth
     sim = OutputSimulator(coulomb_truth(), Experiment(T, {"F": F}, {"x": T, "v": T}, UNITS))

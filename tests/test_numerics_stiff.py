@@ -39,11 +39,11 @@ def test_rosenbrock_converges_at_third_order_to_the_analytic_step_response():
     errors = []
     for n in (101, 201, 401):
         x, t, most = _rosenbrock_position(n)
-        assert most == 1                      # |lambda| dt = 0.04 and less: one sub-step
-        errors.append(np.max(np.abs(x - _msd_step(t))))
-    assert errors[0] < 1e-5                   # of a 0.37 m response, 20 ms steps
+        assert most <= 4                      # |lambda| dt = 0.04 and less: one sub-step, a few
+        errors.append(np.max(np.abs(x - _msd_step(t))))   # more at the start, the error check's
+    assert errors[0] < 2e-6                   # of a 0.37 m response, 20 ms steps
     ratios = np.array(errors[:-1]) / np.array(errors[1:])
-    np.testing.assert_allclose(ratios, 8.0, rtol=0.1)
+    np.testing.assert_allclose(ratios, 8.0, rtol=0.15)
 
 
 def _sticky_mass(eps):
@@ -198,7 +198,7 @@ def _sub_steps(model, x, h, n, jacobian):
     W = np.eye(x.shape[1])
     for _ in range(n):
         Winv = np.linalg.inv(W - evaluate_stiff.GAMMA * h * jacobian(x))[None]
-        x = evaluate_stiff._python_sub_step(model, x, None, 0.0, None, None, h, Winv)
+        x, _ = evaluate_stiff._python_sub_step(model, x, None, 0.0, None, None, h, Winv)
     return x
 
 
@@ -230,3 +230,32 @@ def test_the_stability_function_is_l_stable_with_the_stated_error_constant():
     for angle in (90, 135, 180):
         z = 0.01 * np.exp(1j * np.deg2rad(angle))
         assert abs(R_of(z) - np.exp(z)) / abs(z) ** 4 == pytest.approx(evaluate_stiff.ERROR_CONSTANT, rel=0.03)
+
+
+def test_sticking_and_sliding_within_an_interval_is_checked_by_the_error_estimate():
+    """A 24 Hz oscillator (damping ratio 0.001) with a seal friction of 3 N over 1 mm/s, driven in
+    bursts for 2 s at 1 kHz: it sticks and slides within sample intervals, where the Jacobian frozen
+    at the interval's start is far from the true one.  Against scipy's Radau (per held interval,
+    rtol 1e-10) the position stays within 1e-4 of its span; the linear sub-step rule alone (no
+    error check: RTOL = inf) left 7.6e-3 (on the pam's seesaw, 8 % of the torque's span)."""
+    k = (2 * np.pi * 24.0) ** 2
+    b, Fc, eps = 2 * 0.001 * np.sqrt(k), 3.0, 1e-3
+    graph = mass_spring_damper(m=1.0, b=b, k=k)
+    graph.add(R("seal", effort="Fc*tanh(f/eps)", params={"Fc": Fc, "eps": eps}, domain="translation"))
+    graph.connect("v_mass", "seal")
+    t = np.arange(0.0, 2.0, 0.001)
+    force = 10.0 * np.sin(2 * np.pi * 1.3 * t) * (np.sin(2 * np.pi * 0.4 * t) > 0)
+    x, reference = np.zeros(2), [0.0]
+    for j in range(t.size - 1):
+        sol = solve_ivp(lambda time, s: [s[1], force[j] - b * s[1] - k * s[0] - Fc * np.tanh(s[1] / eps)],
+                        (t[j], t[j + 1]), x, method="Radau", rtol=1e-10, atol=1e-13)
+        x = sol.y[:, -1]
+        reference.append(x[0])
+    reference = np.array(reference)
+    model = OutputSimulator(graph, Experiment(t, {}, {}, {})).model
+    P = model.param_vector(None).reshape(1, -1)
+    X, _, most = rosenbrock_samples(model, t, force[:, None], model.default_state.reshape(1, -1),
+                                    model.default_held.reshape(1, -1), P)
+    position = model.h(X[:, 0], force[:, None], t=t, p=P)[:, model.output_index["x"]]
+    assert most > 7                                     # the linear rule's most: 7
+    assert np.max(np.abs(position - reference)) < 1e-4 * np.ptp(reference)

@@ -19,6 +19,7 @@ import ctypes
 __all__ = ["STEPS_SOURCE", "steps_driver", "c_derivative"]
 
 STEPS_SOURCE = r"""
+#include <math.h>
 #include <stddef.h>
 typedef void (*bc_f_fn)(int n, const double *t, int st, const double *x, const double *u, int su,
                         const double *z, const double *d, int sd, const double *p, int sp,
@@ -42,15 +43,18 @@ static void bc_rows_product(int n, int nx, const double *W, const double *x, dou
      u_i = Winv (gamma h f(x + sum_{j<i} a_ij u_j) + sum_{j<i} c_ij u_j),  x += sum_i mw_i u_i,
    a and c (s, s) row-major, Winv (n, nx, nx) each row's W^-1.  The inputs u are one row shared by
    the batch; d and p have row strides sd, sp (0: one row shared); z is the (empty) algebraic vector.
-   Every stage sees the time at the sub-step's start.  work holds (2 + s) n nx doubles. */
-void bc_rosw_steps(void *fn, int n, int nx, double t0, double h, int m, int s, const double *a,
-                   const double *c, const double *mw, double gamma, double *x, const double *u,
-                   const double *z, const double *d, int sd, const double *p, int sp,
-                   const double *Winv, double *work) {
+   Every stage sees the time at the sub-step's start.  work holds (2 + s) n nx doubles.
+   Returns the largest |sum_i me_i u_i| / tol[k] over the sub-steps, rows and states k (the local
+   error estimate against its tolerance; tol[k] = inf: not measured), NaN where one is NaN. */
+double bc_rosw_steps(void *fn, int n, int nx, double t0, double h, int m, int s, const double *a,
+                     const double *c, const double *mw, const double *me, const double *tol, double gamma,
+                     double *x, const double *u, const double *z, const double *d, int sd, const double *p,
+                     int sp, const double *Winv, double *work) {
   bc_f_fn f = (bc_f_fn)fn;
   size_t nn = (size_t)n * nx;
   double *fv = work, *xs = work + nn, *stage = work + 2 * nn;
-  double t = t0;
+  double t = t0, worst = 0.0;
+  int nan = 0;
   for (int step = 0; step < m; ++step) {
     for (int i = 0; i < s; ++i) {
       for (size_t q = 0; q < nn; ++q) xs[q] = x[q];
@@ -70,8 +74,16 @@ void bc_rosw_steps(void *fn, int n, int nx, double t0, double h, int m, int s, c
       const double *ui = stage + (size_t)i * nn;
       for (size_t q = 0; q < nn; ++q) x[q] += mw[i] * ui[q];
     }
+    for (size_t q = 0; q < nn; ++q) {
+      double e = 0.0;
+      for (int i = 0; i < s; ++i) e += me[i] * stage[(size_t)i * nn + q];
+      e = fabs(e) / tol[q % (size_t)nx];
+      if (e != e) nan = 1;
+      else if (e > worst) worst = e;
+    }
     t += h;
   }
+  return nan ? NAN : worst;
 }
 """
 
@@ -81,7 +93,7 @@ def steps_driver():
     from .c_build import driver_function
     vp, i, dbl = ctypes.c_void_p, ctypes.c_int, ctypes.c_double
     return driver_function(STEPS_SOURCE, "bc_rosw_steps",
-                           [vp, i, i, dbl, dbl, i, i, vp, vp, vp, dbl, vp, vp, vp, vp, i, vp, i, vp, vp], None)
+                           [vp, i, i, dbl, dbl, i, i, vp, vp, vp, vp, vp, dbl, vp, vp, vp, vp, i, vp, i, vp, vp], dbl)
 
 
 def c_derivative(model):

@@ -490,11 +490,12 @@ def _choose(reference, fits, floor, evidence, res, exp, train, held, not_open_lo
         f.y = None
     chosen = choose(reference, fits, noise=floor, evidence=_lookup(evidence), measured=held.outputs)
     alternatives = indistinguishable(chosen, fits, reference, noise=floor, measured=held.outputs)
-    for f in fits:
-        f.extra.pop("holdout_y", None)     # read by the choice only
     if chosen is None and open_loop is not None:
         from .open_loop_judge import choose_open_loop
-        chosen = choose_open_loop(*open_loop, fits, evidence=_lookup(evidence))
+        chosen, alternatives = choose_open_loop(*open_loop, fits, evidence=_lookup(evidence), measured=held.outputs)
+    for f in fits:
+        for key in ("holdout_y", "open_loop_y"):     # read by the choice only
+            f.extra.pop(key, None)
     if chosen is not None or not by_training:
         return chosen, alternatives
     nominal_train = {o: nrmse(train.outputs[o], res.simulated[o][:n]) for o in exp.outputs}

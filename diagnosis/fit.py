@@ -391,7 +391,8 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
         How the held-out error is measured (open-loop, or the segment simulation error where
         the nominal drifts or diverges); default open-loop.  The open-loop held-out NRMSE is
         kept in ``extra["open_loop"]`` (inf where that run diverges: under the segment judge
-        such a fit is still judged).
+        such a fit is still judged), and under the segment judge its held-out prediction in
+        ``extra["open_loop_y"]`` (:mod:`diagnosis.open_loop_judge`).
     mid_run : bool, optional
         Whether `train` (and `x0`) is a window cut from a longer run rather than the recording's
         start; default: whenever `x0` is given.  :func:`diagnosis.diagnose.diagnose` fits from
@@ -475,6 +476,8 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     if judge is not None and holdout is not None:
         judged = judge.evaluate(objective.sim.on(full), values, x0)
         holdout_nrmse, open_loop = judged.nrmse, judged.open_loop
+        open_loop_y = ({o: judged.y[o][-holdout.t.size:] for o in outputs} if judged.segments is not None
+                       else None)     # under the segment judge, for diagnosis.open_loop_judge
         scored = judged.segments if judged.segments is not None else {
             o: v[-holdout.t.size:] for o, v in judged.y.items()}
         try:
@@ -496,13 +499,14 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
         except BondcosimError as exc:
             return CandidateFit(candidate, message=f"{label}: the fitted model does not run: {exc}", graph=model,
                                 n_simulations=objective.n_runs, **failed)
-        open_loop = dict(holdout_nrmse)
+        open_loop, open_loop_y = dict(holdout_nrmse), None
     return CandidateFit(candidate, values, train_nrmse, holdout_nrmse, priced(specs), converged,
                         message if converged else f"{label} did not converge: {message}", model,
                         objective.n_runs + 1,
                         {"train_cost": 0.5 * float(sum(v ** 2 for v in train_nrmse.values())),
                          "open_loop": open_loop, "x0": own_start,
-                         "holdout_y": held_out_prediction(scored) if scored is not None else None},
+                         "holdout_y": held_out_prediction(scored) if scored is not None else None,
+                         "open_loop_y": held_out_prediction(open_loop_y) if open_loop_y is not None else None},
                         y)
 
 

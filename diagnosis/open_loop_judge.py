@@ -19,6 +19,11 @@ friction or a constant load on the same carriage stops it too, with open-loop er
 three and seven times the viscous law's.  A null recording whose nominal does not drift never
 reaches this rule (it is judged open-loop from the start).  It applies to the first round
 (:func:`diagnosis.diagnose.diagnose`); further rounds are judged as before.
+
+The fits of other kinds the open-loop held-out part cannot tell apart from the winner are listed
+with it, by the same test as under the other judges (:func:`diagnosis.alternatives.indistinguishable`,
+on the fits' open-loop held-out predictions, ``extra["open_loop_y"]``); before, such an answer
+carried no list at all (the list was that of the segment reading, which had chosen nothing).
 """
 from __future__ import annotations
 
@@ -26,13 +31,15 @@ from dataclasses import replace
 
 import numpy as np
 
+from .alternatives import indistinguishable
 from .fit import NEAR_FLOOR, choose, needs_explaining, unpriced_error
 
 __all__ = ["choose_open_loop"]
 
 
-def choose_open_loop(nominal_open_loop: dict, floor: dict, fits, evidence=None):
-    """The fit that predicts the held-out part open-loop to about the noise, or None.
+def choose_open_loop(nominal_open_loop: dict, floor: dict, fits, evidence=None, measured=None):
+    """The fit that predicts the held-out part open-loop to about the noise, or None, and the
+    fits of other kinds the open-loop held-out part cannot tell apart from it.
 
     Parameters
     ----------
@@ -44,12 +51,17 @@ def choose_open_loop(nominal_open_loop: dict, floor: dict, fits, evidence=None):
         Their open-loop held-out NRMSE in ``extra["open_loop"]`` (:func:`diagnosis.fit.fit_candidate`).
     evidence : callable, optional
         As for :func:`diagnosis.fit.choose`.
+    measured : dict str -> ndarray, optional
+        The recorded held-out outputs; without them no alternative is resolved (all that tie are
+        listed).
 
     Returns
     -------
-    CandidateFit or None
+    chosen : CandidateFit or None
         The fit itself (its held-out numbers stay the segment judge's), with
         ``extra["judge"] = "open-loop"`` and ``extra["open_loop_reading"]`` its open-loop NRMSE.
+    alternatives : list of diagnosis.alternatives.Alternative
+        Their held-out NRMSE the open-loop ones; empty when none is chosen.
 
     Examples
     --------
@@ -59,27 +71,29 @@ def choose_open_loop(nominal_open_loop: dict, floor: dict, fits, evidence=None):
     ...     return CandidateFit(SimpleNamespace(kind="viscous_friction"), {}, {}, {"v": 0.03}, 1, True, "",
     ...                         extra={"open_loop": {"v": open_loop}})
     >>> near, drift_stopped = fit(0.03), fit(0.10)
-    >>> choose_open_loop({"v": 1.5}, {"v": 0.02}, [near]) is near
+    >>> choose_open_loop({"v": 1.5}, {"v": 0.02}, [near])[0] is near
     True
-    >>> choose_open_loop({"v": 1.5}, {"v": 0.02}, [drift_stopped]) is None
-    True
+    >>> choose_open_loop({"v": 1.5}, {"v": 0.02}, [drift_stopped])
+    (None, [])
     """
-    pairs = []        # (fit, the same fit with its open-loop errors as its held-out ones)
+    pairs = []        # (fit, the same fit judged by its open-loop errors and prediction)
     for f in fits:
         reading = f.extra.get("open_loop") if f.success else None
         if reading and all(np.isfinite(reading.get(o, np.inf)) for o in nominal_open_loop):
-            extra = {k: v for k, v in f.extra.items() if k != "holdout_y"}   # the segments' prediction
+            extra = {k: v for k, v in f.extra.items() if k not in ("holdout_y", "open_loop_y")}
+            extra["holdout_y"] = f.extra.get("open_loop_y")          # not the segments' prediction
             pairs.append((f, replace(f, holdout_nrmse=dict(reading), extra=extra)))
     if not pairs:
-        return None
+        return None, []
     reference = {o: (v if np.isfinite(v) else 1.0) for o, v in nominal_open_loop.items()}
-    best = choose(reference, [p for _, p in pairs], noise=floor, evidence=evidence)
+    judged = [p for _, p in pairs]
+    best = choose(reference, judged, noise=floor, evidence=evidence)
     significant = needs_explaining(reference, floor)
     if best is None or not significant:
-        return None
+        return None, []
     if unpriced_error(best, significant) > NEAR_FLOOR ** 2 * sum(floor.get(o, 0.0) ** 2 for o in significant):
-        return None
+        return None, []
     original = next(f for f, p in pairs if p is best)
     original.extra["judge"] = "open-loop"
     original.extra["open_loop_reading"] = dict(best.holdout_nrmse)
-    return original
+    return original, indistinguishable(best, judged, reference, noise=floor, measured=measured)

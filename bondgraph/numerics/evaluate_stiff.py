@@ -19,8 +19,8 @@ four stages, third order, L-stable, :math:`\\gamma = 0.43586652150845900`.  With
 from the paper's tables :math:`\\alpha, \\Gamma, b` (:data:`ALPHA`, :data:`GAMMA_TABLE`, :data:`B`),
 :math:`L` the strictly lower triangle.
 It keeps order 3 with any :math:`W` (a W-method), so :math:`J = \\partial f/\\partial x` is
-evaluated once per sample interval, at its start, and :math:`W^{-1}` serves all of its
-sub-steps.  Inputs are held over each interval (zero-order hold), as in the RK4 path.  (Until
+evaluated once per sample interval (or per piece of it, below), at its start, and :math:`W^{-1}`
+serves all of its sub-steps.  Inputs are held over each interval (zero-order hold), as in the RK4 path.  (Until
 2026-11 this was the second-order ROS2 of Verwer et al. 1999: see "Sub-steps" for why it went.)
 
 Sub-steps: each interval takes ``m`` equal sub-steps of length :math:`h`.  A followed mode
@@ -67,7 +67,7 @@ import numpy as np
 
 from ..errors import SimulationError
 
-__all__ = ["rosenbrock_samples", "MAX_SUBSTEPS", "TOLERANCE", "ERROR_CONSTANT"]
+__all__ = ["rosenbrock_samples", "MAX_SUBSTEPS", "TOLERANCE", "ERROR_CONSTANT", "RTOL"]
 
 #: ROS34PW2's tables alpha_ij, gamma_ij, b_i as the paper gives them (checked in tests/test_numerics_stiff.py:
 #: order 3 with an exact, a frozen and a wrong J; L-stable)

@@ -11,9 +11,9 @@ them), and each interval is integrated by the compiled classic RK4 of
   the largest eigenvalue modulus of :math:`\\partial f/\\partial x` at the
   initial point (RK4 stays accurate for :math:`h|\\lambda| \\le 0.5`).
 
-A smooth model that would need more than ``_STIFF_SUBSTEPS`` (150) such sub-steps per sample
-runs on the L-stable linearly implicit Rosenbrock W-method ROS34PW2 of
-:mod:`bondgraph.numerics.evaluate_stiff` instead.
+A smooth model that would need more such sub-steps per sample than the L-stable linearly
+implicit Rosenbrock W-method ROS34PW2 of :mod:`bondgraph.numerics.evaluate_stiff` costs (at
+most ``_STIFF_SUBSTEPS``, 1000; fewer the more its derivative costs) runs on that instead.
 
 This is the fixed-step scheme of :func:`bondgraph.numerics.simulate` with the sample
 intervals of the recording as output intervals, uneven sampling included;
@@ -44,13 +44,21 @@ _RK4_ACCURACY = 0.5       # h * |lambda_max| per sub-step for smooth models
 #: 5-7 times slower (seed 2727, cases 010 and 024, on a loaded machine) for the same accuracy (at seed
 #: 3535 case 019's truth values the model is 3.8 noise sigmas of tau off that truth with either)
 _HELD_RK4_REACH = 2.0
-#: RK4 sub-steps per sample interval beyond which a smooth model is integrated by the
-#: linearly implicit Rosenbrock method instead (:mod:`bondgraph.numerics.evaluate_stiff`): where
-#: they cost the same.  On the pam (10.5 s at 1 kHz) one run took 0.8 s on RK4 at 118 sub-steps and
-#: 1.1 s on Rosenbrock, whose cost is mostly per interval (five runs batched: 2.5 s and 1.3 s), and
-#: both were within 1e-5 of tau's span of scipy's Radau (session 22).  Until then 1000, when the
-#: stiff path was the less accurate ROS2
-_STIFF_SUBSTEPS = 150
+#: Most RK4 sub-steps per sample interval of a smooth model before it is integrated by the
+#: linearly implicit Rosenbrock method instead (:mod:`bondgraph.numerics.evaluate_stiff`): fewer
+#: where its derivative costs more (:meth:`OutputSimulator._stiff_from`).  Both paths agree to
+#: 0.01 noise sigmas on the exoskeleton and to 1e-5 of tau's span on the pam-frictionless.
+_STIFF_SUBSTEPS = 1000
+#: The cost model that sets where (session 22, measured here): the stiff path costs about 100 us
+#: per sample interval, mostly in Python (the Jacobian, its eigenvalues, W^-1), and an RK4 sub-step
+#: 47 ns plus 0.4 ns per operation of the state derivatives (sympy ``count_ops``): the
+#: exoskeleton's (64 operations) 73 ns, the pam-frictionless's (1512) 650 ns.  So the crossover is
+#: at about 150 sub-steps on the pam-frictionless, where one run took 0.8 s on RK4 at 118
+#: sub-steps and 1.1 s on the stiff path, and beyond 1000 on the exoskeleton, whose nominal took
+#: 0.1-0.2 s on RK4 at 515 sub-steps and 0.3-0.5 s on the stiff path (with a fixed 150 its
+#: diagnoses took 2-3 times as long; with 1000 a pam-frictionless case took 682 s for 66 s).
+_STIFF_INTERVAL_COST = 100e-6
+_RK4_STEP_COST = (47e-9, 0.4e-9)
 #: most RK4 sub-steps per sample interval of a model with held variables (it has no stiff path)
 _HELD_MOST_SUBSTEPS = 1000
 
@@ -201,6 +209,7 @@ class OutputSimulator:
         other.t = np.ascontiguousarray(experiment.t, dtype=float)
         other.U = input_matrix(self.equations, other.t, experiment.inputs)
         other._dt = np.diff(other.t)
+        other._stiff_limit = getattr(self, "_stiff_limit", None)
         return other
 
     def with_input(self, column: str, values) -> "OutputSimulator":
@@ -337,8 +346,21 @@ class OutputSimulator:
 
     def _stiff(self, subs) -> bool:
         """Whether a run needing `subs` RK4 sub-steps per sample interval takes the Rosenbrock
-        path: a smooth model past ``_STIFF_SUBSTEPS``."""
-        return bool(self.equations.is_smooth and subs.max() > _STIFF_SUBSTEPS)
+        path: a smooth model past :meth:`_stiff_from`."""
+        return bool(self.equations.is_smooth and subs.max() > self._stiff_from())
+
+    def _stiff_from(self) -> int:
+        """RK4 sub-steps per sample interval beyond which this model's runs cost less on the
+        Rosenbrock path (``_STIFF_INTERVAL_COST`` over an RK4 sub-step's ``_RK4_STEP_COST``), at
+        most ``_STIFF_SUBSTEPS``; counted once per model."""
+        if getattr(self, "_stiff_limit", None) is None:
+            try:
+                ops = sum(int(sp.count_ops(e)) for e in self.equations.f)
+            except (TypeError, ValueError, AttributeError):    # an expression sympy cannot count
+                ops = 0
+            step = _RK4_STEP_COST[0] + _RK4_STEP_COST[1] * ops
+            self._stiff_limit = int(min(_STIFF_SUBSTEPS, np.ceil(_STIFF_INTERVAL_COST / step)))
+        return self._stiff_limit
 
     def _run_group(self, group, P, h, x_init, runs) -> None:
         """Simulate the rows `group` of `P` together (sub-step `h` per row), into `runs`."""

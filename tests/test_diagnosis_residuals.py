@@ -231,7 +231,7 @@ def test_a_stiff_law_on_a_held_variable_model_nests_finer_steps_in_the_held_laws
 
 
 def test_a_run_takes_the_integrator_it_takes_alone_whatever_it_is_batched_with():
-    """A smoothed Coulomb friction so sharp that its slope at rest needs more than 150 RK4
+    """A smoothed Coulomb friction so sharp that its slope at rest needs more than 1000 RK4
     sub-steps per sample runs on the Rosenbrock path; a blunt one runs on RK4.  Batched together,
     each gives the outputs it gives alone (before, the sharp run put the whole batch on ROS2 at the sub-steps of
     both: the blunt run's speed moved by 0.2 % of its spread, the sharp run's by 25 %)."""
@@ -243,3 +243,25 @@ def test_a_run_takes_the_integrator_it_takes_alone_whatever_it_is_batched_with()
     for run, ref in zip(together, alone + alone[:1]):
         for o in ("x", "v"):
             assert np.max(np.abs(run.outputs[o] - ref.outputs[o])) <= 1e-9 * np.ptp(ref.outputs[o])
+
+
+def test_the_stiff_path_takes_over_sooner_the_more_a_derivative_costs():
+    """A run goes to the Rosenbrock path where it would cost more on RK4 (residuals._stiff_from,
+    a cost model in the operations of the state derivatives): the mass-spring-damper keeps RK4 up
+    to 1000 sub-steps per sample, as the exoskeleton does (RK4 at 515 sub-steps was 2-3 times
+    cheaper there), while the same plant with a seal law of 300 terms switches at 300 or fewer
+    (the pam-frictionless, 1512 operations, at 154)."""
+    from bondgraph import R
+    from plants.library import mass_spring_damper
+    t = np.linspace(0.0, 1.0, 11)
+    exp = Experiment(t, {"F": np.zeros_like(t)}, {"x": t}, {"F": "N", "x": "m"})
+    cheap = OutputSimulator(library.build("mass-spring-damper"), exp)
+    heavy_graph = mass_spring_damper(b=0.4)
+    heavy_graph.add(R("seal", effort="c*(" + " + ".join(f"tanh(f/{k + 1})" for k in range(300)) + ")",
+                      params={"c": 1e-3}, domain="translation"))
+    heavy_graph.connect("v_mass", "seal")
+    heavy = OutputSimulator(heavy_graph, exp)
+    assert cheap._stiff_from() == 1000
+    assert heavy._stiff_from() <= 300
+    assert heavy._stiff(np.array([500])) and not cheap._stiff(np.array([500]))
+    assert heavy.on(exp)._stiff_limit == heavy._stiff_from()       # counted once per model

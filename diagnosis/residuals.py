@@ -44,10 +44,11 @@ _RK4_ACCURACY = 0.5       # h * |lambda_max| per sub-step for smooth models
 #: 5-7 times slower (seed 2727, cases 010 and 024, on a loaded machine) for the same accuracy (at seed
 #: 3535 case 019's truth values the model is 3.8 noise sigmas of tau off that truth with either)
 _HELD_RK4_REACH = 2.0
-#: Most RK4 sub-steps per sample interval of a smooth model before it is integrated by the
-#: linearly implicit Rosenbrock method instead (:mod:`bondgraph.numerics.evaluate_stiff`): fewer
-#: where its derivative costs more (:meth:`OutputSimulator._stiff_from`).  Both paths agree to
-#: 0.01 noise sigmas on the exoskeleton and to 1e-5 of tau's span on the pam-frictionless.
+#: Most RK4 sub-steps per sample interval of any run.  A smooth model past them, or sooner where
+#: its derivative costs more (:meth:`OutputSimulator._stiff_from`), is integrated by the linearly
+#: implicit Rosenbrock method instead (:mod:`bondgraph.numerics.evaluate_stiff`); a model with held
+#: variables has no such path and fails.  Both paths agree to 0.01 noise sigmas on the exoskeleton
+#: and to 1e-5 of tau's span on the pam-frictionless.
 _STIFF_SUBSTEPS = 1000
 #: The cost model that sets where (session 22, measured here): the stiff path costs about 100 us
 #: per sample interval, mostly in Python (the Jacobian, its eigenvalues, W^-1), and an RK4 sub-step
@@ -59,8 +60,6 @@ _STIFF_SUBSTEPS = 1000
 #: diagnoses took 2-3 times as long; with 1000 a pam-frictionless case took 682 s for 66 s).
 _STIFF_INTERVAL_COST = 100e-6
 _RK4_STEP_COST = (47e-9, 0.4e-9)
-#: most RK4 sub-steps per sample interval of a model with held variables (it has no stiff path)
-_HELD_MOST_SUBSTEPS = 1000
 
 
 @dataclass
@@ -188,6 +187,7 @@ class OutputSimulator:
         self.t = np.ascontiguousarray(experiment.t, dtype=float)
         self.U = input_matrix(self.equations, self.t, experiment.inputs)
         self._dt = np.diff(self.t)
+        self._stiff_limit = None       # counted when first needed (_stiff_from)
 
     def on(self, experiment) -> "OutputSimulator":
         """The same compiled model and outputs on another experiment's grid and inputs.
@@ -209,7 +209,7 @@ class OutputSimulator:
         other.t = np.ascontiguousarray(experiment.t, dtype=float)
         other.U = input_matrix(self.equations, other.t, experiment.inputs)
         other._dt = np.diff(other.t)
-        other._stiff_limit = getattr(self, "_stiff_limit", None)
+        other._stiff_limit = self._stiff_limit
         return other
 
     def with_input(self, column: str, values) -> "OutputSimulator":
@@ -308,8 +308,8 @@ class OutputSimulator:
 
         A finite-difference Jacobian of a fit needs one run per parameter
         plus one; as a batch they cost about a third of separate runs.  Each run takes the
-        integrator it would take alone: the runs that need the Rosenbrock method (more than ``_STIFF_SUBSTEPS``
-        RK4 sub-steps per sample) are batched apart from the others.
+        integrator it would take alone: the runs that take the Rosenbrock method (:meth:`_stiff`)
+        are batched apart from the others.
 
         Parameters
         ----------
@@ -328,7 +328,7 @@ class OutputSimulator:
         x_init = self.initial_state(x0)
         h = np.array([self._sub_step(x_init, P[i:i + 1]) for i in range(P.shape[0])])
         runs = [None] * P.shape[0]
-        # a run takes the integrator it takes alone (RK4, or Rosenbrock past _STIFF_SUBSTEPS): a stiff
+        # a run takes the integrator it takes alone (RK4, or Rosenbrock where _stiff): a stiff
         # run batched with others must not put them on the stiff path (seed 4141, case 034: a Stribeck fit's
         # starts, batched with its guess 1000 times the fitted level, cost 2-9 times what they cost alone)
         stiff = np.array([self._stiff(self._substeps(h_row)[0]) for h_row in h])
@@ -353,7 +353,7 @@ class OutputSimulator:
         """RK4 sub-steps per sample interval beyond which this model's runs cost less on the
         Rosenbrock path (``_STIFF_INTERVAL_COST`` over an RK4 sub-step's ``_RK4_STEP_COST``), at
         most ``_STIFF_SUBSTEPS``; counted once per model."""
-        if getattr(self, "_stiff_limit", None) is None:
+        if self._stiff_limit is None:
             try:
                 ops = sum(int(sp.count_ops(e)) for e in self.equations.f)
             except (TypeError, ValueError, AttributeError):    # an expression sympy cannot count
@@ -415,7 +415,7 @@ class OutputSimulator:
             # damper across a stiff gear): the L-stable linearly implicit Rosenbrock method steps over it
             from bondgraph.numerics.evaluate_stiff import rosenbrock_samples
             return rosenbrock_samples(m, grid, U, x, d, P)
-        if subs.max() <= _HELD_MOST_SUBSTEPS:
+        if subs.max() <= _STIFF_SUBSTEPS:
             X, D = m.rk4_samples(grid, U, subs, x, d, P, every=every)
             return X, D, int(subs.max())
         raise SimulationError(f"model {self.equations.name!r}: {subs.max()} RK4 sub-steps of "

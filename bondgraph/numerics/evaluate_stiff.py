@@ -211,11 +211,9 @@ def _attempt(model, n, d, p, p_rows, use_c):
     `x` (unchanged) with ``W = I - gamma h J``, and the largest local error estimate against
     `tol` (per state) over them, in C where the model allows, else in Python."""
     sub_steps = _c_sub_steps(model, n, d, p_rows) if use_c else None
-    eye = None
+    eye = np.eye(len(model.state_names))
 
     def attempt(x, u_row, u, t0, h, m, J, tol):
-        nonlocal eye
-        eye = np.eye(x.shape[1]) if eye is None else eye
         with np.errstate(all="ignore"):    # a run leaving the finite numbers is named by the caller
             Winv = np.linalg.inv(eye - (GAMMA * h) * J)
             if sub_steps is not None:

@@ -42,16 +42,20 @@ def test_a_limit_between_the_levels_of_a_prbs_input_is_found(tmp_path):
     assert improved < 0.2 * nominal
 
 
-def test_a_constant_input_still_gets_a_valid_saturation_candidate():
-    """An input held constant (a load torque recorded as 0) has no span to start a limit inside:
-    the candidate is offered with its plain starts (no start outside its bounds)."""
+@pytest.mark.parametrize("level", [0.0, 3.33e5])
+def test_a_constant_input_still_gets_a_valid_saturation_candidate(level):
+    """An input held constant (a load torque recorded as 0, a supply pressure held at 333 kPa) has
+    no span to start a limit inside: the candidate is offered with its plain starts (no start
+    outside its bounds).  At 333 kPa a span floored at 1e-12 vanished in floating point, and the
+    candidate's bounds collapsed onto the level: the whole diagnosis stopped (seed 2929, case 029)."""
     from diagnosis.catalogue import candidates
     from diagnosis.place import Place
     from diagnosis.recording import Experiment
     import plants
 
     t = np.arange(0.0, 2.0, 0.02)
-    exp = Experiment(t, {"F": np.zeros(t.size)}, {"x": np.zeros(t.size)}, {"F": "N", "x": "m"}, "constant")
+    exp = Experiment(t, {"F": np.full(t.size, level)}, {"x": np.zeros(t.size)}, {"F": "N", "x": "m"}, "constant")
     (sat,) = [c for c in candidates(plants.load("mass-spring-damper"), Place("input", "F"), experiment=exp)
               if c.kind == "saturation"]
     assert all(p.lower <= s[p.name] <= p.upper for s in sat.starts for p in sat.params if p.name in s)
+    assert all(p.lower < p.guess < p.upper for p in sat.params)

@@ -34,7 +34,10 @@ class InputRecord:
 
     @property
     def width(self) -> float:
-        return max(self.hi - self.lo, 1e-12)
+        """The recorded span, or for a constant input a billionth of its size (at least 1e-12): a
+        span that a bound or start a fraction of it away from the level still resolves in floating
+        point (a supply pressure held at 333 kPa had ``lo - width == lo`` at a floor of 1e-12)."""
+        return max(self.hi - self.lo, 1e-9 * max(abs(self.lo), abs(self.hi)), 1e-12)
 
     @property
     def mid(self) -> float:

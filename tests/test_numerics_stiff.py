@@ -259,3 +259,25 @@ def test_sticking_and_sliding_within_an_interval_is_checked_by_the_error_estimat
     position = model.h(X[:, 0], force[:, None], t=t, p=P)[:, model.output_index["x"]]
     assert most > 7                                     # the linear rule's most: 7
     assert np.max(np.abs(position - reference)) < 1e-4 * np.ptp(reference)
+
+
+def test_a_fall_from_an_unstable_rest_faster_than_the_shortest_sub_step_reaches_its_stable_rest():
+    """A mass (1 kg) pushed off an unstable rest: a negative resistance -lambda (v - v^3), lambda =
+    2.6e7 1/s (a Stribeck peak's falling slope on a nearly massless part grows as fast), and a force of
+    1 mN from t = 5 ms, sampled at 1 kHz.  Its velocity leaves 0 and settles at the stable rest
+    v = 1 + F/(2 lambda) (analytic) within a microsecond.  The linear rule's shortest sub-step
+    (1 ms / 4096) has h lambda = 6; the error check now halves below it, and checks a state leaving 0
+    against where the piece took it.  Before, the run settled at v = 0.068 (a spurious rest of the
+    stepping), and with the halving alone the first sample after the push read 0.085."""
+    lam, force = 2.6e7, 1e-3
+    graph = mass_spring_damper(m=1.0, b=1e-9, k=1e-9)
+    graph.add(R("drive", effort="-lam*(f - f**3)", params={"lam": lam}, domain="translation"))
+    graph.connect("v_mass", "drive")
+    t = np.arange(0.0, 0.02, 0.001)
+    F = np.where(t >= 0.005, force, 0.0)[:, None]
+    model = OutputSimulator(graph, Experiment(t, {}, {}, {})).model
+    P = model.param_vector(None).reshape(1, -1)
+    X, _, _ = rosenbrock_samples(model, t, F, model.default_state.reshape(1, -1), model.default_held.reshape(1, -1), P)
+    v = model.h(X[:, 0], F, t=t, p=P)[:, model.output_index["v"]]
+    assert np.all(v[:6] == 0.0)                          # at rest until the push (held over [5, 6) ms)
+    np.testing.assert_allclose(v[6:], 1.0 + force / (2 * lam), atol=1e-6)

@@ -538,16 +538,18 @@ def _twin_fits(graph, fits, train, rv, fit, say, label, best, x0=None, n_places:
     ``fit(candidate, abandon_above)``; `best` the single-place fits' best training cost
     (:func:`diagnosis.fit_in_turn.fit_in_turn`); `x0` the recording's initial state.  As many
     groups as places were fitted (`n_places`, 3 to 6): the tied and actuator places that join the
-    located ones must not crowd out the twins of another place's best kind."""
+    located ones must not crowd out the twins of another place's best kind.  A group's members that
+    end idle are dropped from its answer (:func:`diagnosis.twins.without_idle_members`)."""
     from .catalogue import candidates
     from .fit_in_turn import fit_in_turn
     from .graph_location import candidate_places
-    from .twins import twin_groups
+    from .twins import twin_groups, without_idle_members
 
     groups = twin_groups(graph, fits, candidate_places(graph, experiment=train),
                          lambda place: candidates(graph, place, regime_variables=rv, experiment=train, x0=x0),
                          experiment=train, best=min(max(int(n_places), 3), 6))
-    return fit_in_turn(groups, fit, say, label, best=best, suffix=", twins")[0]
+    fitted = fit_in_turn(groups, fit, say, label, best=best, suffix=", twins")[0]
+    return [without_idle_members(f, graph) for f in fitted]
 
 
 def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds, *, top, say, label, start=None):

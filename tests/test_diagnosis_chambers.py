@@ -135,3 +135,30 @@ def test_twin_places_are_the_repeated_components():
     assert built.parameters()["c_leak_chamber2"].value == 2e-11
     assert str(group) == "leak at junction chamber1, junction chamber2"
     assert group.explain().count("a leak at") == 2
+
+
+def test_a_twin_group_whose_member_ends_idle_answers_with_the_member_that_acts():
+    """Fitted at both chambers, a leak of one chamber ends at 0 at the other (seed 2929, case 004:
+    9.9e-20 against 2.77e-13 kg/s/Pa): the answer is the single leak that acts, with its values, its
+    price and its graph; a group whose members all act, or all idle, stays as it is."""
+    from diagnosis.catalogue import candidates
+    from diagnosis.fit import CandidateFit
+    from diagnosis.place import Place
+    from diagnosis.twins import IDLE, CandidateGroup, without_idle_members
+
+    g = pam("locked")
+    leaks = [next(c for c in candidates(g, Place("junction", j)) if c.kind == "leak") for j in ("chamber2", "chamber1")]
+    group = CandidateGroup(tuple(leaks))
+    guess = leaks[0].params[0].guess
+
+    def fitted(c2, c1):
+        values = {"c_leak_chamber2": c2 * guess, "c_leak_chamber1": c1 * guess}
+        return CandidateFit(group, values, {"P1": 0.01}, {"P1": 0.02}, group.n_params, True, "", group.build(g))
+
+    answer = without_idle_members(fitted(0.1 * IDLE, 0.3), g)
+    assert answer.candidate is leaks[1] and answer.values == {"c_leak_chamber1": 0.3 * guess}
+    assert answer.n_params == group.n_params - 1 and answer.holdout_nrmse == {"P1": 0.02}
+    assert "leak_chamber1" in answer.graph.elements and "leak_chamber2" not in answer.graph.elements
+    assert answer.extra["idle_twins"] == ["junction chamber2"]
+    for c2, c1 in ((10 * IDLE, 0.3), (0.0, 0.0)):
+        assert without_idle_members(fitted(c2, c1), g).candidate is group

@@ -182,8 +182,6 @@ def without_idle_members(fit, graph):
     or that is not of a group, is returned as it is.  A group fitted at the twins of a located
     chamber put the whole leak at the other chamber (the truth's value to three digits) and
     9.9e-20 at the located one, which the answer then named first (seed 2929, case 004)."""
-    from dataclasses import replace as replaced
-
     group = fit.candidate
     if not isinstance(group, CandidateGroup) or not fit.success:
         return fit
@@ -194,6 +192,6 @@ def without_idle_members(fit, graph):
     dropped = [p for i in idle for p in group.members[i].params]
     names = {p.name for p in dropped}
     candidate = active[0] if len(active) == 1 else CandidateGroup(active)
-    return replaced(fit, candidate=candidate, values={k: v for k, v in fit.values.items() if k not in names},
-                    n_params=fit.n_params - priced(dropped), graph=candidate.build(graph),
-                    extra={**fit.extra, "idle_twins": [str(group.members[i].place) for i in idle]})
+    return replace(fit, candidate=candidate, values={k: v for k, v in fit.values.items() if k not in names},
+                   n_params=fit.n_params - priced(dropped), graph=candidate.build(graph),
+                   extra={**fit.extra, "idle_twins": [str(group.members[i].place) for i in idle]})

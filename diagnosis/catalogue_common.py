@@ -74,6 +74,12 @@ class ParamSpec:
         """`value` within the bounds."""
         return float(min(max(value, self.lower), self.upper))
 
+    @property
+    def magnitude(self) -> bool:
+        """Whether this is a magnitude: bounded below by 0, where 0 is no effect, and guessed above it
+        (a friction level, a leak coefficient, a lag)."""
+        return self.lower == 0 and self.guess > 0
+
 
 def priced(specs) -> int:
     """How many of the parameters `specs` the choice of a model prices (:attr:`ParamSpec.priced`)."""

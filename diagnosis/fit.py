@@ -338,7 +338,7 @@ def _shrink_magnitudes(objective, theta0) -> None:
     place's effort (a viscous coefficient of 10 % of the muscles' torque per RMS speed) can make a
     light joint too stiff for the integration steps (seed 8888, case 068).  Nothing changes when
     none runs."""
-    magnitudes = np.array([s.lower == 0 and s.guess > 0 for s in objective.specs])
+    magnitudes = np.array([s.magnitude for s in objective.specs])
     if not magnitudes.any():
         return
     trials = [np.where(magnitudes, theta0 * f, theta0) for f in SHRINK]

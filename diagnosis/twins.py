@@ -163,12 +163,12 @@ def twin_groups(graph, fits, all_places, make_candidates, *, experiment=None, be
 
 
 def idle_members(group: CandidateGroup, values: dict) -> list[int]:
-    """The indices of `group`'s members whose magnitudes (their parameters bounded below by 0, where
-    0 is no effect, as :func:`diagnosis.fit._shrink_magnitudes` reads them) all ended at most
-    :data:`IDLE` of their guesses in `values`; a member without magnitudes is never idle."""
+    """The indices of `group`'s members whose magnitudes (:attr:`ParamSpec.magnitude
+    <diagnosis.catalogue_common.ParamSpec.magnitude>`) all ended at most :data:`IDLE` of their
+    guesses in `values`; a member without magnitudes is never idle."""
     idle = []
     for i, member in enumerate(group.members):
-        magnitudes = [p for p in member.params if p.lower == 0 and p.guess > 0]
+        magnitudes = [p for p in member.params if p.magnitude]
         if magnitudes and all(abs(values.get(p.name, p.guess)) <= IDLE * p.guess for p in magnitudes):
             idle.append(i)
     return idle

@@ -186,15 +186,16 @@ def rosenbrock_samples(model, t, U, x, d, p, *, use_c: bool = True):
             t0, length = pieces.pop()
             J = _jacobian(model, x, u, t0, p, d)
             h = min(dt / _sub_step_count(J, dt, span), h_hint)
-            m = int(max(min(np.ceil(length / h - 1e-9), np.ceil(length / dt * MAX_SUBSTEPS - 1e-9)), 1))
+            m = int(min(np.ceil(length / h - 1e-9), np.ceil(length / dt * MAX_SUBSTEPS - 1e-9)))
             h = length / m
             x_new, err = attempt(x, U[k], u, t0, h, m, J, tol)
-            reach = np.maximum(scale, np.max(np.abs(x_new), axis=0))
-            if np.any(np.isinf(tol) & (reach > 0)):
+            if np.isinf(tol).any():
                 # a state leaving 0 is checked against where the piece took it (a fall from an
                 # unstable rest, unchecked, settled 8 % of the way to its stable rest)
-                tol = RTOL * np.where(reach > 0, reach, np.inf)
-                x_new, err = attempt(x, U[k], u, t0, h, m, J, tol)
+                reach = np.maximum(scale, np.max(np.abs(x_new), axis=0))
+                if np.any(np.isinf(tol) & (reach > 0)):
+                    tol = RTOL * np.where(reach > 0, reach, np.inf)
+                    x_new, err = attempt(x, U[k], u, t0, h, m, J, tol)
             if not err <= 1.0 and length <= MIN_PIECE * dt:
                 _check_blow_up(model, np.maximum(scale, np.max(np.abs(x), axis=0)), x_new, t0)
             elif not err <= 1.0 and cut < MAX_PIECES:    # NaN too

@@ -82,15 +82,27 @@ _SETS_COMMON = {"1": ("Sf", "MSf"), "0": ("Se", "MSe")}
 
 
 def _driving_elements(graph, junction: str) -> list:
-    """The elements bonded to `junction`, and the sources on its neighbouring junctions that set
-    the neighbour's common variable (:data:`_SETS_COMMON`), which the bond between them carries."""
+    """The elements bonded to `junction`, and the sources that set what one of its bonds carries:
+    a source on a neighbouring junction setting the neighbour's common variable
+    (:data:`_SETS_COMMON`), and, behind a transformer or gyrator bonded to `junction`, the source on
+    its other port or the source setting the common variable of the junction there (a chamber
+    pressure behind a piston's area: an error of the pressure is a force at the piston, scaled)."""
     out = []
     for element, _ in junction_elements(graph, junction):
         out.append(element)
-        if element.ports is None:                          # a neighbouring junction
-            out += [e for e, _ in junction_elements(graph, element.name)
-                    if e.kind in _SETS_COMMON.get(element.kind, ())]
+        beyond = [element]
+        if element.kind in _TWO_PORTS:
+            beyond = [e for e, _ in junction_elements(graph, element.name) if e.name != junction]
+            out += [e for e in beyond if e.kind in _SOURCES]
+        for e in beyond:
+            if e.ports is None:                            # a neighbouring junction
+                out += [s for s, _ in junction_elements(graph, e.name) if s.kind in _SETS_COMMON.get(e.kind, ())]
     return out
+
+
+#: the power-conserving two-ports through which a source's effort or flow reaches a junction unchanged in time
+_TWO_PORTS = ("TF", "MTF", "GY", "MGY")
+_SOURCES = ("Se", "Sf", "MSe", "MSf")
 
 
 #: Places the location cannot tell from the ``top``-th: what they leave unexplained is within

@@ -122,20 +122,23 @@ def test_transport_delay_recovered_from_a_shifted_input(msd):
     assert fit.train_nrmse["x"] < 1e-6
 
 
-def test_a_delay_an_output_reads_directly_is_found_to_the_sample():
+@pytest.mark.parametrize("late", [3, 5, 7])
+def test_a_delay_an_output_reads_directly_is_found_to_the_sample(late):
     """The output `force` reads the (delayed) source's effort itself: at a sample it sees the
     zero-order-hold command of k samples before, and nothing in between, so the fit starts from
-    whole samples (the truth, 3 of them, is not among the lags' half-to-32-sample trial times)."""
+    whole samples (3 is not among the lags' half-to-32-sample trial times), then from each whole
+    sample between the best start's neighbours (5 and 7 are not among the delay's first starts:
+    seed 5757, case 041, a pressure 5 samples late, was fitted 6 late)."""
     graph = library.build("mass-spring-damper").copy()
     graph.add_output("force", "e_F", unit="N")
     rng = np.random.default_rng(4)
     u = np.repeat(rng.choice([-1.0, 1.0], T.size // 5 + 1), 5)[:T.size]     # a command switched every 5 samples
-    seen = np.concatenate([np.zeros(3), u[:-3]])                           # 3 samples late, 0 before
+    seen = np.concatenate([np.zeros(late), u[:-late]])                     # `late` samples late, 0 before
     y = OutputSimulator(graph, Experiment(T, {"F": seen}, {"force": T, "x": T}, UNITS))()
     exp = Experiment(T, {"F": u}, y, {**UNITS, "force": "N"})
     train, hold = exp.split(0.3)
     fit = fit_candidate(graph, _candidate(graph, Place("input", "F"), "transport_delay", train), train, hold)
-    assert fit.values["T_delay_F"] == pytest.approx(3 * (T[1] - T[0]), rel=1e-6)
+    assert fit.values["T_delay_F"] == pytest.approx(late * (T[1] - T[0]), rel=1e-6)
     assert fit.holdout_nrmse["force"] < 1e-12
 
 

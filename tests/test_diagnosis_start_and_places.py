@@ -109,6 +109,20 @@ def test_the_inputs_that_drive_a_located_junction_join_it():
     assert actuator_places(hydraulic, [Place("junction", "p2")], SimpleNamespace(inputs={"Q_p": None})) == []
 
 
+def test_a_source_behind_a_transformer_drives_the_located_junction():
+    """The pneumatic cylinder's chamber pressure p is an effort source on the piston area's
+    transformer, whose other port is the located piston: an error of p is a force there, scaled
+    by the area (seed 5757, case 041: a pressure 5 samples late, located at the piston, was
+    answered none with p never fitted).  The motor voltage behind the dc motor's gyrator is not:
+    the armature's inductance lies between (an effort on a 1-junction sets no common variable)."""
+    cylinder = library.build("pneumatic-cylinder")
+    recorded = SimpleNamespace(inputs={"p": None, "x": None})
+    assert actuator_places(cylinder, [Place("junction", "piston")], recorded) == [Place("input", "p"),
+                                                                                 Place("input", "x")]
+    motor = library.build("dc-motor")
+    assert actuator_places(motor, [Place("junction", "w_motor")], SimpleNamespace(inputs={"V": None})) == []
+
+
 def test_the_springs_that_carry_a_located_torque_node_join_it_for_the_storage_kinds():
     """The exoskeleton's three torque nodes are located alike (a flow at any of them explains the
     same): the series springs' 1-junctions they carry join, with only the kinds that act on the

@@ -151,6 +151,9 @@ def _parser() -> argparse.ArgumentParser:
                    help="most missing effects to find, one per round (default 2)")
     p.add_argument("--noise", action="append", default=[], metavar="NAME=SIGMA[:UNIT]",
                    help="known noise standard deviation of a measured output (default: estimated)")
+    p.add_argument("--keep-spikes", action="store_true",
+                   help="use every sample as recorded (default: a single sample that stands out of its neighbours "
+                        "by over 10 noise standard deviations where nothing else does is replaced, and named)")
     p.add_argument("--report", default=None, metavar="DIR",
                    help="write diagnosis.json, diagnosis.txt, plots and improved_model.json in DIR")
     p.add_argument("--json", action="store_true", help="print the result as JSON (issue 6 schema)")
@@ -325,7 +328,8 @@ def _cmd_diagnose(args) -> int:
     from plants import load as load_model
     report = diagnose(load_model(args.model), args.recording, inputs=args.input, outputs=args.output,
                       time=args.time, holdout=args.holdout, uncertain=args.uncertain, top=args.top,
-                      progress=True, max_effects=args.max_effects, noise=args.noise)
+                      progress=True, max_effects=args.max_effects, noise=args.noise,
+                      spikes="keep" if args.keep_spikes else "repair")
     if args.report:
         paths = report.save(args.report)
         print(f"wrote {', '.join(paths.values())}", file=sys.stderr)

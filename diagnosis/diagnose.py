@@ -113,6 +113,7 @@ def _start_estimator(train, noise, scales, states):
     a candidate's compiled model at `params` on the first samples of `train`, as the nominal's was
     (:func:`diagnosis.initial_state.estimate_initial_state`; its added states stay at theirs)."""
     from .initial_state import estimate_initial_state
+    from .outliers import isolated_spikes, spike_notes, without_spikes
 
     def start(simulator, params):
         est = estimate_initial_state(simulator, train, noise, scales=scales, params=params, states=states)
@@ -241,7 +242,8 @@ def _noise_overrides(noise, exp) -> dict:
 
 
 def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0.3, uncertain=(),
-             top: int = 3, progress: bool = False, x0=None, max_effects: int = 2, noise=None):
+             top: int = 3, progress: bool = False, x0=None, max_effects: int = 2, noise=None,
+             spikes: str = "repair"):
     """Locate, name and model what a model leaves out of a recording.
 
     Parameters
@@ -274,6 +276,11 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         Known measurement-noise standard deviations of some outputs, in the output's
         model unit (or ``"NAME=SIGMA[:UNIT]"``); the others are estimated from the
         recording and the nominal residual (:func:`diagnosis.residuals.noise_sigma`).
+    spikes : {"repair", "keep"}
+        ``"repair"``: single samples of an output that a sensor glitch put there (many noise
+        standard deviations off their neighbours, where the model, the inputs and the other
+        outputs are not) are replaced by the mean of their neighbours before anything else,
+        and the report names them (:mod:`diagnosis.outliers`); ``"keep"``: used as recorded.
 
     Returns
     -------
@@ -291,11 +298,14 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     from .fit_in_turn import fit_in_turn
     from .graph_location import locate_on_graph
     from .initial_state import estimate_initial_state
+    from .outliers import isolated_spikes, spike_notes, without_spikes
     from .locate import locate_regime, regime_variables, significant_windows
     from .recording import bind
     from .residuals import OutputSimulator, settle_substeps
     from .segments import choose_judge
 
+    if spikes not in ("repair", "keep"):
+        raise DiagnosisError(f"spikes must be 'repair' or 'keep'; found {spikes!r}")
     if int(top) < 1:
         raise DiagnosisError(f"top must be a positive number of places; found {top!r}")
     if isinstance(max_effects, bool) or not isinstance(max_effects, (int, np.integer)) or max_effects < 1:
@@ -311,6 +321,14 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     sim = OutputSimulator(graph, exp)
     res, diverged = _nominal_residuals(sim, graph, exp, x0)
     res.noise.update(_noise_overrides(noise, exp))
+    glitches = isolated_spikes(exp, res.run.outputs, res.noise, res.run.states) if spikes == "repair" else {}
+    if glitches:
+        say("isolated spikes", "; ".join(f"{o}: {len(i)} sample(s) replaced" for o, i in glitches.items()))
+        exp = without_spikes(exp, glitches)
+        train, held = exp.split(holdout)
+        sim = sim.on(exp)
+        res, diverged = _nominal_residuals(sim, graph, exp, x0)
+        res.noise.update(_noise_overrides(noise, exp))
     n_train = train.t.size
     start = "the given initial state" if x0 is not None else "the model's initial state"
     estimated = None                 # (the states' scales,) where the start was estimated
@@ -441,7 +459,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                     improved=improved, y_imp=y_imp, windows=windows, rv=rv, scores=scores,
                     fits=fits, chosen=chosen, improved_graph=improved_graph,
                     locate_regime=locate_regime, timings=say.done, rounds=rounds, judge=judge,
-                    judged=(nominal_judged, improved_judged))
+                    judged=(nominal_judged, improved_judged), notes=spike_notes(exp, glitches))
 
 
 def _features(graph, scores, places, train, x0, rv, cands, say, label):

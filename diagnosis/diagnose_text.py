@@ -101,10 +101,12 @@ def _judged_open_loop(fit) -> str:
 
 def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, rv, scores, fits,
              chosen, improved_graph, locate_regime, timings, rounds=(), judge=None,
-             judged=(None, None)) -> DiagnosisReport:
+             judged=(None, None), notes=()) -> DiagnosisReport:
     """Build the report (see :func:`diagnosis.diagnose.diagnose` for the arguments' meaning;
     `rounds`: one :class:`~diagnosis.rounds.Round` per round; `judge`: the held-out
-    :class:`~diagnosis.segments.Judge`, `judged`: the nominal and the improved model judged by it)."""
+    :class:`~diagnosis.segments.Judge`, `judged`: the nominal and the improved model judged by it;
+    `notes`: notes on the recording beyond its own, such as the spikes replaced)."""
+    notes = rec.notes() + list(notes)
     n_train = exp.t.size - held.t.size
     units = dict(exp.units)
     finding, regime_values, regime_signal, regime_label = (None, None, None, "")
@@ -137,7 +139,7 @@ def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, r
         if judged[0] is not None and judged[1] is not None:
             fit["open_loop"] = {"nominal": dict(judged[0].open_loop), "improved": dict(judged[1].open_loop)}
     text = _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen, physics,
-                 finding, rounds, judge, judged)
+                 finding, rounds, judge, judged, notes)
     plot = PlotData(exp.t, dict(exp.outputs), dict(res.run.outputs), dict(y_imp), units,
                     float(held.t[0]), finding.variable if finding else None, regime_values,
                     regime_signal, regime_label)
@@ -146,7 +148,7 @@ def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, r
         plot.segment_starts = [float(held.t[a]) for a in judge.plan.starts]
         plot.nominal_segments, plot.improved_segments = dict(judged[0].segments), dict(judged[1].segments)
     report = DiagnosisReport(location, physics, fit, text, improved_graph, None, scores, fits, chosen,
-                             rec.notes(), timings(), plot, rounds=list(rounds))
+                             notes, timings(), plot, rounds=list(rounds))
     for i, r in enumerate(report.rounds, 1):
         report.timings[f"round {i}"] = r.seconds
     return report
@@ -187,11 +189,11 @@ def _judge_lines(judge, judged, outputs) -> list[str]:
 
 
 def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen, physics, finding,
-          rounds=(), judge=None, judged=(None, None)):
+          rounds=(), judge=None, judged=(None, None), notes=()):
     u = exp.units
     lines = [f"Recording {rec.source}: {exp.t.size} samples over {exp.span[0]:.4g}-{exp.span[1]:.4g} s; "
              f"held out {held.span[0]:.4g}-{held.span[1]:.4g} s."]
-    lines += [f"Note: {n}." for n in rec.notes()]
+    lines += [f"Note: {n}." for n in notes]
     for o in exp.outputs:
         lines.append(f"Output {o}: nominal held-out NRMSE {nominal[o]:.3g} (noise about "
                      f"{res.noise[o]:.3g} {u.get(o, '')}).")

@@ -13,7 +13,8 @@ Schema of :meth:`DiagnosisReport.to_json` (issue 6, section 2e)::
              "judge": "open-loop" | "segments", "judge_reason": str,
              "segments": {"count": int, "length": s, "samples": int, "estimation_samples": int},
              "open_loop": {"nominal": {output: nrmse}, "improved": {output: nrmse}}},
-     "improved_model": path}
+     "improved_model": path,
+     "notes": [str]}
 
 ``missing_physics`` is ``[{"kind": "none", ...}]`` when nothing is missing;
 ``junction`` names the place the physics is attached to (a junction's
@@ -36,6 +37,8 @@ held-out errors ``nominal`` and ``improved`` were measured (:mod:`diagnosis.segm
 segment simulation error; ``segments`` gives their count, length in s and samples, and the
 samples each one's state was estimated from); ``open_loop`` holds the open-loop held-out NRMSE
 either way (``null`` where the run diverges).
+``notes`` (present when there are any) are the notes on the recording: gaps in unbound columns,
+constant columns, isolated spikes replaced (:mod:`diagnosis.outliers`);
 ``features`` (present when round 1 located a junction) holds the feature regression
 at each located junction (:meth:`diagnosis.features.FeatureEvidence.to_json`):
 ``{"place", "unit", "selected": [kind], "selected_share", "kinds": [{"kind", "variant",
@@ -188,6 +191,7 @@ class DiagnosisReport:
                                       for k, d in self.fit["open_loop"].items()}}
                        if "open_loop" in self.fit else {})},
             "improved_model": self.improved_model,
+            **({"notes": [str(n) for n in self.notes]} if self.notes else {}),
             **({"features": [ev.to_json() for ev in self.rounds[0].features]}
                if self.rounds and self.rounds[0].features else {}),
         }

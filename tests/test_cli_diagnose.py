@@ -78,3 +78,19 @@ def test_bad_input_one_line(case, tmp_path, capsys):
 def test_unknown_model(nominal_csv, capsys):
     assert main(["diagnose", "no-such-model", nominal_csv, *ARGS]) == 1
     assert "unknown model 'no-such-model'" in capsys.readouterr().err
+
+
+def test_a_glitch_is_named_and_replaced_unless_kept(nominal_csv, tmp_path, capsys):
+    """One sample of the position 80 noise standard deviations off (a sensor glitch): the report
+    names it and the null recording still reads none; --keep-spikes uses it as recorded."""
+    lines = open(nominal_csv).read().splitlines()
+    row = lines[301].split(",")
+    row[2] = f"{float(row[2]) + 160.0:.6g}"                        # mm; the noise is 2 mm
+    lines[301] = ",".join(row)
+    path = tmp_path / "glitch.csv"
+    path.write_text("\n".join(lines) + "\n")
+    assert main(["diagnose", "mass-spring-damper", str(path), *ARGS]) == 0
+    out = capsys.readouterr().out
+    assert "Note: output x: 1 isolated spike(s) at t = 6 s" in out and "Missing physics: none" in out
+    assert main(["diagnose", "mass-spring-damper", str(path), *ARGS, "--keep-spikes"]) == 0
+    assert "isolated spike" not in capsys.readouterr().out

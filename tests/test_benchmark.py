@@ -6,6 +6,8 @@ against closed forms.  One small seeded run diagnoses two cases end to end.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -203,6 +205,29 @@ def test_kind_right_or_indistinguishable_is_a_measure_apart_from_kind_right():
     assert h["kind_right"] == 0.25 and h["kind_right_or_indistinguishable"] == pytest.approx(2 / 3)
     assert "| kind right or among the stated indistinguishable alternatives (effect cases) | 67 % | |" in markdown(
         summarise(results), seed=0)
+
+
+def test_a_quarter_of_the_recordings_have_a_sensors_glitches(tmp_path):
+    """Drawn from a stream of their own (the case and its noise stay), 1-3 single samples of one
+    varying output, 15-60 noise standard deviations off, in about a quarter of the cases; the
+    written column has them, and a case without keeps its noise exactly."""
+    from diagnosis.benchmark.run import GLITCHY, glitches, write_csv
+    specs = draw_cases(80, 5757, PLANTS)
+    drawn = [np.random.default_rng([s.seed, 11]).uniform() < GLITCHY for s in specs]
+    assert 0.15 < np.mean(drawn) < 0.35
+    spec = next(s for s, d in zip(specs, drawn) if d and s.plant == "msd")
+    rec = realise(spec, PLANTS[spec.plant]())
+    ((o, (samples, jumps)),) = glitches(rec).items()
+    assert 1 <= samples.size <= 3 and np.all((np.abs(jumps) >= 15 * rec.sigma[o]) & (np.abs(jumps) <= 60 * rec.sigma[o]))
+    write_csv(rec, tmp_path / "g.csv", np.random.default_rng(1))
+    rec.spec = replace(spec, seed=next(s.seed for s, d in zip(specs, drawn) if not d))   # same truth, no glitch
+    assert glitches(rec) == {}
+    write_csv(rec, tmp_path / "c.csv", np.random.default_rng(1))
+    written, clean = (np.loadtxt(tmp_path / f, delimiter=",", skiprows=1) for f in ("g.csv", "c.csv"))
+    column = 1 + len(rec.plant.inputs) + [p.name for p in rec.plant.outputs].index(o)
+    moved = np.flatnonzero(written[:, column] != clean[:, column])
+    assert moved.tolist() == samples.tolist()
+    np.testing.assert_allclose(written[samples, column] - clean[samples, column], jumps, atol=2 * rec.quantum[o] + 1e-12)
 
 
 def test_two_seeded_cases_end_to_end(tmp_path):

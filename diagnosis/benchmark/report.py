@@ -40,6 +40,10 @@ def summarise(results: list[dict]) -> dict:
         "holdout_halved": _share(halved),
         "false_alarms": _share(not r["kind_ok"] for r in nulls),
         "diagnosis_errors": sum(1 for r in scored if r["answer_kind"] == "error"),
+        # cases whose recording has a sensor's glitches (diagnosis.benchmark.run.glitches), and how many of
+        # them were answered right (kind right; for a null, no false alarm)
+        "glitchy_cases": sum(1 for r in scored if r.get("glitches")),
+        "glitchy_right": sum(1 for r in scored if r.get("glitches") and r["kind_ok"]),
         "seconds_per_case_median": float(np.median(secs)) if secs else float("nan"),
         "seconds_per_case_max": float(np.max(secs)) if secs else float("nan"),
     }
@@ -76,7 +80,9 @@ def markdown(summary: dict, *, seed: int | None = None) -> str:
     lines = [f"Benchmark: {h['cases']} cases (seed {seed}), {h['effect_cases']} with an effect "
              f"({h['drifting_cases']} on a drifting nominal), {h['null_cases']} nulls; "
              f"{h.get('segment_judged', 0)} judged by the segment simulation error; "
-             f"{h['generator_errors']} generator errors, {h['diagnosis_errors']} diagnosis errors.", "",
+             f"{h['generator_errors']} generator errors, {h['diagnosis_errors']} diagnosis errors; "
+             f"{h.get('glitchy_cases', 0)} recordings with a sensor's glitches, {h.get('glitchy_right', 0)} of them "
+             "answered right.", "",
              "| measure | result | target |", "|---|---|---|",
              f"| kind right (effect cases) | {_pct(h['kind_right'])} | >= 90 % |",
              f"| kind right or among the stated indistinguishable alternatives (effect cases) | "

@@ -11,7 +11,7 @@ import numpy as np
 
 from .draw import CaseSpec, Realised, realise
 
-__all__ = ["Score", "write_csv", "bindings", "score_case", "run_case"]
+__all__ = ["Score", "glitches", "write_csv", "bindings", "score_case", "run_case", "GLITCHY", "GLITCH_SIZE"]
 
 
 @dataclass
@@ -40,6 +40,7 @@ class Score:
     nominal_drifts: bool = False
     drifting_plant: bool = False
     judge: str = ""                       # how the held-out errors were measured (fit.judge)
+    glitches: int = 0                     # sensor glitches written into the recording (glitches())
     answers: list = field(default_factory=list)
     parameters: dict = field(default_factory=dict)
     seconds_generate: float = 0.0
@@ -47,14 +48,40 @@ class Score:
     error: str = ""
 
 
+#: the share of cases whose recording has a sensor's glitches, and their size in noise standard deviations
+GLITCHY, GLITCH_SIZE = 0.25, (15.0, 60.0)
+
+
+def glitches(rec: Realised) -> dict:
+    """The sensor glitches written into the recording of case `rec` (since session 24):
+    ``{output: (samples, jumps)}``.  In :data:`GLITCHY` of the cases, 1-3 single samples of one
+    varying output jump by :data:`GLITCH_SIZE` noise standard deviations (its resolution where it
+    has no noise), either sign: an encoder miscount, an ADC spike.  From a random stream of their
+    own, so the rest of the case and its noise are what they were."""
+    rng = np.random.default_rng([rec.spec.seed, 11])
+    varying = [o.name for o in rec.plant.outputs if np.ptp(rec.truth[o.name]) > 0]
+    if rng.uniform() >= GLITCHY or not varying or rec.t.size < 3:
+        return {}
+    o = str(rng.choice(varying))
+    samples = np.unique(rng.integers(1, rec.t.size - 1, int(rng.integers(1, 4))))
+    sigma = rec.sigma[o] or rec.quantum[o] or 0.01 * float(np.std(rec.truth[o]))
+    jumps = rng.uniform(*GLITCH_SIZE, samples.size) * rng.choice([-1.0, 1.0], samples.size) * sigma
+    return {o: (samples, jumps)}
+
+
 def write_csv(rec: Realised, path: Path, rng) -> list[str]:
-    """The recording as a user would have it: commands as sent, outputs with noise and resolution.
-    Returns the outputs whose written column is constant (a user would not bind them)."""
+    """The recording as a user would have it: commands as sent, outputs with noise, resolution and,
+    in some cases, a sensor's glitches (:func:`glitches`).  Returns the outputs whose written
+    column is constant (a user would not bind them)."""
     cols = {"t": [f"{v:.6f}" for v in rec.t]}
     for spec in rec.plant.inputs:
         cols[spec.name] = [f"{v:.10g}" for v in rec.u[spec.name]]
+    glitched = glitches(rec)
     for o in rec.plant.outputs:
         y = rec.truth[o.name] + rng.normal(0.0, rec.sigma[o.name], rec.t.size)
+        if o.name in glitched:
+            samples, jumps = glitched[o.name]
+            y[samples] += jumps
         q = rec.quantum[o.name]
         if q > 0:
             y = np.round(y / q) * q
@@ -128,6 +155,7 @@ def run_case(spec: CaseSpec, plants: dict, workdir: Path, *, max_effects: int = 
         score.error = f"{type(exc).__name__}: {exc}"
         score.error += "\n" + traceback.format_exc(limit=3) if not hasattr(exc, "args") else ""
     score.seconds_generate, score.seconds_diagnose = t1 - t0, time.perf_counter() - t1
+    score.glitches = sum(len(samples) for samples, _ in glitches(rec).values())
     out = asdict(score)
     out["spec"] = asdict(spec)
     out["effect"] = None if rec.effect is None else rec.effect.describe()

@@ -104,6 +104,19 @@ def test_modulated_friction_recovers_an_mr_dampers_level_gain_and_lag(rng):
     assert "following V with a lag of 0.0" in coil.explain(values)
 
 
+def test_modulated_friction_starts_with_a_level_that_stays_positive(rng):
+    """A friction's level is never negative: every start keeps ``F0 + k (V - V_ref)`` at or above
+    a tenth of F0 over the recorded voltages (a slope of 30 % of the effort scale against a small
+    level made the pam's seesaw run on with the motion: seed 5757, case 043)."""
+    rig, place = _damper_rig(), Place("junction", "piston")
+    train, _ = _mr_damper_recording(rng).split(0.3)
+    coil = next(c for c in candidates(rig, place, experiment=train) if c.kind == "modulated_friction")
+    v_ref, volts = coil.constants[0][1], train.inputs["V"]
+    levels = [s["F0_piston_V"] + s["k_mod_piston_V"] * (volts - v_ref) for s in coil.starts]
+    assert all(np.min(level) >= 0.1 * s["F0_piston_V"] * (1 - 1e-9) for level, s in zip(levels, coil.starts))
+    assert {np.sign(s["k_mod_piston_V"]) for s in coil.starts} == {-1.0, 1.0}     # both slopes still tried
+
+
 def test_modulated_friction_starts_where_the_feature_regression_found_it(rng):
     """The regression on the damper's located residual picks the lag of its grid nearest the
     truth's (20 samples = 0.1 s; truth 0.08 s) and estimates level and gain: that start is closer

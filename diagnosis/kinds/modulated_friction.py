@@ -140,7 +140,7 @@ class ModulatedFriction(Kind):
                                   f"change of the friction level at {j} per unit of {label}"),
                         ParamSpec(tau, taus[1], tau_lo, tau_hi, "s", f"lag of {label} reaching the friction at {j}"),
                         smoothing(site)),
-                starts=tuple({f0: 0.1 * E * g, k: sign * 0.3 * E / s_scale, tau: t}
+                starts=tuple({f0: 0.1 * E * g, k: sign * _slope_start(0.1 * E * g, 0.3 * E / s_scale, s, s_ref), tau: t}
                              for t in taus for sign in (1.0, -1.0) for g in (0.1, 1.0))))
         return out
 
@@ -168,3 +168,13 @@ class ModulatedFriction(Kind):
         return (f"the motion at {j} loses about {show(f0)} whenever it moves (at {cand.regime} = {s_ref:.4g}), "
                 f"{trend}, following {cand.regime} with a lag of {show(tau)}: "
                 f"friction modulated by {cand.regime} at the {j} 1-junction")
+
+
+def _slope_start(level: float, slope: float, s, s_ref: float) -> float:
+    """The slope a start gives the level: `slope`, at most what keeps ``level + slope (s - s_ref)``
+    at or above a tenth of `level` over the signal's recorded values `s`.  A friction's level is
+    never negative, and a start that made it so over part of the record pushed the pam's seesaw
+    on with the motion: runs of 500-1000 RK4 sub-steps a sample against 240 (10 s instead of 2.5 s
+    each; seed 5757, case 043 spent most of its 27 minutes there) or a run away."""
+    reach = float(np.max(np.abs(np.asarray(s, dtype=float) - s_ref)))
+    return float(min(slope, 0.9 * level / reach)) if reach > 0 else float(slope)

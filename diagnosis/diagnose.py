@@ -113,7 +113,6 @@ def _start_estimator(train, noise, scales, states):
     a candidate's compiled model at `params` on the first samples of `train`, as the nominal's was
     (:func:`diagnosis.initial_state.estimate_initial_state`; its added states stay at theirs)."""
     from .initial_state import estimate_initial_state
-    from .outliers import isolated_spikes, spike_notes, without_spikes
 
     def start(simulator, params):
         est = estimate_initial_state(simulator, train, noise, scales=scales, params=params, states=states)
@@ -298,8 +297,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     from .fit_in_turn import fit_in_turn
     from .graph_location import locate_on_graph
     from .initial_state import estimate_initial_state
-    from .outliers import isolated_spikes, spike_notes, without_spikes
     from .locate import locate_regime, regime_variables, significant_windows
+    from .outliers import isolated_spikes, spike_notes, without_spikes
     from .recording import bind
     from .residuals import OutputSimulator, settle_substeps
     from .segments import choose_judge

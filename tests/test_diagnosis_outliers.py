@@ -111,7 +111,8 @@ def test_diagnose_repairs_a_glitchy_sensor_and_says_where(tmp_path):
     data.to_csv(path, index=False)
     args = dict(time="t_s", inputs=["F=F_N:N"], outputs=["x=x_mm:mm"])
     report = diagnose("mass-spring-damper", str(path), **args).to_json()
-    assert [(m["kind"], m["attached_to"]) for m in report["missing_physics"]] == [("coulomb_friction", "junction v_mass")]
+    answers = [(m["kind"], m["attached_to"]) for m in report["missing_physics"]]
+    assert answers == [("coulomb_friction", "junction v_mass")]
     assert report["fit"]["improved"]["x"] < 0.05 * report["fit"]["nominal"]["x"]
     assert "3 isolated spike(s) at t = 7, 24, 27 s" in report["notes"][0]
     kept = diagnose("mass-spring-damper", str(path), spikes="keep", **args).to_json()

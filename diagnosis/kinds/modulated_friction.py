@@ -140,7 +140,8 @@ class ModulatedFriction(Kind):
                                   f"change of the friction level at {j} per unit of {label}"),
                         ParamSpec(tau, taus[1], tau_lo, tau_hi, "s", f"lag of {label} reaching the friction at {j}"),
                         smoothing(site)),
-                starts=tuple({f0: 0.1 * E * g, k: sign * _slope_start(0.1 * E * g, 0.3 * E / s_scale, s, s_ref), tau: t}
+                starts=tuple({f0: 0.1 * E * g,
+                              k: sign * _slope_start(0.1 * E * g, 0.3 * E / s_scale, s, s_ref), tau: t}
                              for t in taus for sign in (1.0, -1.0) for g in (0.1, 1.0))))
         return out
 

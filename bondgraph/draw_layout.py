@@ -42,10 +42,11 @@ from __future__ import annotations
 import functools
 import math
 
+from .elements import SOURCE_KINDS, TWO_PORT_KINDS
+
 __all__ = []  # private helpers of bondgraph.draw only
 
-_SOURCES = ("Se", "Sf", "MSe", "MSf")
-_TWO_PORTS = ("TF", "GY", "MTF", "MGY")
+_SOURCES, _TWO_PORTS = SOURCE_KINDS, TWO_PORT_KINDS
 _PREFIX = {"CField": "C", "IField": "I"}
 
 # Sizes, inches at the natural figure size (1 layout unit = 1 inch) and points.

@@ -24,17 +24,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from bondgraph.elements import SOURCE_KINDS, TWO_PORT_KINDS
+
 from .errors import DiagnosisError, UnknownNameError
 from .place import Place
 
 __all__ = ["LawPort", "law_ports", "law_places", "split_law", "split_laws", "at_junction", "acts_on"]
 
 #: two-ports a law's effort or flow passes through unchanged but for a modulus
-_TWO_PORTS = frozenset({"TF", "GY", "MTF", "MGY"})
+_TWO_PORTS = TWO_PORT_KINDS
 
 #: element kinds whose law is not a place of its own: junctions, sources (the law is the
 #: input's: an input place), transformers and gyrators (a modulus is geometry, not physics)
-_NOT_LAWS = frozenset({"0", "1", "Se", "Sf", "MSe", "MSf", "TF", "GY", "MTF", "MGY"})
+_NOT_LAWS = frozenset({"0", "1"}) | SOURCE_KINDS | TWO_PORT_KINDS
 
 
 @dataclass(frozen=True)

@@ -13,6 +13,7 @@ are fitted at the law too (:func:`companion_candidates`).
 from __future__ import annotations
 
 from bondgraph.editing_inputs import expression_fields, mentions
+from bondgraph.elements import SOURCE_KINDS, TWO_PORT_KINDS
 
 from .catalogue_common import junction_elements
 from .place import Place
@@ -91,18 +92,13 @@ def _driving_elements(graph, junction: str) -> list:
     for element, _ in junction_elements(graph, junction):
         out.append(element)
         beyond = [element]
-        if element.kind in _TWO_PORTS:
+        if element.kind in TWO_PORT_KINDS:
             beyond = [e for e, _ in junction_elements(graph, element.name) if e.name != junction]
-            out += [e for e in beyond if e.kind in _SOURCES]
+            out += [e for e in beyond if e.kind in SOURCE_KINDS]
         for e in beyond:
             if e.ports is None:                            # a neighbouring junction
                 out += [s for s, _ in junction_elements(graph, e.name) if s.kind in _SETS_COMMON.get(e.kind, ())]
     return out
-
-
-#: the power-conserving two-ports through which a source's effort or flow reaches a junction unchanged in time
-_TWO_PORTS = ("TF", "MTF", "GY", "MGY")
-_SOURCES = ("Se", "Sf", "MSe", "MSf")
 
 
 #: Places the location cannot tell from the ``top``-th: what they leave unexplained is within

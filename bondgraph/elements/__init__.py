@@ -18,4 +18,9 @@ from .twoports import GY, MGY, MTF, TF
 
 __all__ = ["Element", "ELEMENT_KINDS", "EFFORT", "FLOW", "Se", "Sf", "MSe", "MSf", "I", "C", "R",
            "TF", "GY", "MTF", "MGY", "Zero", "One", "CField", "IField", "EquationElement",
-           "PneumaticChamber"]
+           "PneumaticChamber", "SOURCE_KINDS", "TWO_PORT_KINDS"]
+
+#: the kinds of the sources (an imposed effort or flow, constant or modulated)
+SOURCE_KINDS = frozenset(c.kind for c in (Se, Sf, MSe, MSf))
+#: the kinds of the power-conserving two-ports (transformers and gyrators, constant or modulated)
+TWO_PORT_KINDS = frozenset(c.kind for c in (TF, MTF, GY, MGY))

@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from bondgraph import EquationElement
+from bondgraph.elements import SOURCE_KINDS
 from bondgraph.editing_inputs import expression_fields, mentions
 
 from ..catalogue_common import ParamSpec, fresh_name, junction_domain, junction_elements, junction_units
@@ -71,7 +72,7 @@ def _driving_inputs(graph, junction: str) -> set:
     found = set()
     for element in graph.elements.values():
         entry = element.to_dict()
-        source = entry.get("kind") in ("Se", "Sf", "MSe", "MSf")
+        source = entry.get("kind") in SOURCE_KINDS
         if not (entry["name"] in bonded or (source and entry.get("domain") == dom and dom != "generic")):
             continue
         if entry.get("kind") in ("Se", "Sf"):

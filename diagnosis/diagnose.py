@@ -300,7 +300,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     from .locate import locate_regime, regime_variables, significant_windows
     from .outliers import isolated_spikes, spike_notes, without_spikes
     from .recording import bind
-    from .residuals import OutputSimulator, settle_substeps
+    from .residuals import OutputSimulator, residuals, settle_substeps
     from .segments import choose_judge
 
     if spikes not in ("repair", "keep"):
@@ -326,7 +326,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         exp = without_spikes(exp, glitches)
         train, held = exp.split(holdout)
         sim = sim.on(exp)
-        res, diverged = _nominal_residuals(sim, graph, exp, x0)
+        # the inputs are the same: the nominal's run (or its divergence) stands, the residuals are new
+        res = _diverged_residuals(sim, exp) if diverged else residuals(graph, exp, simulator=sim, run=res.run)
         res.noise.update(_noise_overrides(noise, exp))
     n_train = train.t.size
     start = "the given initial state" if x0 is not None else "the model's initial state"

@@ -73,10 +73,10 @@ def _near_reversals(signals, n: int) -> np.ndarray:
     return near
 
 
-def _spiking(y, scale: float) -> np.ndarray:
-    """Where `y` stands out of its neighbours by :data:`SPIKE` times `scale` and by :data:`LOCAL`
-    times the second differences two samples away."""
-    d = np.abs(_standing_out(y))
+def _spiking(y, standing_out, scale: float) -> np.ndarray:
+    """Where `y` stands out of its neighbours (`standing_out`, :func:`_standing_out`) by
+    :data:`SPIKE` times `scale` and by :data:`LOCAL` times the second differences two samples away."""
+    d = np.abs(standing_out)
     return (d > SPIKE * scale) & (d > LOCAL * _curvature_around(y))
 
 
@@ -125,8 +125,9 @@ def isolated_spikes(experiment, predicted: dict, noise: dict, states=None) -> di
         # a command's scale: what its samples stand out by (1.4826 MAD), at least 1e-9 of its span
         # (a command held in steps stands out nowhere but at its pulses)
         u = np.asarray(u, dtype=float)
-        scale = max(1.4826 * float(np.median(np.abs(_standing_out(u)))), 1e-9 * float(np.ptp(u)), 1e-300)
-        loud = _spiking(u, scale)
+        d = _standing_out(u)
+        scale = max(1.4826 * float(np.median(np.abs(d))), 1e-9 * float(np.ptp(u)), 1e-300)
+        loud = _spiking(u, d, scale)
         for lag in range(_INPUT_REACH + 1):            # an input pulse at k - lag reaching the output at k
             quiet_inputs[lag:] &= ~loud[:n - lag]
     calm = ~_near_reversals([*predicted.values(), *(np.asarray(states).T if states is not None else ())], n)
@@ -138,7 +139,7 @@ def isolated_spikes(experiment, predicted: dict, noise: dict, states=None) -> di
             continue
         mine = np.abs(out[o])
         theirs = np.abs(_standing_out(predicted[o])) if o in predicted else np.zeros(n)
-        spikes = _spiking(y, sigma[o]) & ~(theirs >= 0.5 * mine) & quiet_inputs & calm
+        spikes = _spiking(y, out[o], sigma[o]) & ~(theirs >= 0.5 * mine) & quiet_inputs & calm
         for other, d in out.items():
             if other != o and sigma[other] > 0:
                 loud = np.abs(d) > ALONE * sigma[other]

@@ -678,7 +678,7 @@ class Residuals:
 
 
 def residuals(model, experiment, *, params=None, x0=None, outputs=None,
-              simulator: OutputSimulator | None = None) -> Residuals:
+              simulator: OutputSimulator | None = None, run: SimRun | None = None) -> Residuals:
     """Simulate the model on the experiment and compare with its measured outputs.
 
     Parameters
@@ -691,6 +691,8 @@ def residuals(model, experiment, *, params=None, x0=None, outputs=None,
         Default: every measured output.
     simulator : OutputSimulator, optional
         A compiled simulator of this model and experiment to reuse.
+    run : SimRun, optional
+        The model's run on these inputs, already simulated (`params` and `x0` are then not used).
 
     Returns
     -------
@@ -698,7 +700,7 @@ def residuals(model, experiment, *, params=None, x0=None, outputs=None,
     """
     names = list(outputs) if outputs is not None else list(experiment.outputs)
     sim = simulator or OutputSimulator(model, experiment, outputs=names)
-    run = sim.run(params, x0)
+    run = run if run is not None else sim.run(params, x0)
     measured = {n: np.asarray(experiment.outputs[n], dtype=float) for n in names}
     simulated = {n: run.outputs[n] for n in names}
     residual = {n: measured[n] - simulated[n] for n in names}

@@ -296,7 +296,9 @@ def _best_start(objective, candidate, theta0, start=None):
     wins, the objective's start state becomes it.  An effect that acts on the first samples (a
     sensor's range that clips them) made the nominal's estimate absorb it: a force-driven
     carriage read at a clipped position started there, and no range could then explain the
-    rest of the record, which read a constant offset (seed 7171, case 035)."""
+    rest of the record, which read a constant offset (seed 7171, case 035).
+
+    The start chosen, the magnitudes' units follow the starts (:func:`_units_from_starts`)."""
     if candidate is None or (not candidate.starts and start is None):
         return theta0
     guess = objective.params(theta0)
@@ -304,21 +306,53 @@ def _best_start(objective, candidate, theta0, start=None):
     def scaled(starts):
         return [np.array([{**guess, **start}[s.name] for s in objective.specs]) / objective.scale for start in starts]
 
+    def cost(r):
+        return np.inf if np.all(r == _WALL) else float(r @ r)
+
     trials = [theta0] + scaled(candidate.starts)
-    costs = [float(r @ r) for r in objective.batch(trials)]
+    costs = [cost(r) for r in objective.batch(trials)]
     if start is not None:
         own = [_own_start(objective, theta, start) for theta in trials]
         i = int(np.argmin([c for c, _ in own]))
         if own[i][0] < min(costs):
             objective.x0, objective._last = own[i][1], (None, None)
-            return trials[i]
+            return _units_from_starts(objective, trials, [c for c, _ in own], trials[i])
     combine = getattr(candidate, "combined_starts", None)       # a group of twins has none
     if combine is not None:
         more = combine([(objective.params(t), c) for t, c in zip(trials, costs)])
         if more:
             trials += scaled(more)
-            costs += [float(r @ r) for r in objective.batch(trials[-len(more):])]
-    return trials[int(np.argmin(costs))]
+            costs += [cost(r) for r in objective.batch(trials[-len(more):])]
+    return _units_from_starts(objective, trials, costs, trials[int(np.argmin(costs))])
+
+
+#: a start's magnitude below this share of its parameter's unit is least_squares' nudge off the bound
+#: at 0 (it keeps its iterates strictly inside), a term a fit left out, not a size to scale by
+_NUDGE = 1e-6
+
+
+def _units_from_starts(objective, trials, costs, best):
+    """`best` (a scaled parameter vector among `trials`, whose training costs are `costs`, inf
+    where one did not run) in new units: each magnitude's unit (:attr:`_Objective.scale`, its
+    guess until now) becomes its value in the lowest-cost start where it is not 0.
+
+    The optimiser's forward-difference step and its stopping tolerance on the step are relative
+    to those units.  A guess scaled on the place's effort can be five orders of magnitude above
+    the effect (a pam seesaw's friction of 2e-6 N m against a guess of 0.08 N m): the difference
+    quotient then spans forty times the friction (a secant across a different motion), and the
+    whole move from the start to the fit is below the step tolerance: a Coulomb + viscous law
+    started at the viscous fit stopped there after one evaluation, its Coulomb level left at 0
+    (seed 6262, case 044).  In the units of its best starts the same fit moves."""
+    values = [objective.params(t) for t in trials]
+    unit = objective.scale.copy()
+    for i, spec in enumerate(objective.specs):
+        sizes = [(c, abs(v[spec.name])) for c, v in zip(costs, values)
+                 if spec.magnitude and np.isfinite(c) and abs(v[spec.name]) > _NUDGE * objective.scale[i]]
+        if sizes:
+            unit[i] = min(sizes)[1]
+    best = np.asarray(best, dtype=float) * objective.scale / unit
+    objective.scale, objective._last = unit, (None, None)     # its cache is keyed on theta
+    return best
 
 
 def _scaled_bounds(objective):
@@ -435,10 +469,10 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
         objective = _Objective(OutputSimulator(model, train, outputs=outputs), train, specs, x0)
     except BondcosimError as exc:
         return CandidateFit(candidate, message=f"{label} could not be built or compiled: {exc}", **failed)
-    lower, upper = _scaled_bounds(objective)
     theta0 = np.array([s.guess for s in specs]) / objective.scale
     if specs:
         theta0 = _best_start(objective, candidate, theta0, start)
+        lower, upper = _scaled_bounds(objective)
         r0 = objective(theta0)
         if np.all(r0 == _WALL):
             _shrink_magnitudes(objective, theta0)

@@ -619,6 +619,30 @@ def test_a_guess_that_does_not_run_starts_from_one_that_does(starts):
     assert fit.values[spec.name] == pytest.approx(0.8, rel=1e-3)
 
 
+
+def test_a_joint_law_guessed_far_above_the_effect_moves_from_the_simpler_fits_ends(msd, rng):
+    """Coulomb (0.3 N) + viscous (0.4 N s/m beyond the nominal's) friction, its Coulomb + viscous
+    candidate guessed 1e4 times too high (as a pam seesaw's friction level, scaled on the muscles'
+    torque, is guessed far above its 2e-6 N m), started where the Coulomb-only and viscous-only
+    fits ended.  In the guess's units the optimiser's difference quotients spanned thousands of
+    times the friction and the move to the truth was below its step tolerance: the fit stopped
+    near a start, its viscous term at 0 (seed 6262, case 044).  In the units of its starts it
+    recovers both levels."""
+    from diagnosis.fit_in_turn import nested_starts
+
+    train, hold = _record(coulomb_truth(fc=0.3, b=0.8), rng=rng, noise=0.02).split(0.3)
+    place = Place("junction", "v_mass")
+    simpler = [fit_candidate(msd, _candidate(msd, place, kind, train), train, hold)
+               for kind in ("coulomb_friction", "viscous_friction")]
+    cand = _candidate(msd, place, "coulomb_viscous_friction", train)
+    far = tuple(replace(s, guess=1e4 * s.guess, upper=1e5 * s.guess) if s.magnitude else s for s in cand.params)
+    cand = nested_starts(replace(cand, params=far, starts=()), simpler)
+    assert len(cand.starts) == 2
+    fit = fit_candidate(msd, cand, train, hold)
+    assert fit.success, fit.message
+    assert fit.values["Fc_v_mass"] == pytest.approx(0.3, rel=0.03)
+    assert fit.values["b_visc_v_mass"] == pytest.approx(0.4, rel=0.03)
+
 def test_a_lag_hundreds_of_samples_long_is_started_near():
     """A 3 s actuator lag on a force-driven carriage (20 kg) recorded at 200 Hz, commands held
     0.1-0.5 s: 600 samples, far beyond the old starts (at most 32 samples, 0.16 s), from which the

@@ -333,8 +333,9 @@ _NUDGE = 1e-6
 
 def _units_from_starts(objective, trials, costs, best):
     """`best` (a scaled parameter vector among `trials`, whose training costs are `costs`, inf
-    where one did not run) in new units: each magnitude's unit (:attr:`_Objective.scale`, its
-    guess until now) becomes its value in the lowest-cost start where it is not 0.
+    where one did not run) in new units: the unit (:attr:`_Objective.scale`) of each parameter
+    whose 0 is no effect (a magnitude, or a signed term guessed at 0: its unit was a tenth of its
+    range) becomes its value in the lowest-cost start where it is not 0.
 
     The optimiser's forward-difference step and its stopping tolerance on the step are relative
     to those units.  A guess scaled on the place's effort can be five orders of magnitude above
@@ -342,12 +343,15 @@ def _units_from_starts(objective, trials, costs, best):
     quotient then spans forty times the friction (a secant across a different motion), and the
     whole move from the start to the fit is below the step tolerance: a Coulomb + viscous law
     started at the viscous fit stopped there after one evaluation, its Coulomb level left at 0
-    (seed 6262, case 044).  In the units of its best starts the same fit moves."""
+    (seed 6262, case 044); a pam spring's cubic term, its unit a tenth of a range 2e4 times the
+    truth's, stayed at 0 (seed 3434, case 016).  In the units of its best starts the same fit moves."""
     values = [objective.params(t) for t in trials]
     unit = objective.scale.copy()
     for i, spec in enumerate(objective.specs):
+        if not (spec.magnitude or spec.guess == 0.0):
+            continue
         sizes = [(c, abs(v[spec.name])) for c, v in zip(costs, values)
-                 if spec.magnitude and np.isfinite(c) and abs(v[spec.name]) > _NUDGE * objective.scale[i]]
+                 if np.isfinite(c) and abs(v[spec.name]) > _NUDGE * objective.scale[i]]
         if sizes:
             unit[i] = min(sizes)[1]
     best = np.asarray(best, dtype=float) * objective.scale / unit

@@ -313,21 +313,40 @@ def test_a_soft_end_stop_is_recovered_with_its_stiffness(msd):
     assert max(fit.holdout_nrmse.values()) < 1e-6
 
 
-def test_hardening_spring_recovered(msd):
+def _hardening_msd(k3: float = 2.0):
     stiff = BondGraph("msd_hardening")                 # written out by hand: k x + k3 x^3
     stiff.add(Se("F", 0.0, domain="translation"))
     stiff.add(One("v_mass"))
     stiff.connect("F", "v_mass")
     for e in (I("m", 1.0, domain="translation"), R("b", 0.4, domain="translation"),
-              C("k", law="k_lin*q + k3_true*q**3", params={"k_lin": 4.0, "k3_true": 2.0}, domain="translation")):
+              C("k", law="k_lin*q + k3_true*q**3", params={"k_lin": 4.0, "k3_true": k3}, domain="translation")):
         stiff.add(e)
         stiff.connect("v_mass", e.name)
     stiff.add_output("x", "q_k", unit="m")
     stiff.add_output("v", "f_m", unit="m/s")
-    train, hold = _record(stiff).split(0.3)
+    return stiff
+
+
+def test_hardening_spring_recovered(msd):
+    train, hold = _record(_hardening_msd()).split(0.3)
     fit = fit_candidate(msd, _candidate(msd, Place("junction", "v_mass"), "nonlinear_stiffness", train),
                         train, hold)
     assert fit.values["k3_k"] == pytest.approx(2.0, rel=0.01)
+
+
+def test_a_signed_term_guessed_at_0_moves_in_the_units_of_its_start(msd):
+    """A cubic term guessed at 0 had a tenth of its range as its unit; with a range 1e5 times the
+    truth's (a pam seesaw's spring: 2e4 times, seed 3434, case 016) the optimiser's difference
+    quotients spanned ten thousand times the term and it stopped a third short (1.32 for 2.0).
+    Started at half the truth, it now reaches it."""
+    train, hold = _record(_hardening_msd(), rng=np.random.default_rng(5), noise=0.02).split(0.3)
+    cand = _candidate(msd, Place("junction", "v_mass"), "nonlinear_stiffness", train)
+    k3, own = cand.params
+    assert k3.guess == 0.0
+    wide = replace(k3, lower=-1e5 * 2.0, upper=1e5 * 2.0)
+    fit = fit_candidate(msd, replace(cand, params=[wide, own], starts=({k3.name: 1.0},)), train, hold)
+    assert fit.success, fit.message
+    assert fit.values["k3_k"] == pytest.approx(2.0, rel=0.03)
 
 
 def test_leak_recovered_in_a_pneumatic_tank(rng):

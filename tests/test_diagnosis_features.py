@@ -194,6 +194,32 @@ def test_feature_coefficients_start_the_fits_of_the_kinds_they_estimate():
     assert started["backlash"].starts == before["backlash"].starts
 
 
+
+def test_a_cubic_spring_starts_at_its_feature_coefficients():
+    """A hardening spring whose linear value was identified with part of its cubic term
+    (extra effort 3 x^3 - 1 x): the nonlinear_stiffness candidate starts with its cubic term at the
+    q^3 coefficient and the C's own stiffness (4 N/m) changed by the q coefficient; a C written
+    as a compliance (1/4 m/N) starts at the compliance of that stiffness."""
+    from dataclasses import replace
+
+    from diagnosis.catalogue import candidates
+    from diagnosis.features import with_feature_starts
+    from plants import library
+    graph = library.build("mass-spring-damper")
+    exp = _truth(lambda x, v: 3.0 * x ** 3 - 1.0 * x, seed=3)
+    ev = _evidence(lambda x, v: 3.0 * x ** 3 - 1.0 * x, seed=3)
+    coef = _by_kind(ev)["nonlinear_stiffness"].coefficients
+    assert coef["q^3"] == pytest.approx(3.0, rel=0.05) and coef["q"] == pytest.approx(-1.0, rel=0.1)
+    (cand,) = [c for c in candidates(graph, PLACE, experiment=exp) if c.kind == "nonlinear_stiffness"]
+    (started,) = with_feature_starts([cand], {PLACE: ev})
+    k3, own = started.params
+    assert own.name == "k" and own.guess == 4.0
+    assert started.starts[-1] == {k3.name: pytest.approx(coef["q^3"]), "k": pytest.approx(4.0 + coef["q"])}
+    compliance = replace(own, guess=0.25, lower=0.25 / 3, upper=25.0,
+                         description=own.description.replace("stiffness", "compliance"))
+    start = cand.definition.feature_start(replace(cand, params=[k3, compliance]), _by_kind(ev)["nonlinear_stiffness"])
+    assert start["k"] == pytest.approx(1.0 / (4.0 + coef["q"]))
+
 def test_a_richer_law_fitted_to_nothing_is_not_preferred_by_its_features():
     """A pressure-dependent friction extends Coulomb friction: where its fit predicts the held-out
     part as the Coulomb fit does (a tenth of the noise apart, its pressure term fitted to

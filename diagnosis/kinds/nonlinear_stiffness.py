@@ -25,6 +25,25 @@ class NonlinearStiffness(Kind):
         return [FeatureGroup(c, "", ["q^3", "q"], np.stack([q ** 3, q], axis=1))
                 for c, q in s.labelled("content").items()]
 
+    def feature_start(self, cand, evidence):
+        """The cubic coefficient at the coefficient of ``q^3`` and the linear value changed by that
+        of ``q`` (the regression's sign convention is the C's: an effort it takes from the
+        junction), clipped to their bounds.  A spring's cubic term may be ten thousand times below
+        its range's tenth (a pam seesaw's: 0.018 N m/rad^3 against 340), from which the optimiser
+        did not leave 0 (seed 3434, case 016)."""
+        cubic, linear = (evidence.coefficients.get(name) for name in ("q^3", "q"))
+        if cubic is None or not np.isfinite(cubic):
+            return None
+        k3, own = cand.params
+        start = {k3.name: k3.clipped(float(cubic))}
+        if linear is not None and np.isfinite(linear):
+            value = own.guess + float(linear)          # a stiffness, or a change of one (dk)
+            if own.description.startswith("linear compliance"):      # _linear_value's words
+                stiffness = 1.0 / own.guess + float(linear)
+                value = 1.0 / stiffness if stiffness > 0 else own.guess
+            start[own.name] = own.clipped(value)
+        return start
+
     def propose(self, site):
         e_unit, _ = junction_units(site.graph, site.name)
         out = []

@@ -408,3 +408,57 @@ def test_the_pam_truths_signals_survive_a_run_gone_to_infinity():
 
     sig = pam().signals(np.array([np.inf, 1.0, 4e5, 4e5]), {})
     assert np.isnan(sig["muscle1"]) and np.isnan(sig["muscle2"])
+
+
+def test_a_compound_case_draws_a_second_effect_a_rig_could_have_besides():
+    """--compound: each effect case gets a second effect of another kind, reproducibly, never a
+    second friction law at the same 1-junction, the same input or output twice, or a second change
+    of the same storage; null cases stay null."""
+    from diagnosis.benchmark.compound import FRICTIONS, compound_label, second_effect
+    specs = draw_cases(80, 3434, PLANTS)
+    seconds = [second_effect(s, PLANTS[s.plant]()) for s in specs]
+    assert seconds == [second_effect(s, PLANTS[s.plant]()) for s in specs]
+    for first, second in zip(specs, seconds):
+        if first.kind == "none":
+            assert second is None and compound_label(first, second) == first.label
+            continue
+        assert second is not None and second.kind != first.kind
+        assert (second.seed, second.excitation, second.ratio) == (first.seed, first.excitation, first.ratio)
+        if (second.door, second.name) == (first.door, first.name):
+            assert second.door == "junction" and not {first.kind, second.kind} <= set(FRICTIONS)
+        assert compound_label(first, second) == f"{first.label}+{second.kind}@{second.door}:{second.name}"
+    assert len({s.kind for s in seconds if s is not None}) >= 10
+
+
+def test_a_compound_truth_carries_both_effects_and_is_scored_on_each():
+    """A constant load at the msd's mass and an offset of its position sensor, each sized alone on
+    the same commands: on the linear plant the truth with both is the load's truth plus the offset,
+    to rounding.  The score names which effect some answer found."""
+    from diagnosis.benchmark.compound import realise_compound
+    from diagnosis.benchmark.run import score_case
+    load = CaseSpec(0, 31, "msd", "constant_load", "junction", "v_mass", target_change=0.1, ratio=10.0)
+    offset = CaseSpec(0, 31, "msd", "sensor_offset", "output", "x", target_change=0.05, ratio=10.0)
+    plant = PLANTS["msd"]()
+    alone = realise(load, plant)
+    rec = realise_compound(load, offset, plant)
+    assert rec.also.effect.kind == "sensor_offset" and rec.also.effect.m != 0.0
+    np.testing.assert_allclose(rec.truth["x"], alone.truth["x"] + rec.also.effect.m, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(rec.truth["v"], alone.truth["v"], rtol=0, atol=1e-12)
+    assert rec.sigma == alone.sigma
+    both = {"missing_physics": [{"kind": "constant_load", "attached_to": "junction v_mass", "parameters": {}},
+                                {"kind": "sensor_offset", "attached_to": "output x", "parameters": {}}],
+            "fit": {"nominal": {}, "improved": {}}}
+    s = score_case(rec, both)
+    assert (s.first_found, s.also_found, s.also_kind, s.also_place) == (True, True, "sensor_offset", "output x")
+    one = {**both, "missing_physics": both["missing_physics"][1:]}
+    assert (score_case(rec, one).first_found, score_case(rec, one).also_found) == (False, True)
+    base = dict(seconds_diagnose=1.0, place_ok=True, answer_place="", plant="msd", improvement=0.9, kind="leak",
+                answer_kind="leak", kind_ok=True, also_kind="sensor_offset")
+    h = summarise([dict(base, label="a", first_found=True, also_found=True),
+                   dict(base, label="b", first_found=True, also_found=False)])["headline"]
+    assert (h["compound_cases"], h["first_found"], h["second_found"], h["both_found"]) == (2, 1.0, 0.5, 0.5)
+    assert "| compound cases (2, two concealed effects): some answer names the first / the second / both | " \
+           "100 % / 50 % / 50 % | |" in markdown(summarise([dict(base, label="a", first_found=True, also_found=True),
+                                                           dict(base, label="b", first_found=True,
+                                                                also_found=False)]), seed=0)
+    assert "compound_cases" not in summarise([dict(base, label="c", also_kind="")])["headline"]

@@ -1,10 +1,12 @@
-"""``python -m diagnosis.benchmark [--cases N] [--seed S] [--report DIR] [--jobs J] [--plants A,B]``.
+"""``python -m diagnosis.benchmark [--cases N] [--seed S] [--report DIR] [--jobs J] [--plants A,B] [--compound]``.
 
 Draws N cases (default 80), diagnoses each recording as a user would, and
 writes into DIR (default ``benchmark-report``): one JSON file per case
 (``cases/LABEL.json``; a rerun with the same DIR skips finished cases),
 ``results.json`` (all scores and the summary), ``results.md`` (the tables)
 and ``results.png`` (confusion matrix, held-out improvement, time per case).
+With ``--compound`` every effect case conceals a second effect too
+(:mod:`diagnosis.benchmark.compound`); use a report directory of its own.
 """
 from __future__ import annotations
 
@@ -15,6 +17,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
+from .compound import compound_label, second_effect
 from .draw import draw_cases
 from .plants import PLANTS
 from .report import summarise, write_report
@@ -22,10 +25,10 @@ from .run import run_case
 
 
 def _work(args):
-    spec, workdir, max_effects = args
+    spec, workdir, max_effects, second = args
     import os
     os.environ.setdefault("OMP_NUM_THREADS", "1")
-    return run_case(spec, PLANTS, workdir, max_effects=max_effects)
+    return run_case(spec, PLANTS, workdir, max_effects=max_effects, second=second)
 
 
 def main(argv=None) -> int:
@@ -37,6 +40,8 @@ def main(argv=None) -> int:
     ap.add_argument("--plants", default="", help="comma-separated plant names (default: all)")
     ap.add_argument("--only", default="", help="comma-separated case indices to run")
     ap.add_argument("--max-effects", type=int, default=2, help="passed to diagnose (default 2)")
+    ap.add_argument("--compound", action="store_true",
+                    help="a second concealed effect in every effect case (diagnosis.benchmark.compound)")
     a = ap.parse_args(argv)
     if a.cases < 1 or a.jobs < 1:
         ap.error("--cases and --jobs must be positive")
@@ -53,9 +58,10 @@ def main(argv=None) -> int:
     out = Path(a.report)
     (out / "cases").mkdir(parents=True, exist_ok=True)
     (out / "recordings").mkdir(exist_ok=True)
+    seconds = {s.index: second_effect(s, plants[s.plant]()) if a.compound else None for s in specs}
     results, todo = [], []
     for s in specs:
-        f = out / "cases" / f"{s.label}.json"
+        f = out / "cases" / f"{compound_label(s, seconds[s.index])}.json"
         if f.exists():
             results.append(json.loads(f.read_text()))
         else:
@@ -63,7 +69,7 @@ def main(argv=None) -> int:
     print(f"benchmark: {len(specs)} cases ({len(results)} done before), seed {a.seed}, {a.jobs} job(s)",
           file=sys.stderr, flush=True)
     start = time.perf_counter()
-    jobs = [(s, out / "recordings", a.max_effects) for s in todo]
+    jobs = [(s, out / "recordings", a.max_effects, seconds[s.index]) for s in todo]
     done = 0
 
     def record(r):
@@ -77,6 +83,8 @@ def main(argv=None) -> int:
             f"{'ok ' if r['kind_ok'] else 'BAD'} {r['kind']} -> {r['answer_kind']}"
             f" ({'place ok' if r['place_ok'] else 'place ' + (r['answer_place'] or '-')})"
             f" {r['seconds_diagnose']:.0f} s")
+        if r.get("also_kind"):
+            verdict += f"; found: first {r['first_found']}, second {r['also_found']} ({', '.join(r['answers'])})"
         print(f"benchmark: [{done}/{len(todo)} {el:6.0f} s, eta {eta:5.0f} s] {r['label']}: {verdict}",
               file=sys.stderr, flush=True)
 

@@ -150,6 +150,7 @@ class Realised:
     quantum: dict = field(default_factory=dict)
     nominal_drifts: bool = False  # the nominal's open-loop error exceeds the output's spread
     calibration_runs: int = 0
+    also: "Realised | None" = None  # a compound case's second effect, sized alone (compound.py)
 
 
 def _segment_difference(plant, t, u, effect, truth_states, n_segments=10):

@@ -44,6 +44,7 @@ def summarise(results: list[dict]) -> dict:
         # them were answered right (kind right; for a null, no false alarm)
         "glitchy_cases": sum(1 for r in scored if r.get("glitches")),
         "glitchy_right": sum(1 for r in scored if r.get("glitches") and r["kind_ok"]),
+        **_compound_headline(effects),
         "seconds_per_case_median": float(np.median(secs)) if secs else float("nan"),
         "seconds_per_case_max": float(np.max(secs)) if secs else float("nan"),
     }
@@ -70,6 +71,19 @@ def summarise(results: list[dict]) -> dict:
                                       for q in (0.1, 0.25, 0.5, 0.75, 0.9)}}
 
 
+def _compound_headline(effects: list) -> dict:
+    """Of the compound cases (a second concealed effect, ``--compound``): how many, and the share
+    in which some answered effect names the first's kind, the second's, and both (each at one of
+    its places, or its kind listed as not told apart there); nothing for a run without them."""
+    compound = [r for r in effects if r.get("also_kind")]
+    if not compound:
+        return {}
+    return {"compound_cases": len(compound),
+            "first_found": _share(r["first_found"] for r in compound),
+            "second_found": _share(r["also_found"] for r in compound),
+            "both_found": _share(r["first_found"] and r["also_found"] for r in compound)}
+
+
 def _pct(x):
     return "-" if not np.isfinite(x) else f"{100 * x:.0f} %"
 
@@ -90,6 +104,9 @@ def markdown(summary: dict, *, seed: int | None = None) -> str:
              f"| place right or equivalent (effect cases) | {_pct(h['place_right'])} | >= 85 % |",
              f"| held-out NRMSE of the affected output at least halved | {_pct(h['holdout_halved'])} | >= 90 % |",
              f"| false alarms on nulls | {_pct(h['false_alarms'])} | <= 5 % |",
+             *([f"| compound cases ({h['compound_cases']}, two concealed effects): some answer names the first / "
+                f"the second / both | {_pct(h['first_found'])} / {_pct(h['second_found'])} / "
+                f"{_pct(h['both_found'])} | |"] if "compound_cases" in h else []),
              f"| time per case, median / max | {h['seconds_per_case_median']:.0f} s / "
              f"{h['seconds_per_case_max']:.0f} s | |", "",
              "| held-out improvement quantile | " + " | ".join(f"{int(q * 100)} %" for q in

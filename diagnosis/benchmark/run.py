@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .compound import compound_label, realise_compound
 from .draw import CaseSpec, Realised, realise
 
 __all__ = ["Score", "glitches", "write_csv", "bindings", "score_case", "run_case", "GLITCHY", "GLITCH_SIZE"]
@@ -41,6 +42,12 @@ class Score:
     drifting_plant: bool = False
     judge: str = ""                       # how the held-out errors were measured (fit.judge)
     glitches: int = 0                     # sensor glitches written into the recording (glitches())
+    # a compound case (compound.py): its second effect, and whether some answered effect names each
+    # effect's kind (or lists it as not told apart) at one of its places
+    also_kind: str = ""
+    also_place: str = ""
+    first_found: bool | None = None
+    also_found: bool | None = None
     answers: list = field(default_factory=list)
     parameters: dict = field(default_factory=dict)
     seconds_generate: float = 0.0
@@ -120,6 +127,11 @@ def score_case(rec: Realised, report) -> Score:
     s.kind_or_indistinguishable_ok = s.kind_ok or spec.kind in s.indistinguishable
     s.place_ok = s.answer_place in eff.accepted_places()
     s.affected = rec.affected
+    also = getattr(rec, "also", None)          # a compound case's second effect (a Realised)
+    if also is not None:
+        s.also_kind, s.also_place = also.spec.kind, also.effect.place
+        s.first_found = _names(found, spec.kind, rec.effect.effects[0].accepted_places())
+        s.also_found = _names(found, s.also_kind, also.effect.accepted_places())
     nom, imp = data["fit"]["nominal"].get(rec.affected), data["fit"]["improved"].get(rec.affected)
     if nom is not None and imp is not None:
         s.nominal_nrmse, s.improved_nrmse = float(nom), float(imp)
@@ -127,19 +139,29 @@ def score_case(rec: Realised, report) -> Score:
     return s
 
 
-def run_case(spec: CaseSpec, plants: dict, workdir: Path, *, max_effects: int = 2) -> dict:
-    """Realise, write, diagnose and score one case; never raises (errors are scored)."""
+def _names(found: list, kind: str, places: set) -> bool:
+    """Whether one of the answered effects `found` (report JSON) names `kind`, or lists it as not
+    told apart from its own, at one of `places`."""
+    return any((e["kind"] == kind or kind in [a["kind"] for a in e.get("indistinguishable", [])])
+               and e["attached_to"] in places for e in found)
+
+
+def run_case(spec: CaseSpec, plants: dict, workdir: Path, *, max_effects: int = 2,
+             second: CaseSpec | None = None) -> dict:
+    """Realise, write, diagnose and score one case (with the `second` effect too: a compound case,
+    :mod:`diagnosis.benchmark.compound`); never raises (errors are scored)."""
     from ..diagnose import diagnose
     plant = plants[spec.plant]()
+    label = compound_label(spec, second)
     t0 = time.perf_counter()
     try:
-        rec = realise(spec, plant)
+        rec = realise(spec, plant) if second is None else realise_compound(spec, second, plant)
     except Exception as exc:   # a generator failure is the benchmark's, reported, not scored
-        return {"label": spec.label, "generator_error": f"{type(exc).__name__}: {exc}"}
-    path = Path(workdir) / f"{spec.label}.csv"
+        return {"label": label, "generator_error": f"{type(exc).__name__}: {exc}"}
+    path = Path(workdir) / f"{label}.csv"
     constant = write_csv(rec, path, np.random.default_rng(spec.seed + 1))
     if len(constant) == len(rec.plant.outputs):
-        return {"label": spec.label, "generator_error": f"every output is constant in the recording ({constant})"}
+        return {"label": label, "generator_error": f"every output is constant in the recording ({constant})"}
     t1 = time.perf_counter()
     # a user binds the outputs that were measured varying (the diagnosis refuses a constant one)
     ins, outs = bindings(rec, constant)
@@ -156,6 +178,7 @@ def run_case(spec: CaseSpec, plants: dict, workdir: Path, *, max_effects: int = 
         score.error += "\n" + traceback.format_exc(limit=3) if not hasattr(exc, "args") else ""
     score.seconds_generate, score.seconds_diagnose = t1 - t0, time.perf_counter() - t1
     score.glitches = sum(len(samples) for samples, _ in glitches(rec).values())
+    score.label = label
     out = asdict(score)
     out["spec"] = asdict(spec)
     out["effect"] = None if rec.effect is None else rec.effect.describe()

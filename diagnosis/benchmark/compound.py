@@ -6,11 +6,11 @@ one of another kind, drawn from a stream of its own (:func:`second_effect`), eac
 :func:`~diagnosis.benchmark.draw.realise` sizes one, then simulated together
 (:class:`CompoundEffect`).  The sensors' noise is the first effect's case's.
 
-A second effect is one a rig could have besides the first: another kind; at another input or
-output where both act on the same one; not a second friction law at the same 1-junction (two
-frictions at one contact are one law, ``coulomb_viscous_friction`` among them); not a second
-change of the same storage element; not at a different algebraic junction (the truth solves one
-junction's flow with its effect) nor on the junction of a storage law that sensors read.
+A second effect is one a rig could have besides the first: another kind, and not at the same
+input, output or storage element; not a second friction law at the same 1-junction or at one no
+recording tells apart from it (a rigidly geared one): two frictions at one contact are one law,
+``coulomb_viscous_friction`` among them; not at a second algebraic junction (the truth solves one
+junction's flow with its effects) nor on the junction of a storage law its sensors read.
 """
 from __future__ import annotations
 
@@ -114,7 +114,7 @@ def _compatible(plant, first: CaseSpec, kind, door, name) -> bool:
     if (door, name) == (first.door, first.name) and door in ("input", "output", "storage"):
         return False
     j1, j2 = _junction_of(plant, first.door, first.name), _junction_of(plant, door, name)
-    if j1 is not None and j1 == j2:
+    if j1 is not None and j2 is not None and (j1 == j2 or j2 in plant.junction(j1).equivalent):
         if kind in FRICTIONS and first.kind in FRICTIONS:
             return False
         sensed = [d for d, n in ((first.door, first.name), (door, name))

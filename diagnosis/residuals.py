@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
-from .errors import DiagnosisError
+from .errors import BondcosimError, DiagnosisError
 
 __all__ = ["OutputSimulator", "SimRun", "input_matrix", "settle_substeps", "simulate_outputs", "nrmse",
            "noise_sigma", "Residuals", "residuals"]
@@ -50,6 +50,10 @@ _HELD_RK4_REACH = 2.0
 #: variables has no such path and fails.  Both paths agree to 0.01 noise sigmas on the exoskeleton
 #: and to 1e-5 of tau's span on the pam-frictionless.
 _STIFF_SUBSTEPS = 1000
+#: states along a run whose Jacobian checks its RK4 sub-step (:meth:`OutputSimulator._step_along`),
+#: the share of its sub-step below which a run is simulated again with the one they need, and how
+#: many times at most
+_ALONG, _RESTEP, _RESTEPS = 24, 0.5, 2
 #: The cost model that sets where (session 22, measured here): the stiff path costs about 100 us
 #: per sample interval, mostly in Python (the Jacobian, its eigenvalues, W^-1), and an RK4 sub-step
 #: 47 ns plus 0.4 ns per operation of the state derivatives (sympy ``count_ops``): the
@@ -331,11 +335,16 @@ class OutputSimulator:
         # a run takes the integrator it takes alone (RK4, or Rosenbrock where _stiff): a stiff
         # run batched with others must not put them on the stiff path (seed 4141, case 034: a Stribeck fit's
         # starts, batched with its guess 1000 times the fitted level, cost 2-9 times what they cost alone)
-        stiff = np.array([self._stiff(self._substeps(h_row)[0]) for h_row in h])
-        for group in (np.flatnonzero(~stiff), np.flatnonzero(stiff)):
-            if group.size:
-                self._run_group(group, P, h, x_init, runs)
+        self._run_rows(np.arange(P.shape[0]), P, h, x_init, runs)
         return runs
+
+    def _run_rows(self, rows, P, h, x_init, runs, depth: int = 0) -> None:
+        """Simulate the rows `rows` of `P` (sub-step `h` per row) into `runs`, each on the path it
+        takes alone (:meth:`run_batch`)."""
+        stiff = np.array([self._stiff(self._substeps(h[i])[0]) for i in rows], dtype=bool)
+        for group in (rows[~stiff], rows[stiff]):
+            if group.size:
+                self._run_group(group, P, h, x_init, runs, depth)
 
     def _substeps(self, h_max: float):
         """``(subs, every)`` of :meth:`_nesting` for RK4 sub-steps of at most `h_max` s (and at
@@ -362,8 +371,10 @@ class OutputSimulator:
             self._stiff_limit = int(min(_STIFF_SUBSTEPS, np.ceil(_STIFF_INTERVAL_COST / step)))
         return self._stiff_limit
 
-    def _run_group(self, group, P, h, x_init, runs) -> None:
-        """Simulate the rows `group` of `P` together (sub-step `h` per row), into `runs`."""
+    def _run_group(self, group, P, h, x_init, runs, depth: int = 0) -> None:
+        """Simulate the rows `group` of `P` together (sub-step `h` per row), into `runs`.  A run on
+        RK4 whose own states need a sub-step below :data:`_RESTEP` of its own (:meth:`_step_along`)
+        is simulated again with that one (at most :data:`_RESTEPS` times)."""
         h_max = float(np.min(h[group]))
         subs, every = self._substeps(h_max)
         # runs whose delayed inputs are late by the same times share their grid and inputs
@@ -371,8 +382,42 @@ class OutputSimulator:
             rows = group[np.asarray(members)]
             grid, U, at = self._delayed_inputs(delays)
             X, D, most = self._integrate(grid, U, self._grid_substeps(grid, subs), h_max, x_init, P[rows], every)
+            if depth < _RESTEPS and not self._stiff(subs):
+                need = np.array([self._step_along(X[at, k], U[at], P[i:i + 1]) for k, i in enumerate(rows)])
+                finer = need < _RESTEP * h_max
+                if finer.any():
+                    h = h.copy()
+                    h[rows[finer]] = need[finer]
+                    self._run_rows(rows[finer], P, h, x_init, runs, depth + 1)
+            else:
+                finer = np.zeros(rows.size, dtype=bool)
             for k, i in enumerate(rows):
-                runs[i] = self._run(X[at, k], D[at, k], U[at], P[i:i + 1], most)
+                if not finer[k]:
+                    runs[i] = self._run(X[at, k], D[at, k], U[at], P[i:i + 1], most)
+
+    def _step_along(self, X, U, p) -> float:
+        """The RK4 sub-step (:meth:`_sub_step`'s rule) that :data:`_ALONG` states of one run
+        (`X`, at the samples, with their inputs `U`) need, up to the last tenth of its finite
+        part (a run gone to infinity is stiff only there).  :meth:`_sub_step` looks at the start
+        state alone: a law stiff only in motion (a Dahl element: its relaxation rate is sigma |v|
+        / F, 0 at rest) got the step of a model at rest and went to infinity when it moved (a
+        carriage with Dahl friction, |lambda| h about 5 on 5 ms samples)."""
+        n = X.shape[0]
+        finite = np.isfinite(X).all(axis=1)
+        stop = n if finite.all() else int(0.9 * np.argmin(finite))
+        if stop < 2 or not X.shape[1]:
+            return np.inf
+        idx = np.unique(np.linspace(0, stop - 1, _ALONG).astype(int))
+        try:
+            J = self.model.jac_x(X[idx], U[idx], t=self.t[idx], p=np.repeat(p, idx.size, axis=0))
+        except (FloatingPointError, ValueError, ArithmeticError, BondcosimError):
+            return np.inf
+        J = J[np.isfinite(J).all(axis=(1, 2))]
+        if not J.size:
+            return np.inf
+        lam = float(np.max(np.abs(np.linalg.eigvals(J))))
+        reach = _RK4_ACCURACY if self.equations.is_smooth else _HELD_RK4_REACH
+        return reach / lam if lam > 0 else np.inf
 
     def _inputs_by_delay(self, P) -> dict:
         """Delays (one tuple per distinct set) -> the rows of `P` simulated with them."""

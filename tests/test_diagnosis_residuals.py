@@ -265,3 +265,24 @@ def test_the_stiff_path_takes_over_sooner_the_more_a_derivative_costs():
     assert heavy._stiff_from() <= 300
     assert heavy._stiff(np.array([500])) and not cheap._stiff(np.array([500]))
     assert heavy.on(exp)._stiff_limit == heavy._stiff_from()       # counted once per model
+
+
+def test_a_law_stiff_only_in_motion_gets_the_sub_step_its_run_needs():
+    """A Dahl friction (0.1 N, 1000 N/m) on the msd relaxes at sigma |v| / F_h, 0 at rest: the
+    sub-step from the start state (2 per 20 ms sample) went to infinity once the mass moved
+    (|lambda| h about 200; a carriage's Dahl fit diverged so, seed 3434, compound case 007).  The
+    run's own states now set it: finite, and equal to a run at 800 sub-steps per sample."""
+    from dataclasses import replace
+    from test_diagnosis_fit import F, T, UNITS, _candidate
+    from diagnosis.place import Place
+    msd = library.build("mass-spring-damper")
+    exp = Experiment(T, {"F": F}, {"x": T, "v": T}, UNITS)
+    cand = _candidate(msd, Place("junction", "v_mass"), "hysteresis", exp)
+    level, sigma = (p.name for p in cand.params)
+    graph = cand.build(msd, {level: 0.1, sigma: 1e3})
+    run = OutputSimulator(graph, exp).run()
+    assert run.substeps > 100
+    fine = OutputSimulator(graph, replace(exp, substeps=800))()
+    for o in ("x", "v"):
+        assert np.isfinite(run.outputs[o]).all()
+        assert np.max(np.abs(run.outputs[o] - fine[o])) < 1e-4 * np.ptp(fine[o])

@@ -50,10 +50,12 @@ _HELD_RK4_REACH = 2.0
 #: variables has no such path and fails.  Both paths agree to 0.01 noise sigmas on the exoskeleton
 #: and to 1e-5 of tau's span on the pam-frictionless.
 _STIFF_SUBSTEPS = 1000
-#: states along a run whose Jacobian checks its RK4 sub-step (:meth:`OutputSimulator._step_along`),
-#: the share of its sub-step below which a run is simulated again with the one they need, and how
-#: many times at most
+#: states along a run gone to infinity whose Jacobian checks its RK4 sub-step
+#: (:meth:`OutputSimulator._step_along`), the share of its sub-step below which it is simulated
+#: again with the one they need, and how many times at most
 _ALONG, _RESTEP, _RESTEPS = 24, 0.5, 2
+#: h |lambda| past which classic RK4 is unstable (2.79 on the negative real axis, 2.83 on the imaginary one)
+_RK4_STABLE = 2.78
 #: The cost model that sets where (session 22, measured here): the stiff path costs about 100 us
 #: per sample interval, mostly in Python (the Jacobian, its eigenvalues, W^-1), and an RK4 sub-step
 #: 47 ns plus 0.4 ns per operation of the state derivatives (sympy ``count_ops``): the
@@ -373,8 +375,9 @@ class OutputSimulator:
 
     def _run_group(self, group, P, h, x_init, runs, depth: int = 0) -> None:
         """Simulate the rows `group` of `P` together (sub-step `h` per row), into `runs`.  A run on
-        RK4 whose own states need a sub-step below :data:`_RESTEP` of its own (:meth:`_step_along`)
-        is simulated again with that one (at most :data:`_RESTEPS` times)."""
+        RK4 that left the finite numbers where its own states needed a sub-step below
+        :data:`_RESTEP` of its own (:meth:`_step_along`) is simulated again with that one (at most
+        :data:`_RESTEPS` times); the runs that stay finite are kept as they are."""
         h_max = float(np.min(h[group]))
         subs, every = self._substeps(h_max)
         # runs whose delayed inputs are late by the same times share their grid and inputs
@@ -383,7 +386,8 @@ class OutputSimulator:
             grid, U, at = self._delayed_inputs(delays)
             X, D, most = self._integrate(grid, U, self._grid_substeps(grid, subs), h_max, x_init, P[rows], every)
             if depth < _RESTEPS and not self._stiff(subs):
-                need = np.array([self._step_along(X[at, k], U[at], P[i:i + 1]) for k, i in enumerate(rows)])
+                need = np.array([self._step_along(X[at, k], U[at], P[i:i + 1], h_max)
+                                 if not np.isfinite(X[at, k]).all() else np.inf for k, i in enumerate(rows)])
                 finer = need < _RESTEP * h_max
                 if finer.any():
                     h = h.copy()
@@ -395,16 +399,18 @@ class OutputSimulator:
                 if not finer[k]:
                     runs[i] = self._run(X[at, k], D[at, k], U[at], P[i:i + 1], most)
 
-    def _step_along(self, X, U, p) -> float:
-        """The RK4 sub-step (:meth:`_sub_step`'s rule) that :data:`_ALONG` states of one run
-        (`X`, at the samples, with their inputs `U`) need, up to the last tenth of its finite
-        part (a run gone to infinity is stiff only there).  :meth:`_sub_step` looks at the start
-        state alone: a law stiff only in motion (a Dahl element: its relaxation rate is sigma |v|
-        / F, 0 at rest) got the step of a model at rest and went to infinity when it moved (a
-        carriage with Dahl friction, |lambda| h about 5 on 5 ms samples)."""
-        n = X.shape[0]
+    def _step_along(self, X, U, p, h) -> float:
+        """The RK4 sub-step (:meth:`_sub_step`'s rule) that a run gone to infinity with sub-step
+        `h` needed: at :data:`_ALONG` of its states (`X`, at the samples, with their inputs `U`)
+        up to the first where `h` was past RK4's stability (:data:`_RK4_STABLE`; the states after
+        it are the instability's, not the model's), at least the sample interval over twice
+        :data:`_STIFF_SUBSTEPS` (a smooth model then takes the Rosenbrock path, one with held
+        variables fails as before).  :meth:`_sub_step` looks at the start state alone: a law stiff
+        only in motion (a Dahl element: its relaxation rate is sigma |v| / F, 0 at rest) got the
+        step of a model at rest and went to infinity when it moved (a carriage with Dahl
+        friction, |lambda| h about 5 on 5 ms samples)."""
         finite = np.isfinite(X).all(axis=1)
-        stop = n if finite.all() else int(0.9 * np.argmin(finite))
+        stop = X.shape[0] if finite.all() else int(np.argmin(finite))
         if stop < 2 or not X.shape[1]:
             return np.inf
         idx = np.unique(np.linspace(0, stop - 1, _ALONG).astype(int))
@@ -412,12 +418,12 @@ class OutputSimulator:
             J = self.model.jac_x(X[idx], U[idx], t=self.t[idx], p=np.repeat(p, idx.size, axis=0))
         except (FloatingPointError, ValueError, ArithmeticError, BondcosimError):
             return np.inf
-        J = J[np.isfinite(J).all(axis=(1, 2))]
-        if not J.size:
-            return np.inf
-        lam = float(np.max(np.abs(np.linalg.eigvals(J))))
+        lam = np.array([np.max(np.abs(np.linalg.eigvals(j))) if np.isfinite(j).all() else 0.0 for j in J])
+        past = np.flatnonzero(lam * h > _RK4_STABLE)
+        lam = float(np.max(lam[:past[0] + 1] if past.size else lam))
         reach = _RK4_ACCURACY if self.equations.is_smooth else _HELD_RK4_REACH
-        return reach / lam if lam > 0 else np.inf
+        floor = float(np.min(self._dt)) / (2 * _STIFF_SUBSTEPS)
+        return max(reach / lam, floor) if lam > 0 else np.inf
 
     def _inputs_by_delay(self, P) -> dict:
         """Delays (one tuple per distinct set) -> the rows of `P` simulated with them."""

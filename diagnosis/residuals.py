@@ -269,10 +269,14 @@ class OutputSimulator:
             except (FloatingPointError, ValueError, ArithmeticError):
                 J = np.full((1, 1), np.nan)
             if np.isfinite(J).all():
-                lam = float(np.max(np.abs(np.linalg.eigvals(J))))
-                if lam > 0:
-                    h = min(h, (_RK4_ACCURACY if self.equations.is_smooth else _HELD_RK4_REACH) / lam)
+                h = min(h, self._rk4_step(float(np.max(np.abs(np.linalg.eigvals(J))))))
         return h
+
+    def _rk4_step(self, lam: float) -> float:
+        """The RK4 sub-step for a fastest mode of `lam` 1/s: :data:`_RK4_ACCURACY` over it (with
+        held variables :data:`_HELD_RK4_REACH`); inf where `lam` is 0."""
+        reach = _RK4_ACCURACY if self.equations.is_smooth else _HELD_RK4_REACH
+        return reach / lam if lam > 0 else np.inf
 
     def _nesting(self, subs):
         """``(subs, every)``: sub-steps per sample interval and how many of them one held-law
@@ -418,12 +422,12 @@ class OutputSimulator:
             J = self.model.jac_x(X[idx], U[idx], t=self.t[idx], p=np.repeat(p, idx.size, axis=0))
         except (FloatingPointError, ValueError, ArithmeticError, BondcosimError):
             return np.inf
-        lam = np.array([np.max(np.abs(np.linalg.eigvals(j))) if np.isfinite(j).all() else 0.0 for j in J])
+        ok = np.isfinite(J).all(axis=(1, 2))
+        lam = np.zeros(idx.size)
+        lam[ok] = np.max(np.abs(np.linalg.eigvals(J[ok])), axis=1) if ok.any() else 0.0
         past = np.flatnonzero(lam * h > _RK4_STABLE)
-        lam = float(np.max(lam[:past[0] + 1] if past.size else lam))
-        reach = _RK4_ACCURACY if self.equations.is_smooth else _HELD_RK4_REACH
-        floor = float(np.min(self._dt)) / (2 * _STIFF_SUBSTEPS)
-        return max(reach / lam, floor) if lam > 0 else np.inf
+        step = self._rk4_step(float(np.max(lam[:past[0] + 1] if past.size else lam)))
+        return max(step, float(np.min(self._dt)) / (2 * _STIFF_SUBSTEPS))
 
     def _inputs_by_delay(self, P) -> dict:
         """Delays (one tuple per distinct set) -> the rows of `P` simulated with them."""

@@ -14,7 +14,7 @@ import pytest
 import plants.library as library
 from bondgraph.numerics import simulate
 from diagnosis.benchmark import plants_textbook as tb
-from diagnosis.benchmark.draw import CaseSpec, draw_cases, realise
+from diagnosis.benchmark.draw import RATIOS, CaseSpec, draw_cases, realise
 from diagnosis.benchmark.effects import KIND_PLACES, make_effect, places_for
 from diagnosis.benchmark.plants import PLANTS
 from diagnosis.benchmark.report import markdown, summarise
@@ -410,6 +410,21 @@ def test_the_pam_truths_signals_survive_a_run_gone_to_infinity():
     assert np.isnan(sig["muscle1"]) and np.isnan(sig["muscle2"])
 
 
+def test_a_second_effect_the_first_hides_is_measured_invisible():
+    """Seed 3434, compound case 006: Coulomb friction on the geared inertias' first shaft and a speed
+    sensor on it that clips at 90 % of the nominal's range, each sized alone.  With the friction the
+    shaft never reaches the range: the truth with both is the friction's alone, to rounding (the
+    second's effect-to-noise 0), while the friction's stands out of the noise."""
+    from diagnosis.benchmark.compound import realise_compound, second_effect
+    spec = draw_cases(80, 3434, PLANTS)[6]
+    plant = PLANTS[spec.plant]()
+    second = second_effect(spec, plant)
+    assert (spec.kind, second.kind, second.door) == ("coulomb_friction", "saturation", "output")
+    rec = realise_compound(spec, second, plant)
+    first, also = rec.visible
+    assert also < 1e-6 and first > RATIOS[0]
+
+
 def test_a_compound_case_draws_a_second_effect_a_rig_could_have_besides():
     """--compound: each effect case gets a second effect of another kind, reproducibly, never a
     second friction law at the same 1-junction or a rigidly geared one, the same input or output
@@ -461,8 +476,13 @@ def test_a_compound_truth_carries_both_effects_and_is_scored_on_each():
     h = summarise([dict(base, label="a", first_found=True, also_found=True),
                    dict(base, label="b", first_found=True, also_found=False)])["headline"]
     assert (h["compound_cases"], h["first_found"], h["second_found"], h["both_found"]) == (2, 1.0, 0.5, 0.5)
-    assert "| compound cases (2, two concealed effects): some answer names the first / the second / both | " \
-           "100 % / 50 % / 50 % | |" in markdown(summarise([dict(base, label="a", first_found=True, also_found=True),
-                                                           dict(base, label="b", first_found=True,
-                                                                also_found=False)]), seed=0)
+    assert "| compound cases (2, two concealed effects; the second visible in 2, both in 2): some answer names " \
+           "the first / the second / both | 100 % / 50 % / 50 % | |" in markdown(summarise(
+               [dict(base, label="a", first_found=True, also_found=True),
+                dict(base, label="b", first_found=True, also_found=False)]), seed=0)
+    # a second effect the first hides in the truth with both is not asked for
+    h = summarise([dict(base, label="a", first_found=True, also_found=True, first_visible=9.0, also_visible=4.0),
+                   dict(base, label="b", first_found=True, also_found=False, first_visible=9.0,
+                        also_visible=0.5)])["headline"]
+    assert (h["second_visible"], h["both_visible"], h["second_found"], h["both_found"]) == (1, 1, 1.0, 1.0)
     assert "compound_cases" not in summarise([dict(base, label="c", also_kind="")])["headline"]

@@ -17,6 +17,8 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
+import numpy as np
+
 from .compound import compound_label, second_effect
 from .draw import draw_cases
 from .plants import PLANTS
@@ -84,7 +86,9 @@ def main(argv=None) -> int:
             f" ({'place ok' if r['place_ok'] else 'place ' + (r['answer_place'] or '-')})"
             f" {r['seconds_diagnose']:.0f} s")
         if r.get("also_kind"):
-            verdict += f"; found: first {r['first_found']}, second {r['also_found']} ({', '.join(r['answers'])})"
+            verdict += (f"; found: first {r['first_found']}, second {r['also_found']} ({', '.join(r['answers'])}); "
+                        f"effect-to-noise with both: {r.get('first_visible', np.nan):.3g} / "
+                        f"{r.get('also_visible', np.nan):.3g}")
         print(f"benchmark: [{done}/{len(todo)} {el:6.0f} s, eta {eta:5.0f} s] {r['label']}: {verdict}",
               file=sys.stderr, flush=True)
 

@@ -23,7 +23,7 @@ from .draw import KINDS, CaseSpec, Realised, realise
 from .effects import places_for
 from .simulate import NoEffect, simulate_truth
 
-__all__ = ["CompoundEffect", "second_effect", "realise_compound", "compound_label", "FRICTIONS"]
+__all__ = ["CompoundEffect", "second_effect", "realise_compound", "compound_label", "visibility", "FRICTIONS"]
 
 #: the kinds that are a friction law of a 1-junction: two of them at one junction are one law
 FRICTIONS = ("coulomb_friction", "viscous_friction", "stribeck_friction", "coulomb_viscous_friction",
@@ -153,9 +153,20 @@ def realise_compound(first: CaseSpec, second: CaseSpec, plant) -> Realised:
     truth = simulate_truth(plant, rec.t, rec.u, effect, signals=plant.drifts)
     if not truth["_finite"]:
         raise BenchmarkError(f"{compound_label(first, second)}: the truth with both effects is not finite")
+    rec.visible = (visibility(truth, also.truth, rec.sigma), visibility(truth, rec.truth, rec.sigma))
     rec.effect, rec.truth, rec.also = effect, truth, also
     rec.calibration_runs += also.calibration_runs + 1
     return rec
+
+
+def visibility(both: dict, without: dict, sigma: dict) -> float:
+    """An effect's effect-to-noise in a compound truth: the largest over the outputs of the rms of
+    `both` (the truth with both effects) less `without` (with the other effect alone), over the
+    noise's standard deviation.  Each effect is sized alone; together, one may hide the other (a
+    friction that slows a shaft below the range its speed sensor clips at).  Below the draw's
+    least ratio (:data:`~diagnosis.benchmark.draw.RATIOS`), the benchmark does not ask for it."""
+    ratios = [float(np.sqrt(np.mean((both[o] - without[o]) ** 2))) / s for o, s in sigma.items() if s > 0]
+    return max(ratios, default=0.0)
 
 
 def compound_label(first: CaseSpec, second: CaseSpec | None) -> str:

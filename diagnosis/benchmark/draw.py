@@ -40,6 +40,8 @@ NULL_EVERY = 6
 #: log-uniformly per case, so that the catalogue's fixed smoothing (1 %) is sharper than some
 #: truths and blunter than others, as it is against a real rig's friction
 SHARPNESS = (0.003, 0.03)
+#: range of the effect-to-noise ratio drawn: rms of the effect's change of its output over the noise
+RATIOS = (3.0, 30.0)
 
 
 @dataclass(frozen=True)
@@ -93,7 +95,7 @@ def draw_cases(n: int, seed: int, plants: dict) -> list[CaseSpec]:
         door, name = places_for(built[plant], kind)[int(rng.integers(len(places_for(built[plant], kind))))]
         specs.append(CaseSpec(i, case_seed, plant, kind, door, name,
                               target_change=float(math.exp(rng.uniform(math.log(0.03), math.log(0.3)))),
-                              ratio=float(math.exp(rng.uniform(math.log(3.0), math.log(30.0)))),
+                              ratio=float(math.exp(rng.uniform(math.log(RATIOS[0]), math.log(RATIOS[1])))),
                               excitation=exc))
     return specs
 
@@ -151,6 +153,8 @@ class Realised:
     nominal_drifts: bool = False  # the nominal's open-loop error exceeds the output's spread
     calibration_runs: int = 0
     also: "Realised | None" = None  # a compound case's second effect, sized alone (compound.py)
+    # a compound case: each effect's own effect-to-noise in the truth with both (compound.visibility)
+    visible: tuple = ()
 
 
 def _segment_difference(plant, t, u, effect, truth_states, n_segments=10):

@@ -74,14 +74,25 @@ def summarise(results: list[dict]) -> dict:
 def _compound_headline(effects: list) -> dict:
     """Of the compound cases (a second concealed effect, ``--compound``): how many, and the share
     in which some answered effect names the first's kind, the second's, and both (each at one of
-    its places, or its kind listed as not told apart there); nothing for a run without them."""
+    its places, or its kind listed as not told apart there), each share over the cases where the
+    effects it asks for are visible in the truth with both (effect-to-noise at least the draw's
+    least, :func:`~diagnosis.benchmark.compound.visibility`; a case scored before the measure
+    existed counts as visible); nothing for a run without them."""
+    from .draw import RATIOS
     compound = [r for r in effects if r.get("also_kind")]
     if not compound:
         return {}
-    return {"compound_cases": len(compound),
-            "first_found": _share(r["first_found"] for r in compound),
-            "second_found": _share(r["also_found"] for r in compound),
-            "both_found": _share(r["first_found"] and r["also_found"] for r in compound)}
+
+    def seen(r, key):
+        return not r.get(key, np.nan) < RATIOS[0]     # NaN: not measured, counted
+
+    first = [r for r in compound if seen(r, "first_visible")]
+    second = [r for r in compound if seen(r, "also_visible")]
+    both = [r for r in first if seen(r, "also_visible")]
+    return {"compound_cases": len(compound), "second_visible": len(second), "both_visible": len(both),
+            "first_found": _share(r["first_found"] for r in first),
+            "second_found": _share(r["also_found"] for r in second),
+            "both_found": _share(r["first_found"] and r["also_found"] for r in both)}
 
 
 def _pct(x):
@@ -104,9 +115,10 @@ def markdown(summary: dict, *, seed: int | None = None) -> str:
              f"| place right or equivalent (effect cases) | {_pct(h['place_right'])} | >= 85 % |",
              f"| held-out NRMSE of the affected output at least halved | {_pct(h['holdout_halved'])} | >= 90 % |",
              f"| false alarms on nulls | {_pct(h['false_alarms'])} | <= 5 % |",
-             *([f"| compound cases ({h['compound_cases']}, two concealed effects): some answer names the first / "
-                f"the second / both | {_pct(h['first_found'])} / {_pct(h['second_found'])} / "
-                f"{_pct(h['both_found'])} | |"] if "compound_cases" in h else []),
+             *([f"| compound cases ({h['compound_cases']}, two concealed effects; the second visible in "
+                f"{h.get('second_visible', h['compound_cases'])}, both in {h.get('both_visible', h['compound_cases'])})"
+                f": some answer names the first / the second / both | {_pct(h['first_found'])} / "
+                f"{_pct(h['second_found'])} / {_pct(h['both_found'])} | |"] if "compound_cases" in h else []),
              f"| time per case, median / max | {h['seconds_per_case_median']:.0f} s / "
              f"{h['seconds_per_case_max']:.0f} s | |", "",
              "| held-out improvement quantile | " + " | ".join(f"{int(q * 100)} %" for q in

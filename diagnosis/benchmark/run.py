@@ -48,6 +48,9 @@ class Score:
     also_place: str = ""
     first_found: bool | None = None
     also_found: bool | None = None
+    # each effect's effect-to-noise in the truth with both (compound.visibility): first, second
+    first_visible: float = float("nan")
+    also_visible: float = float("nan")
     answers: list = field(default_factory=list)
     parameters: dict = field(default_factory=dict)
     seconds_generate: float = 0.0
@@ -132,6 +135,7 @@ def score_case(rec: Realised, report) -> Score:
         s.also_kind, s.also_place = also.spec.kind, also.effect.place
         s.first_found = _names(found, spec.kind, rec.effect.effects[0].accepted_places())
         s.also_found = _names(found, s.also_kind, also.effect.accepted_places())
+        s.first_visible, s.also_visible = rec.visible or (float("nan"), float("nan"))
     nom, imp = data["fit"]["nominal"].get(rec.affected), data["fit"]["improved"].get(rec.affected)
     if nom is not None and imp is not None:
         s.nominal_nrmse, s.improved_nrmse = float(nom), float(imp)

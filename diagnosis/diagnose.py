@@ -45,8 +45,8 @@ from plants import load as load_model
 
 from .errors import DiagnosisError
 from .initial_state import start_inconsistent
-from .place_choice import (MIN_PLACE_SHARE, actuator_places, companions, located_places, on_storage, spring_places,
-                           without_companions)
+from .place_choice import (MIN_PLACE_SHARE, actuator_places, companions, located_places, on_storage, sensor_places,
+                           spring_places, without_companions)
 from .rounds import JointRefit, Round
 
 __all__ = ["diagnose", "MIN_PLACE_SHARE", "MAX_FIT_SAMPLES"]
@@ -403,6 +403,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         return fit_candidate(graph, cand, fit_part, held, uncertain=uncertain, x0=fit_x0, through=train,
                              mid_run=False, abandon_above=abandon_above, judge=judge, start=own_start)
 
+    round_part, round_x0, start_x0 = fit_part, fit_x0, x0     # the backfit's, on the nominal model
     fits, best = fit_in_turn(cands, fit_one, say, "fitting")
     fits += _companion_fits(graph, fits, place_list, cand_part, rv, fit_one, say, "fitting", best, x0)
     fits += _twin_fits(graph, fits, cand_part, rv, fit_one, say, "fitting", best, x0, len(place_list))
@@ -447,6 +448,33 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
             improved_graph, improved, y_imp, improved_judged = found.graph, found.improved, found.y, found.judged
         effects = [r.chosen for r in rounds if r.chosen is not None]
         if len(effects) >= 2:
+            from .backfit import backfit
+            from .fit import choose as choose_fit
+
+            def refit(base, cand, names, bounds):
+                return fit_candidate(base, cand, round_part, held, uncertain=names, x0=round_x0, through=train,
+                                     mid_run=False, judge=judge, start=own_start, bounds=bounds)
+
+            def rechoose(reference, refits):
+                chosen = choose_fit(reference, refits, noise=floor, measured=held.outputs)
+                for f in refits:
+                    f.extra.pop("holdout_y", None), f.extra.pop("open_loop_y", None)
+                return chosen
+
+            def sensor_candidates():
+                return [c for p in sensor_places([], train)
+                        for c in candidates(graph, p, regime_variables=rv, experiment=cand_part, x0=start_x0)]
+
+            effects, backfitted = backfit(graph, rounds, fit=refit, floor=floor, choose=rechoose,
+                                          with_values=_with_values, say=say, sensors=sensor_candidates,
+                                          judge_model=lambda base: _holdout_nrmse(OutputSimulator(base, exp), None,
+                                                                                  start_x0, judge)[0])
+            if any(r.replaced is not None for r in rounds):
+                improved_graph = backfitted
+                x0 = next((e.extra["x0"] for e in reversed(effects) if e.extra.get("x0")), start_x0)
+                improved, y_imp, improved_judged = _holdout_nrmse(OutputSimulator(improved_graph, exp), None, x0,
+                                                                  judge)
+                chosen = rounds[0].chosen
             say("joint refit", f"{len(effects)} effects")
             joint = _joint_refit(improved_graph, effects, exp, train, held, judge, x0, improved, floor,
                                  uncertain)
@@ -495,11 +523,12 @@ def _choose(reference, fits, floor, evidence, res, exp, train, held, not_open_lo
     apart from a held-out choice (:func:`diagnosis.alternatives.indistinguishable`; none for an
     answer of the training part, which the held-out part cannot judge at all)."""
     from .alternatives import indistinguishable
-    from .fit import choose, noise_floor
+    from .fit import choose, floor_within_reach, noise_floor
     from .residuals import nrmse
     from .training_judge import choose_on_training, mark_silent, restart_evidence
     if not fits:
         return None, []
+    floor = floor_within_reach(floor, fits, list(reference))
     n = train.t.size
     by_training = not not_open_loop or held_nominal is not None
     if by_training:
@@ -607,6 +636,8 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     places = located_places(without_companions(graph, scores), top)
     by_place = {s.place: s for s in scores}
     places += [by_place[p] for p in actuator_places(graph, [s.place for s in places], train) if p in by_place]
+    if places:                           # behind what is located: nothing located is noise
+        places += [by_place[p] for p in sensor_places([s.place for s in places], train) if p in by_place]
     springs = [by_place[p] for p in spring_places(graph, [s.place for s in places]) if p in by_place]
     places += springs
     done = {(c.kind, c.place) for r in rounds if r.chosen is not None and r.chosen.candidate is not None
@@ -652,12 +683,10 @@ def _joint_refit(graph, effects, exp, train, held, judge, x0, reference, floor, 
     from .fit import excess_error, fit_candidate
     from .residuals import OutputSimulator
 
-    from .catalogue_common import released
-    values = graph.parameters()   # a released saturation limit stays released
-    names = [p.name for e in effects for p in e.candidate.params
-             if p.name not in values or not released(values[p.name].value)] + list(uncertain)
+    from .backfit import refittable
+    names, own = refittable(graph, effects)       # a released saturation limit stays released
+    names += list(uncertain)
     part, part_x0 = _fit_window(train, None, x0)
-    own = {p.name: (p.lower, p.upper) for e in effects for p in e.candidate.params}
     fit = fit_candidate(graph, None, part, held, uncertain=names, x0=part_x0, through=train, judge=judge,
                         within=own)
     out = JointRefit(fit, dict(reference), dict(reference))

@@ -250,11 +250,13 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
             lines.append(f"Held-out error nearly tied it with {chosen.extra['preferred_over']}; the feature "
                          f"regression decided.")
         lines += _indistinguishable_text(chosen, rounds[0].indistinguishable if rounds else None)
+        lines += _backfit_text(1, rounds[0]) if rounds else []
         if finding is not None and finding.variable is not None:
             share = ("" if finding.explained < _MIN_REGIME_SHARE
                      else f" (explains {100 * finding.explained:.0f} % of it)")
             lines.append(f"Operating regime: {finding.description}{share}.")
-        others = sorted((f for f in fits if f is not chosen and f.success and f.holdout_nrmse),
+        others = sorted((f for f in fits if str(f.candidate) != str(chosen.candidate) and f.success
+                         and f.holdout_nrmse),
                         key=lambda f: sum(f.holdout_nrmse.values()))[:3]
         if others:
             lines.append("Runners-up (held-out NRMSE): " + "; ".join(
@@ -269,6 +271,20 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
         lines.append(f"Held-out NRMSE of {o}: nominal {nominal[o]:.3g} -> improved {improved[o]:.3g} "
                      f"({_pct(nominal[o], improved[o])} lower).")
     return "\n".join(lines)
+
+
+def _backfit_text(number: int, r) -> list:
+    """A line on round `number`'s effect replaced by backfitting (:mod:`diagnosis.backfit`)."""
+    if r.replaced is None:
+        return []
+    old = next((f for f in r.backfit or () if str(f.candidate) == str(r.replaced.candidate) and f.success), None)
+    held = ""
+    if old is not None:
+        held = " (held-out NRMSE " + ", ".join(f"{o} {old.holdout_nrmse[o]:.3g} -> {v:.3g}"
+                                                for o, v in r.chosen.holdout_nrmse.items()) + ")"
+    return [f"Backfitted: with the later effects in place, round {number}'s candidates were fitted again; "
+            f"{r.chosen.candidate} now fits the held-out part better than {r.replaced.candidate}, "
+            f"which round {number} chose first{held} (diagnosis.backfit)."]
 
 
 def _further_text(rounds, outputs):
@@ -295,6 +311,7 @@ def _further_text(rounds, outputs):
         if c.extra.get("judge") == "training":
             lines.append(_judged_on_training(c))
         lines += _indistinguishable_text(c, r.indistinguishable)
+        lines += _backfit_text(i, r)
     joint = next((r.joint for r in rounds if r.joint is not None), None)
     if joint is not None:
         gain = ", ".join(f"{o} {joint.reference[o]:.3g} -> {joint.improved[o]:.3g}" for o in outputs)

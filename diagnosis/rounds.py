@@ -101,6 +101,11 @@ class Round(_ReadByKey):
         The fits of other kinds the held-out part cannot tell apart from ``chosen``
         (:func:`diagnosis.alternatives.indistinguishable`), lowest held-out error first; empty when
         nothing was chosen or the training part chose.
+    replaced : CandidateFit, optional
+        The round's first choice, where backfitting (:mod:`diagnosis.backfit`) replaced it by
+        ``chosen``, chosen again with the later effects in place.
+    backfit : list of CandidateFit, optional
+        The round's best candidates fitted again with the later effects in place (backfitting).
     """
 
     chosen: object
@@ -121,3 +126,5 @@ class Round(_ReadByKey):
     features: list | None = None
     pruned: list | None = None
     indistinguishable: list | None = None
+    replaced: object = None
+    backfit: list | None = None

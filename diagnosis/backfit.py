@@ -1,0 +1,159 @@
+"""Backfitting: each effect but the last chosen again with the later effects in place.
+
+A round chooses its effect on a model that still lacks the effects later rounds find.  Where a
+later effect accounts for part of the residual an earlier round explained, that round's choice
+was made on the wrong residual: a transport delay in a pump's flow, seen through a pipe that
+also lacks its viscous loss, fits better as a first-order lag (the lag's phase stands in for
+some of the missing damping); a Coulomb + viscous friction on a mass whose spring also has
+backlash loses its Coulomb part to the backlash's dead band.  The later rounds found the missing
+damping and the dead band; with them in place, the earlier round's own candidates tell the delay
+from the lag, and the Coulomb + viscous law from the viscous one.
+
+So once several effects were found, each earlier round's best few candidates (:data:`ALTERNATIVES`
+kinds, the chosen one among them, ranked by the round's held-out error) are fitted again on the
+nominal model with every other effect built in, each started from where it ended in its round, the
+other effects' parameters refitted alongside within their kinds' bounds (fitted beside the effect
+now taken out, they may have to move far: a leak answered at the wrong tank had left the right
+tank's leak at a third of its size), and with them the sensor candidates at every output (a
+sensor's error is what a larger residual hides from graph location); they are chosen among by the
+round's own rule (:func:`diagnosis.fit.choose`) against that model's held-out error.  A different winner replaces the effect (the round keeps the one it
+replaced, ``Round.replaced``, and the refits, ``Round.backfit``); no winner leaves it as it was.
+This is one sweep of backfitting, the coordinate-wise refit of additive models (Hastie and
+Tibshirani, *Generalized Additive Models*, 1990, ch. 4), over kinds instead of smooth functions;
+the joint refit of all effects' parameters follows it (:func:`diagnosis.diagnose._joint_refit`).
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+from .errors import BondcosimError
+from .fit import needs_explaining, unpriced_error, usable_fits
+
+__all__ = ["ALTERNATIVES", "alternatives", "backfit", "build_effects", "refittable"]
+
+#: the round's candidates fitted again: its chosen kind and the next best, by held-out error
+ALTERNATIVES = 4
+
+
+def build_effects(graph, effects, with_values):
+    """`graph` with each of `effects` (CandidateFits, in order) built in at its fitted values; the
+    values of parameters that are not the candidate's own (refitted nominal ones) set by
+    ``with_values(graph, values)``."""
+    for effect in effects:
+        own = {p.name for p in effect.candidate.params}
+        graph = effect.candidate.build(graph, {k: v for k, v in effect.values.items() if k in own})
+        graph = with_values(graph, {k: v for k, v in effect.values.items() if k not in own})
+    return graph
+
+
+def alternatives(chosen, fits, reference: dict, floor: dict, n: int = ALTERNATIVES, taken=frozenset()) -> list:
+    """The round's chosen fit and the successful fits of the next best kinds or places (one fit per
+    kind and place, lowest held-out error on the outputs that needed explaining first), at most
+    `n` in all, the chosen first; none with a parameter named in `taken`."""
+    significant = needs_explaining(reference, floor) or list(reference)
+    ranked = sorted(usable_fits(fits, list(reference)), key=lambda f: unpriced_error(f, significant))
+    out, seen = [], set()
+    for fit in [chosen] + ranked:
+        if len(out) < n and fit.candidate is not None and _key(fit) not in seen \
+                and not taken & {p.name for p in fit.candidate.params}:
+            out.append(fit)
+            seen.add(_key(fit))
+    return out
+
+
+def backfit(graph, rounds, *, fit, floor: dict, judge_model, choose, with_values, say, sensors=None,
+            n: int = ALTERNATIVES):
+    """Every chosen effect but the last chosen again with the others in place (module docstring).
+
+    Parameters
+    ----------
+    graph : BondGraph
+        The nominal model.
+    rounds : list of Round
+        The rounds so far; a round whose effect is replaced gets ``chosen`` (the new fit),
+        ``replaced`` (the old one) and ``backfit`` (the refits); every round that was backfitted
+        gets ``backfit``.
+    fit : callable
+        ``fit(base, candidate, uncertain, bounds) -> CandidateFit``: a candidate fitted on the model
+        `base`, with the parameters `uncertain` of `base` (the other effects') within their own
+        `bounds` (:func:`diagnosis.fit.fit_candidate`): fitted beside the effect taken out, they
+        may need to move far (a leak at one tank fitted beside a leak answered at the other).
+    floor : dict str -> float
+        The held-out noise floor per output (:func:`diagnosis.fit.noise_floor`).
+    judge_model : callable
+        ``judge_model(base) -> dict``: the held-out NRMSE per output of the model `base`.
+    choose : callable
+        ``choose(reference, fits) -> CandidateFit or None``: the round's rule.
+    with_values : callable
+        ``with_values(graph, values)``: `graph` with some parameters set.
+    say : callable
+        ``say(step, detail)`` progress.
+    sensors : callable, optional
+        ``sensors() -> list of Candidate``: the sensor candidates at every output of `graph`, fitted
+        too (from their own guesses) where the round did not fit them: a sensor's error is judged on
+        its own output only, the kind another effect's larger residual hides from graph location
+        (:func:`diagnosis.place_choice.sensor_places`), and its fit is cheap (no state of its own).
+
+    Returns
+    -------
+    (list of CandidateFit, BondGraph)
+        The effects after the sweep, in the rounds' order, and `graph` with all of them built in
+        (the other effects' values as refitted with a replacing one).
+    """
+    chosen = [r for r in rounds if r.chosen is not None and r.chosen.candidate is not None]
+    tuned = {}                  # the other effects' values refitted alongside a replacing effect
+    for r in chosen[:-1]:
+        others = [c.chosen for c in chosen if c is not r]
+        try:
+            base = with_values(build_effects(graph, others, with_values), tuned)
+            names, bounds = refittable(base, others)
+            reference = judge_model(base)
+        except BondcosimError as exc:     # a later effect placed on the earlier one's element, a run diverging
+            say("backfitting", f"round {rounds.index(r) + 1} left as chosen: without it, {exc}")
+            continue
+        # a candidate named for the nominal model may clash with the others' names
+        taken = set(base.parameters())
+        tried = [(f.candidate, f.values) for f in alternatives(r.chosen, r.fits, r.reference, floor, n, taken)]
+        keys = {_key(c) for c, _ in tried}
+        tried += [(c, None) for c in (sensors() if sensors is not None else [])
+                  if _key(c) not in keys and not taken & {p.name for p in c.params}]
+        refits = []
+        for k, (cand, ended) in enumerate(tried, 1):
+            if ended is not None and hasattr(cand, "with_starts"):     # a group of twins: its own guesses
+                cand = cand.with_starts([_ended(cand, ended)])
+            say("backfitting", f"round {rounds.index(r) + 1}: {cand} ({k}/{len(tried)})")
+            refit = fit(base, cand, names, bounds)
+            refit.n_params -= len(names)   # the others' parameters: the reference has them too
+            refits.append(refit)
+        r.backfit = refits
+        winner = choose(reference, refits)
+        if winner is not None and _key(winner) != _key(r.chosen):
+            say("backfitting", f"round {rounds.index(r) + 1}: {winner.candidate} replaces {r.chosen.candidate}")
+            tuned.update({k: v for k, v in winner.values.items() if k in names})
+            own = {p.name for p in winner.candidate.params}
+            r.replaced, r.chosen = r.chosen, replace(winner, values={k: v for k, v in winner.values.items()
+                                                                     if k in own or k not in names})
+    effects = [r.chosen for r in chosen]
+    return effects, with_values(build_effects(graph, effects, with_values), tuned)
+
+
+def refittable(graph, effects) -> tuple[list, dict]:
+    """``(names, bounds)``: the parameters of `effects` (built into `graph`) a refit fits again,
+    a saturation limit released to its bound left out, and each one's own bounds (name ->
+    (lower, upper))."""
+    from .catalogue_common import released
+    values = graph.parameters()
+    names = [p.name for e in effects for p in e.candidate.params
+             if p.name not in values or not released(values[p.name].value)]
+    return names, {p.name: (p.lower, p.upper) for e in effects for p in e.candidate.params}
+
+
+def _ended(cand, values: dict) -> dict:
+    """Where a fit of `cand` ended, as a start: its own parameters' `values` within their bounds (a
+    saturation limit the data gave no evidence for was released beyond its bound)."""
+    return {p.name: min(max(float(values[p.name]), p.lower), p.upper) for p in cand.params if p.name in values}
+
+
+def _key(fit_or_candidate) -> tuple:
+    cand = getattr(fit_or_candidate, "candidate", fit_or_candidate)
+    return cand.kind, tuple(str(p) for p in getattr(cand, "places", (cand.place,)))

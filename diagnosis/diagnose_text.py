@@ -282,7 +282,7 @@ def _backfit_text(number: int, r) -> list:
     if old is not None:
         held = " (held-out NRMSE " + ", ".join(f"{o} {old.holdout_nrmse[o]:.3g} -> {v:.3g}"
                                                 for o, v in r.chosen.holdout_nrmse.items()) + ")"
-    return [f"Backfitted: with the later effects in place, round {number}'s candidates were fitted again; "
+    return [f"Backfitted: with the other effects in place, round {number}'s candidates were fitted again; "
             f"{r.chosen.candidate} now fits the held-out part better than {r.replaced.candidate}, "
             f"which round {number} chose first{held} (diagnosis.backfit)."]
 

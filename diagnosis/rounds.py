@@ -103,9 +103,9 @@ class Round(_ReadByKey):
         nothing was chosen or the training part chose.
     replaced : CandidateFit, optional
         The round's first choice, where backfitting (:mod:`diagnosis.backfit`) replaced it by
-        ``chosen``, chosen again with the later effects in place.
+        ``chosen``, chosen again with the other effects in place.
     backfit : list of CandidateFit, optional
-        The round's best candidates fitted again with the later effects in place (backfitting).
+        The round's best candidates fitted again with the other effects in place (backfitting).
     """
 
     chosen: object

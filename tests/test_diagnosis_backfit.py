@@ -5,10 +5,27 @@ from types import SimpleNamespace
 import pytest
 
 from diagnosis.backfit import alternatives
-from diagnosis.benchmark.draw import CaseSpec
+from diagnosis.benchmark.compound import second_effect
+from diagnosis.benchmark.draw import draw_cases
 from diagnosis.benchmark.plants import PLANTS
 from diagnosis.benchmark.run import run_case
 from diagnosis.fit import CandidateFit, floor_within_reach
+
+
+def _compound(tmp_path, index: int) -> dict:
+    """Seed 3434's compound benchmark case `index`, diagnosed and scored (its label checked)."""
+    spec = draw_cases(80, 3434, PLANTS)[index]
+    second = second_effect(spec, PLANTS[spec.plant]())
+    r = run_case(spec, PLANTS, tmp_path, second=second)
+    assert r["label"] == LABELS[index]
+    return r
+
+
+#: the compound cases below, as the benchmark labels them
+LABELS = {0: "000-carriage-sensor_gain@output:v+viscous_friction@junction:v_cart",
+          2: "002-msd-coulomb_viscous_friction@junction:v_mass+backlash@storage:k",
+          4: "004-hydraulic-viscous_friction@junction:q_pipe+transport_delay@input:Q_p",
+          28: "028-carriage-constant_load@junction:v_cart+valve_lag@input:F"}
 
 
 def _fit(kind, place, holdout, names=("p",), success=True):
@@ -40,11 +57,7 @@ def test_backfitting_tells_a_coulomb_plus_viscous_law_from_viscous_once_the_back
     backlash in front of its spring.  Round 1, on a model without the dead band, answered viscous
     friction; round 2 found the backlash; with it in place, round 1's candidates fitted again choose
     the Coulomb + viscous law."""
-    first = CaseSpec(2, 588231826, "msd", "coulomb_viscous_friction", "junction", "v_mass",
-                     target_change=0.16767507072651625, ratio=4.355376062361023, excitation="prbs")
-    second = CaseSpec(2, 588231826, "msd", "backlash", "storage", "k", target_change=0.1496731767415938,
-                      ratio=4.355376062361023, excitation="prbs")
-    r = run_case(first, PLANTS, tmp_path, second=second)
+    r = _compound(tmp_path, 2)
     assert r["answers"] == ["coulomb_viscous_friction @ junction v_mass", "backlash @ junction v_mass"]
     assert r["first_found"] and r["also_found"]
     assert r["improvement"] >= 0.7
@@ -55,11 +68,7 @@ def test_backfitting_tells_a_transport_delay_from_a_lag_once_the_pipes_loss_is_i
     pipe has a viscous loss.  Round 1 answered a 1 ms first-order lag (its phase stood in for part of
     the missing damping); with the viscous loss in place and its coefficient refitted alongside, the
     delay fits the training part 3.4 times better than the lag, and replaces it."""
-    first = CaseSpec(4, 1403464139, "hydraulic", "viscous_friction", "junction", "q_pipe",
-                     target_change=0.08779968941306115, ratio=27.191240265167732, excitation="prbs")
-    second = CaseSpec(4, 1403464139, "hydraulic", "transport_delay", "input", "Q_p",
-                      target_change=0.10925215408439751, ratio=27.191240265167732, excitation="prbs")
-    r = run_case(first, PLANTS, tmp_path, second=second)
+    r = _compound(tmp_path, 4)
     assert r["answers"] == ["transport_delay @ input Q_p", "viscous_friction @ junction q_pipe"]
     delay = r["effect"]["also"][0]["magnitude"]
     assert r["parameters"]["T_delay_Q_p"] == pytest.approx(delay, rel=0.15)
@@ -71,11 +80,7 @@ def test_the_last_round_is_chosen_again_with_the_earlier_effect_refitted_beside_
     a lag of its force actuator.  Round 1 found the lag (0.20 s, fitted without the load); round 2,
     on that lag, answered viscous friction.  Chosen again with the lag refitted beside it (0.14 s),
     the constant load fits the training part 130 times better than the friction."""
-    first = CaseSpec(28, 658398526, "carriage", "constant_load", "junction", "v_cart",
-                     target_change=0.04546419324457113, ratio=29.886151388580142, excitation="levels")
-    second = CaseSpec(28, 658398526, "carriage", "valve_lag", "input", "F", target_change=0.22328424108593017,
-                      ratio=29.886151388580142, excitation="levels")
-    r = run_case(first, PLANTS, tmp_path, second=second)
+    r = _compound(tmp_path, 28)
     assert r["answers"] == ["valve_lag @ input F", "constant_load @ junction v_cart"]
     assert r["improvement"] >= 0.95          # 0.68 with the viscous friction
 
@@ -85,11 +90,7 @@ def test_a_second_effect_under_an_overestimated_segment_floor_is_found(tmp_path)
     a speed sensor reading 1.09 times the truth.  After the friction, the speed's segment error 0.151
     sat under the margined floor 0.156, though the sensor gain's fit took it to 0.128: the floor is
     now no higher than a fit reaches."""
-    first = CaseSpec(0, 170317176, "carriage", "sensor_gain", "output", "v", target_change=0.2146248962274526,
-                     ratio=11.701561775311609, excitation="levels")
-    second = CaseSpec(0, 170317176, "carriage", "viscous_friction", "junction", "v_cart",
-                      target_change=0.17163441628846746, ratio=11.701561775311609, excitation="levels")
-    r = run_case(first, PLANTS, tmp_path, second=second)
+    r = _compound(tmp_path, 0)
     assert r["judge"] == "segments"
     assert r["answers"] == ["viscous_friction @ junction v_cart", "sensor_gain @ output v"]
     assert r["improvement"] >= 0.75          # 0.65 with the friction alone

@@ -450,15 +450,18 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         if len(effects) >= 2:
             from .backfit import backfit
             from .fit import choose as choose_fit
+            from .fit import floor_within_reach
 
             def refit(base, cand, names, bounds):
                 return fit_candidate(base, cand, round_part, held, uncertain=names, x0=round_x0, through=train,
                                      mid_run=False, judge=judge, start=own_start, bounds=bounds)
 
-            def rechoose(reference, refits):
-                chosen = choose_fit(reference, refits, noise=floor, measured=held.outputs)
+            def rechoose(reference, refits):        # as _choose does on the held-out part
+                chosen = choose_fit(reference, refits, noise=floor_within_reach(floor, refits, list(reference)),
+                                    measured=held.outputs)
                 for f in refits:
-                    f.extra.pop("holdout_y", None), f.extra.pop("open_loop_y", None)
+                    for key in ("holdout_y", "open_loop_y"):     # read by the choice only
+                        f.extra.pop(key, None)
                 return chosen
 
             def sensor_candidates():

@@ -606,9 +606,9 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     """One more effect on `graph` (the improved graph so far) against its own residual.
 
     Location, candidates at the ``top`` places (minus the kinds already added at
-    the same place), fits with the earlier effects' values fixed in the graph,
-    and :func:`~diagnosis.fit.choose` against `reference` (the held-out NRMSE of
-    `graph`) with the noise floor `floor`.  Returns a :class:`~diagnosis.rounds.Round`:
+    the same place) and the sensors at every output where something was located, fits with the
+    earlier effects' values fixed in the graph, and :func:`~diagnosis.fit.choose` against
+    `reference` (the held-out NRMSE of `graph`) with the noise floor `floor`.  Returns a :class:`~diagnosis.rounds.Round`:
     ``chosen`` (CandidateFit or None), ``fits``, ``reference``, ``improved``, ``scores`` and,
     when something was kept, ``graph`` and ``y`` (its simulated outputs).  `start`: as
     :func:`~diagnosis.fit.fit_candidate`'s, where the recording's start state was estimated.

@@ -218,6 +218,21 @@ def test_transport_delay_is_a_delayed_input_the_elements_read():
     _differs_by(built, msd, "p_m", S("F_late") - S("F"))    # the mass feels the late force
 
 
+def test_a_delays_starts_between_samples_come_from_its_own_half_sample_start():
+    """The starts a delay's fit combines are the whole samples between the best start's neighbours;
+    the sample interval is read off the kind's own first start (half a sample), not off the smallest
+    start tried: one added where an earlier fit ended, at 3 us on a 5 ms record, made 74 000 starts."""
+    msd = library.build("mass-spring-damper")
+    cand = _one(msd, Place("input", "F"), "transport_delay")
+    T = cand.params[0].name
+    half = cand.starts[0][T]
+    cand = cand.with_starts([{T: 3e-6}])
+    tried = [(start, 1.0) for start in cand.starts] + [({T: cand.params[0].guess}, 1.0)]
+    tried = [(start, 0.5 if np.isclose(start[T], 8 * 2 * half) else cost) for start, cost in tried]
+    got = [start[T] / (2 * half) for start in cand.combined_starts(tried)]
+    np.testing.assert_allclose(got, [7.0, 9.0, 10.0, 11.0])
+
+
 def test_an_exported_transport_delay_is_the_pade_2_3_approximant():
     msd = library.build("mass-spring-damper")
     built = _one(msd, Place("input", "F"), "transport_delay").build(msd).with_delays_realised()

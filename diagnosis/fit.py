@@ -485,10 +485,13 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     if specs:
         theta0 = _best_start(objective, candidate, theta0, start)
         lower, upper = _scaled_bounds(objective)
+        # a start at a bound, carried into new units (_units_from_starts), may round past it
+        theta0 = np.clip(theta0, lower, upper)
         r0 = objective(theta0)
         if np.all(r0 == _WALL):
             _shrink_magnitudes(objective, theta0)
             lower, upper = _scaled_bounds(objective)
+            theta0 = np.clip(theta0, lower, upper)
             r0 = objective(theta0)
         if np.all(r0 == _WALL):
             return CandidateFit(candidate, message=f"{label}: the model does not run at the initial guess "

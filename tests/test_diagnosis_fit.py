@@ -662,6 +662,24 @@ def test_a_joint_law_guessed_far_above_the_effect_moves_from_the_simpler_fits_en
     assert fit.values["Fc_v_mass"] == pytest.approx(0.3, rel=0.03)
     assert fit.values["b_visc_v_mass"] == pytest.approx(0.4, rel=0.03)
 
+def test_a_start_at_a_parameters_upper_bound_is_a_valid_start(msd, rng):
+    """A Coulomb level whose best start is its upper bound: in the units of that start
+    (:func:`diagnosis.fit._units_from_starts`) the bound is 0.9999999999999999 and the start 1.0, and
+    least_squares refused it ("Initial guess is outside of provided bounds", a diagnosis error on
+    seed 5656's compound case 026).  The start is clipped into the bounds and the fit runs."""
+    train, hold = _record(coulomb_truth(fc=0.3), rng=rng, noise=0.02).split(0.3)
+    cand = _candidate(msd, Place("junction", "v_mass"), "coulomb_friction", train)
+    level = next(s for s in cand.params if s.name == "Fc_v_mass")
+    upper = 0.23706110949551196          # case 026's bound
+    guess = 0.01009504752376188          # the first unit: upper / guess * guess rounds above upper
+    assert upper / guess * guess > upper
+    params = tuple(replace(s, guess=guess, upper=upper) if s is level else s for s in cand.params)
+    cand = replace(cand, params=params, starts=({"Fc_v_mass": upper},))
+    fit = fit_candidate(msd, cand, train, hold)
+    assert fit.success, fit.message
+    assert fit.values["Fc_v_mass"] == pytest.approx(upper, rel=1e-6)     # the truth's 0.3 lies beyond
+
+
 def test_a_lag_hundreds_of_samples_long_is_started_near():
     """A 3 s actuator lag on a force-driven carriage (20 kg) recorded at 200 Hz, commands held
     0.1-0.5 s: 600 samples, far beyond the old starts (at most 32 samples, 0.16 s), from which the

@@ -116,8 +116,9 @@ def backfit(graph, rounds, *, fit, floor: dict, judge_model, choose, with_values
         except BondcosimError as exc:     # a later effect placed on the earlier one's element, a run diverging
             say("backfitting", f"round {rounds.index(r) + 1} left as chosen: without it, {exc}")
             continue
-        # a candidate named for the nominal model may clash with the others' names
-        taken = set(base.parameters())
+        # a candidate named for the nominal model may clash with the others' names (not with the
+        # nominal's: a storage kind refits its element's own linear value)
+        taken = {p.name for o in others for p in o.candidate.params}
         tried = [(f.candidate, f.values) for f in alternatives(r.chosen, r.fits, r.reference, floor, n, taken)]
         keys = {_key(c) for c, _ in tried}
         tried += [(c, None) for c in (sensors() if sensors is not None else [])
@@ -132,7 +133,9 @@ def backfit(graph, rounds, *, fit, floor: dict, judge_model, choose, with_values
             refits.append(refit)
         r.backfit = refits
         winner = choose(reference, refits)
-        if winner is not None and _key(winner) != _key(r.chosen):
+        # only a refit of the round's own choice, beaten, is replaced
+        kept = any(_key(f) == _key(r.chosen) and f.success for f in refits)
+        if kept and winner is not None and _key(winner) != _key(r.chosen):
             say("backfitting", f"round {rounds.index(r) + 1}: {winner.candidate} replaces {r.chosen.candidate}")
             tuned.update({k: v for k, v in winner.values.items() if k in names})
             own = {p.name for p in winner.candidate.params}

@@ -449,20 +449,13 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         effects = [r.chosen for r in rounds if r.chosen is not None]
         if len(effects) >= 2:
             from .backfit import backfit
-            from .fit import choose as choose_fit
-            from .fit import floor_within_reach
 
             def refit(base, cand, names, bounds):
                 return fit_candidate(base, cand, round_part, held, uncertain=names, x0=round_x0, through=train,
                                      mid_run=False, judge=judge, start=own_start, bounds=bounds)
 
-            def rechoose(reference, refits):        # as _choose does on the held-out part
-                chosen = choose_fit(reference, refits, noise=floor_within_reach(floor, refits, list(reference)),
-                                    measured=held.outputs)
-                for f in refits:
-                    for key in ("holdout_y", "open_loop_y"):     # read by the choice only
-                        f.extra.pop(key, None)
-                return chosen
+            def rechoose(reference, refits):        # the held-out part's choice alone, no training fallback
+                return _choose(reference, refits, floor, None, None, exp, train, held, not_open_loop=True)[0]
 
             def sensor_candidates():
                 return [c for p in sensor_places([], train)
@@ -608,10 +601,11 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     Location, candidates at the ``top`` places (minus the kinds already added at
     the same place) and the sensors at every output where something was located, fits with the
     earlier effects' values fixed in the graph, and :func:`~diagnosis.fit.choose` against
-    `reference` (the held-out NRMSE of `graph`) with the noise floor `floor`.  Returns a :class:`~diagnosis.rounds.Round`:
-    ``chosen`` (CandidateFit or None), ``fits``, ``reference``, ``improved``, ``scores`` and,
-    when something was kept, ``graph`` and ``y`` (its simulated outputs).  `start`: as
-    :func:`~diagnosis.fit.fit_candidate`'s, where the recording's start state was estimated.
+    `reference` (the held-out NRMSE of `graph`) with the noise floor `floor`.  Returns a
+    :class:`~diagnosis.rounds.Round`: ``chosen`` (CandidateFit or None), ``fits``, ``reference``,
+    ``improved``, ``scores`` and, when something was kept, ``graph`` and ``y`` (its simulated
+    outputs).  `start`: as :func:`~diagnosis.fit.fit_candidate`'s, where the recording's start
+    state was estimated.
     """
     from .catalogue import candidates
     from .fit import fit_candidate

@@ -17,9 +17,9 @@ nominal model with every other effect built in, each started from where it ended
 effects' parameters are refitted alongside within their kinds' bounds (fitted beside the effect now
 taken out, they may have to move far: a leak answered at the wrong tank had left the right tank's
 leak at a third of its size) and not priced (the reference has them too); the sensor candidates at
-every output are fitted with them (a sensor's error is what a larger residual hides from graph
-location).  The round's own rule (:func:`diagnosis.fit.choose`) chooses among them against that
-model's held-out error.  A different winner replaces the effect (the round keeps the one it
+the outputs the round's effect leaves unexplained are fitted with them (a sensor's error is what a
+larger residual hides from graph location).  The round's own rule (:func:`diagnosis.fit.choose`)
+chooses among them against that model's held-out error.  A different winner replaces the effect (the round keeps the one it
 replaced, ``Round.replaced``, and the refits, ``Round.backfit``); no winner leaves it as it was.
 The rounds are swept once, in order.  This is the backfitting of additive models (Hastie and
 Tibshirani, *Generalized Additive Models*, 1990, ch. 4), over kinds instead of smooth functions;
@@ -93,10 +93,13 @@ def backfit(graph, rounds, *, fit, floor: dict, judge_model, choose, with_values
     say : callable
         ``say(step, detail)`` progress.
     sensors : callable, optional
-        ``sensors() -> list of Candidate``: the sensor candidates at every output of `graph`, fitted
+        ``sensors(outputs) -> list of Candidate``: the sensor candidates at the named outputs, fitted
         too (from their own guesses) where the round did not fit them: a sensor's error is judged on
         its own output only, the kind another effect's larger residual hides from graph location
-        (:func:`diagnosis.place_choice.sensor_places`), and its fit is cheap (no state of its own).
+        (:func:`diagnosis.place_choice.sensor_places`).  Only the outputs the other effects leave
+        unexplained without this round's (:func:`diagnosis.fit.needs_explaining`) are asked for: a
+        sensor at an output already at its floor changes no output the round's rule counts, and
+        cannot explain the share it asks for (on the pam joint, two of its four outputs at most).
 
     Returns
     -------
@@ -121,7 +124,8 @@ def backfit(graph, rounds, *, fit, floor: dict, judge_model, choose, with_values
         taken = {p.name for o in others for p in o.candidate.params}
         tried = [(f.candidate, f.values) for f in alternatives(r.chosen, r.fits, r.reference, floor, n, taken)]
         keys = {_key(c) for c, _ in tried}
-        tried += [(c, None) for c in (sensors() if sensors is not None else [])
+        unexplained = needs_explaining(reference, floor)
+        tried += [(c, None) for c in (sensors(unexplained) if sensors is not None else [])
                   if _key(c) not in keys and not taken & {p.name for p in c.params}]
         refits = []
         for k, (cand, ended) in enumerate(tried, 1):

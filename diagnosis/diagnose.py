@@ -457,8 +457,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
             def rechoose(reference, refits):        # the held-out part's choice alone, no training fallback
                 return _choose(reference, refits, floor, None, None, exp, train, held, not_open_loop=True)[0]
 
-            def sensor_candidates():
-                return [c for p in sensor_places([], train)
+            def sensor_candidates(outputs):
+                return [c for p in sensor_places([], train) if p.name in outputs
                         for c in candidates(graph, p, regime_variables=rv, experiment=cand_part, x0=start_x0)]
 
             effects, backfitted = backfit(graph, rounds, fit=refit, floor=floor, choose=rechoose,

@@ -43,6 +43,7 @@ import time as _time
 import numpy as np
 from plants import load as load_model
 
+from . import pairs
 from .errors import DiagnosisError
 from .initial_state import start_inconsistent
 from .place_choice import (MIN_PLACE_SHARE, actuator_places, companions, located_places, on_storage, sensor_places,
@@ -411,13 +412,20 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         say("fitting", f"nominal parameters {', '.join(uncertain)} alone")
         fits.append(fit_candidate(graph, None, fit_part, held, uncertain=uncertain, x0=fit_x0,
                                   through=train, judge=judge))
-    say("choosing")
-    chosen, alternatives = _choose(nominal, fits, floor, evidence, res, exp, train, held,
-                                   diverged or judge.kind != "open-loop", sim,
-                                   open_loop=((nominal_judged.open_loop, measurement_floor)
-                                              if judge.kind == "segments" else None),
-                                   held_nominal=(nominal_judged.segments if judge.kind == "segments" and not diverged
-                                                 and _finite_over(res.simulated, n_train) else None))
+
+    def choose_round_one():
+        say("choosing")
+        return _choose(nominal, fits, floor, evidence, res, exp, train, held, diverged or judge.kind != "open-loop",
+                       sim, open_loop=(nominal_judged.open_loop, measurement_floor) if judge.kind == "segments" else None,
+                       held_nominal=(nominal_judged.segments if judge.kind == "segments" and not diverged
+                                     and _finite_over(res.simulated, n_train) else None))
+
+    chosen, alternatives = choose_round_one()
+    if chosen is None and int(max_effects) >= 2 and pairs.wanted(nominal, floor):
+        pair_fits, _ = fit_in_turn(pairs.pair_candidates(fits), fit_one, say, "fitting pairs", best=best)
+        if pair_fits:
+            fits += pair_fits
+            chosen, alternatives = choose_round_one()
 
     say("improved model")
     improved_judged = nominal_judged
@@ -436,7 +444,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                     indistinguishable=alternatives)]
 
     if chosen is not None and chosen.candidate is not None:
-        while len(rounds) < int(max_effects):
+        while sum(pairs.effect_count(r.chosen.candidate) for r in rounds if r.chosen is not None) < int(max_effects):
             start = _time.perf_counter()
             found = _further_round(improved_graph, exp, train, held, judge, x0, improved, floor,
                                    rounds, top=int(top), say=say, label=f"round {len(rounds) + 1}", start=own_start)

@@ -6,6 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from .pairs import CandidatePair
 from .report import DiagnosisReport, PlotData
 
 __all__ = ["assemble"]
@@ -58,6 +59,14 @@ def _effects(fit, refit=None, alternatives=None) -> list[dict]:
                     "explanation": cand.explain(params), "judged_on": fit.extra.get("judge", "held-out"),
                     "indistinguishable": [a.to_json() for a in alternatives or ()]})
     return out
+
+
+def _named(found) -> str:
+    """The ``missing_physics`` entries `found` of one round in words: one kind at its places (a
+    group of twins), or each kind at its place (a pair)."""
+    if len({m["kind"] for m in found}) == 1:
+        return f"{found[0]['kind']} at {', '.join(m['attached_to'] for m in found)}"
+    return " and ".join(f"{m['kind']} at {m['attached_to']}" for m in found)
 
 
 def _indistinguishable_text(winner, alternatives) -> list[str]:
@@ -236,8 +245,10 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
                      f"({len(fits)} candidate fit(s) tried).")
     else:
         first = physics[:len(getattr(chosen.candidate, "members", (None,)))]   # round 1: one per twin place
-        lines.append(f"Missing physics: {m['kind']} at {', '.join(e['attached_to'] for e in first)}. "
-                     f"{'; '.join(e['explanation'] for e in first)}")
+        lines.append(f"Missing physics: {_named(first)}. {'; '.join(e['explanation'] for e in first)}")
+        if isinstance(chosen.candidate, CandidatePair):
+            lines.append("No single candidate explained the required share of the residual; these two were "
+                         "fitted together (diagnosis.pairs).")
         if chosen.extra.get("judge") == "training":
             lines.append(_judged_on_training(chosen))
         if chosen.extra.get("judge") == "open-loop":
@@ -305,8 +316,7 @@ def _further_text(rounds, outputs):
             continue
         found = _effects(c)
         gain = ", ".join(f"{o} {r.reference[o]:.3g} -> {r.improved[o]:.3g}" for o in outputs)
-        where = ", ".join(m["attached_to"] for m in found)
-        lines.append(f"Also missing (round {i}): {found[0]['kind']} at {where}. "
+        lines.append(f"Also missing (round {i}): {_named(found)}. "
                      f"{'; '.join(m['explanation'] for m in found)} (held-out NRMSE {gain}).")
         if c.extra.get("judge") == "training":
             lines.append(_judged_on_training(c))

@@ -22,7 +22,9 @@
    nominal parameters alone when any are given; the choice by held-out error
    and parsimony (:func:`diagnosis.fit.choose`), ``none`` when nothing
    explains a significant share; the fits of other kinds the held-out part cannot tell apart from
-   the answer (:func:`diagnosis.alternatives.indistinguishable`);
+   the answer (:func:`diagnosis.alternatives.indistinguishable`); where that is ``none`` on a
+   residual clearly beyond the noise, the best single fits again in pairs
+   (:mod:`diagnosis.pairs`) and the choice once more;
 5. the improved graph, its held-out NRMSE (same simulation as the nominal
    one), the regime of the chosen place's correction, the explanation;
 6. up to ``max_effects - 1`` further rounds: steps 3-5 again on the improved

@@ -245,6 +245,27 @@ def test_a_run_takes_the_integrator_it_takes_alone_whatever_it_is_batched_with()
             assert np.max(np.abs(run.outputs[o] - ref.outputs[o])) <= 1e-9 * np.ptp(ref.outputs[o])
 
 
+def test_a_batchs_rk4_runs_take_their_own_sub_steps_unless_they_are_alike():
+    """A blunt Coulomb friction needs 1 RK4 sub-step per sample, a sharp one 93 (both below the
+    Rosenbrock path's).  Batched, each runs at its own and gives its outputs alone to the last
+    bit; before, the blunt run took the sharp one's 93 (on the pam a fit's sharp start imposed
+    744 sub-steps on three others that need 4-152: seed 4848, case 034).  Runs whose sub-steps are
+    within a factor 4 (a finite-difference Jacobian's) still share the shortest one."""
+    from test_diagnosis_fit import F, T, UNITS, coulomb_truth
+
+    from diagnosis.residuals import _alike_steps
+    sim = OutputSimulator(coulomb_truth(), Experiment(T, {"F": F}, {"x": T, "v": T}, UNITS))
+    blunt, sharp = {"Fc_true": 0.3, "v_true": 0.02}, {"Fc_true": 3.0, "v_true": 1e-4}
+    alone = [sim.run(p) for p in (blunt, sharp)]
+    together = sim.run_batch([blunt, sharp, blunt])
+    assert [r.substeps for r in alone] == [1, 93] and [r.substeps for r in together] == [1, 93, 1]
+    for run, ref in zip(together, alone + alone[:1]):
+        for o in ("x", "v"):
+            np.testing.assert_array_equal(run.outputs[o], ref.outputs[o])
+    groups = _alike_steps(np.arange(5), np.array([1e-3, 1e-5, 0.9e-3, 3e-4, 2e-3]))
+    assert [list(g) for g in groups] == [[0, 2, 4], [3], [1]]
+
+
 def test_the_stiff_path_takes_over_sooner_the_more_a_derivative_costs():
     """A run goes to the Rosenbrock path where it would cost more on RK4 (residuals._stiff_from,
     a cost model in the operations of the state derivatives): the mass-spring-damper keeps RK4 up

@@ -471,6 +471,10 @@ def test_a_compound_truth_carries_both_effects_and_is_scored_on_each():
     assert (s.first_found, s.also_found, s.also_kind, s.also_place) == (True, True, "sensor_offset", "output x")
     one = {**both, "missing_physics": both["missing_physics"][1:]}
     assert (score_case(rec, one).first_found, score_case(rec, one).also_found) == (False, True)
+    # the load stated as not told apart from the offset counts at the load's own place, not elsewhere
+    for place, named in (("junction v_mass", True), ("junction other", False)):
+        one["missing_physics"][0]["indistinguishable"] = [{"kind": "constant_load", "place": place}]
+        assert score_case(rec, one).first_found is named
     base = dict(seconds_diagnose=1.0, place_ok=True, answer_place="", plant="msd", improvement=0.9, kind="leak",
                 answer_kind="leak", kind_ok=True, also_kind="sensor_offset")
     h = summarise([dict(base, label="a", first_found=True, also_found=True),

@@ -48,8 +48,8 @@ from plants import load as load_model
 from . import pairs
 from .errors import DiagnosisError
 from .initial_state import start_inconsistent
-from .place_choice import (MIN_PLACE_SHARE, actuator_places, companions, located_places, on_storage, sensor_places,
-                           spring_places, without_companions)
+from .place_choice import (MIN_PLACE_SHARE, actuator_places, companions, further_places, located_places, on_storage,
+                           sensor_places, spring_places, without_companions)
 from .rounds import JointRefit, Round
 
 __all__ = ["diagnose", "MIN_PLACE_SHARE", "MAX_FIT_SAMPLES"]
@@ -640,13 +640,7 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     except (np.linalg.LinAlgError, FloatingPointError) as exc:   # numerics: no further effect
         return Round(None, [], dict(reference), dict(reference), scores=[],
                      note=f"graph location failed: {type(exc).__name__}: {exc}")
-    places = located_places(without_companions(graph, scores), top)
-    by_place = {s.place: s for s in scores}
-    places += [by_place[p] for p in actuator_places(graph, [s.place for s in places], train) if p in by_place]
-    if places:                           # behind what is located: nothing located is noise
-        places += [by_place[p] for p in sensor_places([s.place for s in places], train) if p in by_place]
-    springs = [by_place[p] for p in spring_places(graph, [s.place for s in places]) if p in by_place]
-    places += springs
+    places, springs = further_places(graph, scores, top, train)
     done = {(c.kind, c.place) for r in rounds if r.chosen is not None and r.chosen.candidate is not None
             for c in getattr(r.chosen.candidate, "members", (r.chosen.candidate,))}
     cands = [c for s in places for c in candidates(graph, s.place, regime_variables=rv, experiment=train, x0=x0)

@@ -18,7 +18,8 @@ from bondgraph.elements import SOURCE_KINDS, TWO_PORT_KINDS
 from .catalogue_common import junction_elements
 from .place import Place
 
-__all__ = ["located_places", "actuator_places", "sensor_places", "spring_places", "on_storage", "without_companions",
+__all__ = ["located_places", "further_places", "actuator_places", "sensor_places", "spring_places", "on_storage",
+           "without_companions",
            "companions", "companion_candidates", "MIN_PLACE_SHARE", "PLACE_TIE", "COMPANION_KINDS"]
 
 #: places whose correction explains less than this share of the residual get no candidates
@@ -130,6 +131,27 @@ def located_places(scores, top: int) -> list:
     last = 1.0 - kept[top - 1].explained
     tied = [s for s in kept[top:2 * top] if 1.0 - s.explained <= PLACE_TIE * last]
     return kept[:top] + tied
+
+
+def further_places(graph, scores, top: int, experiment) -> tuple[list, list]:
+    """``(places, springs)``: the place scores a further round fits its candidates at (the located
+    ones, :func:`located_places`; the actuators that drive them; the sensors behind them when
+    something was located; the series springs of located 0-junctions), and which of them are
+    springs (storage kinds only).  The added places are looked up among `scores` by kind and name:
+    graph location names a junction with the bond it reports it by, which the added places lack,
+    and the springs were lost so in every further round (seed 6767, compound case 005: the
+    exoskeleton's hardening k_s was never fitted in round 2, and the gear spring k_g answered)."""
+    places = located_places(without_companions(graph, scores), top)
+    by_name = {(s.place.kind, s.place.name): s for s in scores}
+
+    def scored(added):
+        return [by_name[(p.kind, p.name)] for p in added if (p.kind, p.name) in by_name]
+
+    places += scored(actuator_places(graph, [s.place for s in places], experiment))
+    if places:                           # behind what is located: nothing located is noise
+        places += scored(sensor_places([s.place for s in places], experiment))
+    springs = scored(spring_places(graph, [s.place for s in places]))
+    return places + springs, springs
 
 
 def without_companions(graph, scores) -> list:

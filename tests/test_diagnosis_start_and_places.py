@@ -139,6 +139,25 @@ def test_the_springs_that_carry_a_located_torque_node_join_it_for_the_storage_ki
     assert {c.target for c in candidates(exo, Place("junction", "dw_eh")) if on_storage(exo, c)} == {"k_eh"}
 
 
+def test_a_further_round_fits_the_springs_of_its_located_torque_nodes():
+    """Graph location names each junction with the bond it reports it by; the series springs
+    added to a further round's places were looked up with none and lost (seed 6767, compound case
+    005: the exoskeleton's hardening k_s was never fitted in round 2, and k_g answered for it)."""
+    from diagnosis.graph_location_graph import report_bond
+    from diagnosis.place_choice import further_places
+    exo = library.build("exoskeleton")
+    explained = {"tau_eh": 0.901, "tau_g": 0.9, "tau_s_j": 0.9, "dw_g": 0.895, "w_sext": 0.796, "dw_eh": 0.796,
+                 "dw_s": 0.312, "w_h_j": 0.05}
+    scores = [SimpleNamespace(place=Place("junction", n, report_bond(exo, n)), explained=e) for n, e in explained.items()]
+    assert all(s.place.bond is not None for s in scores)
+    t = np.linspace(0.0, 1.0, 11)
+    train = Experiment(t, {"tau_m": t, "w_h": t}, {"tau_s": t}, {"tau_m": "N*m", "w_h": "rad/s", "tau_s": "N*m"})
+    places, springs = further_places(exo, scores, 3, train)
+    assert [s.place.name for s in springs] == ["dw_eh", "w_h_j", "dw_s"]
+    assert [s.place.name for s in places if s.place.kind == "junction"] == [
+        "tau_eh", "tau_g", "tau_s_j", "dw_g", "dw_eh", "w_h_j", "dw_s"]
+
+
 def test_a_source_that_sets_a_neighbouring_junctions_common_variable_drives_the_located_one():
     """The exoskeleton's human speed w_h is a flow source on the 1-junction w_h_j, bonded to the
     torque node tau_eh: it sets that bond's flow, so a delay of w_h looks like a flow at tau_eh

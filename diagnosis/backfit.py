@@ -29,8 +29,11 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import numpy as np
+
 from .errors import BondcosimError
 from .fit import needs_explaining, unpriced_error, usable_fits
+from .fit_in_turn import HOPELESS
 
 __all__ = ["ALTERNATIVES", "alternatives", "backfit", "build_effects", "refittable"]
 
@@ -78,10 +81,14 @@ def backfit(graph, rounds, *, fit, floor: dict, judge_model, choose, with_values
         ``replaced`` (the old one) and ``backfit`` (the refits); every round that was backfitted
         gets ``backfit``.
     fit : callable
-        ``fit(base, candidate, uncertain, bounds) -> CandidateFit``: a candidate fitted on the model
-        `base`, with the parameters `uncertain` of `base` (the other effects') within their own
-        `bounds` (:func:`diagnosis.fit.fit_candidate`): fitted beside the effect taken out, they
-        may need to move far (a leak at one tank fitted beside a leak answered at the other).
+        ``fit(base, candidate, uncertain, bounds, abandon_above) -> CandidateFit``: a candidate
+        fitted on the model `base`, with the parameters `uncertain` of `base` (the other effects')
+        within their own `bounds` (:func:`diagnosis.fit.fit_candidate`): fitted beside the effect
+        taken out, they may need to move far (a leak at one tank fitted beside a leak answered at
+        the other).  `abandon_above` (None: fit fully) is :data:`~diagnosis.fit_in_turn.HOPELESS`
+        times the best training cost of the round's refits so far: a refit stalled far above it
+        is given up (on the exoskeleton, each refit took 10-40 s and the sensors' were hopeless
+        beside a backlash).
     floor : dict str -> float
         The held-out noise floor per output (:func:`diagnosis.fit.noise_floor`).
     judge_model : callable
@@ -127,14 +134,18 @@ def backfit(graph, rounds, *, fit, floor: dict, judge_model, choose, with_values
         unexplained = needs_explaining(reference, floor)
         tried += [(c, None) for c in (sensors(unexplained) if sensors is not None else [])
                   if _key(c) not in keys and not taken & {p.name for p in c.params}]
-        refits = []
+        refits, best = [], np.inf
         for k, (cand, ended) in enumerate(tried, 1):
             if ended is not None and hasattr(cand, "with_starts"):     # a group of twins: its own guesses
                 cand = cand.with_starts([_ended(cand, {**ended, **tuned})])
             say("backfitting", f"round {rounds.index(r) + 1}: {cand} ({k}/{len(tried)})")
-            refit = fit(base, cand, names, bounds)
+            # the round's own choice comes first and is fitted fully; a hopeless one after it is
+            # given up as in the rounds (diagnosis.fit_in_turn)
+            refit = fit(base, cand, names, bounds, HOPELESS * best if np.isfinite(best) else None)
             refit.n_params -= len(names)   # the others' parameters: the reference has them too
             refits.append(refit)
+            cost = refit.extra.get("train_cost", np.inf) if refit.success else np.inf
+            best = min(best, float(cost) if np.isfinite(cost) else np.inf)
         r.backfit = refits
         winner = choose(reference, refits)
         # only a refit of the round's own choice, beaten, is replaced

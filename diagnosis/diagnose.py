@@ -460,9 +460,10 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         if len(effects) >= 2:
             from .backfit import backfit
 
-            def refit(base, cand, names, bounds):
+            def refit(base, cand, names, bounds, abandon_above):
                 return fit_candidate(base, cand, round_part, held, uncertain=names, x0=round_x0, through=train,
-                                     mid_run=False, judge=judge, start=own_start, bounds=bounds)
+                                     mid_run=False, judge=judge, start=own_start, bounds=bounds,
+                                     abandon_above=abandon_above)
 
             def rechoose(reference, refits):        # the held-out part's choice alone, no training fallback
                 return _choose(reference, refits, floor, None, None, exp, train, held, not_open_loop=True)[0]

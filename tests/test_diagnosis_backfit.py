@@ -144,10 +144,10 @@ def test_a_storage_kind_that_refits_its_elements_value_is_backfitted_and_kept_un
     rounds = [Round(first, [first], {"x": 1.0}, {"x": 0.2}), Round(second, [second, other], {"x": 0.2}, {"x": 0.05})]
     error = {"coulomb_friction": 0.02, "nonlinear_stiffness": 0.02, "hysteresis": 0.03}
 
-    def fit(base, cand, names, bounds):
+    def fit(base, cand, names, bounds, abandon_above):
         ok = not (refit_fails and cand.kind == "nonlinear_stiffness")
         return CandidateFit(cand, {p.name: 1.0 for p in cand.params}, {}, {"x": error[cand.kind]},
-                            len(cand.params) + len(names), ok, "")
+                            len(cand.params) + len(names), ok, "", extra={"train_cost": error[cand.kind]})
 
     def choose(reference, refits):
         usable = [f for f in refits if f.success]
@@ -185,8 +185,35 @@ def test_sensors_are_refitted_only_at_the_outputs_a_rounds_effect_leaves_unexpla
     def judge_model(base):               # the model without the round's effect (its parameter)
         return without[next(k for k in without if k not in base.names)]
 
-    backfit(_Graph({"m"}), rounds, fit=lambda base, cand, names, bounds: CandidateFit(
+    backfit(_Graph({"m"}), rounds, fit=lambda base, cand, names, bounds, abandon_above: CandidateFit(
                 cand, {p.name: 1.0 for p in cand.params}, {}, {"x": 0.05, "v": 0.05, "F": 0.01}, 1, True, ""),
             floor={"x": 0.01, "v": 0.01, "F": 0.01}, judge_model=judge_model, choose=lambda ref, fits: None,
             with_values=lambda g, values: g, say=lambda *a: None, sensors=sensors)
     assert asked == [["v", "x"], ["x"]]
+
+
+def test_a_refit_hopeless_beside_the_rounds_own_choice_is_given_up():
+    """The round's own choice is refitted first and fully; every later refit may be given up once
+    it stalls above ten times the best training cost so far (diagnosis.fit_in_turn.HOPELESS): on
+    the exoskeleton each backfit refit took 10-40 s, most of them sensors beside a backlash."""
+    from diagnosis.backfit import backfit
+    from diagnosis.fit_in_turn import HOPELESS
+    from diagnosis.rounds import Round
+    first, second = (_candidate("coulomb_friction", "junction v", ["Fc"]), _candidate("backlash", "junction v",
+                                                                                     ["b"]))
+    gain = _candidate("sensor_gain", "output x", ["g"])
+    fits = [CandidateFit(c, {c.params[0].name: 1.0}, {}, {"x": 0.1}, 1, True, "") for c in (first, second)]
+    rounds = [Round(fits[0], [fits[0]], {"x": 1.0}, {"x": 0.2}), Round(fits[1], [fits[1]], {"x": 0.2}, {"x": 0.1})]
+    cost = {"coulomb_friction": 0.02, "backlash": 0.03, "sensor_gain": 0.5}
+    asked = []
+
+    def fit(base, cand, names, bounds, abandon_above):
+        asked.append((cand.kind, abandon_above))
+        return CandidateFit(cand, {p.name: 1.0 for p in cand.params}, {}, {"x": 0.1}, 1, True, "",
+                            extra={"train_cost": cost[cand.kind]})
+
+    backfit(_Graph({"m"}), rounds, fit=fit, floor={"x": 0.01}, judge_model=lambda base: {"x": 0.5},
+            choose=lambda ref, fits: None, with_values=lambda g, values: g, say=lambda *a: None,
+            sensors=lambda outputs: [gain])
+    assert asked == [("coulomb_friction", None), ("sensor_gain", HOPELESS * 0.02),
+                     ("backlash", None), ("sensor_gain", HOPELESS * 0.03)]

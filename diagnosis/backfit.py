@@ -19,8 +19,9 @@ taken out, they may have to move far: a leak answered at the wrong tank had left
 leak at a third of its size) and not priced (the reference has them too); the sensor candidates at
 the outputs the round's effect leaves unexplained are fitted with them (a sensor's error is what a
 larger residual hides from graph location).  The round's own rule (:func:`diagnosis.fit.choose`)
-chooses among them against that model's held-out error.  A different winner replaces the effect (the round keeps the one it
-replaced, ``Round.replaced``, and the refits, ``Round.backfit``); no winner leaves it as it was.
+chooses among them against that model's held-out error.  A different winner replaces the effect
+(the round keeps the one it replaced, ``Round.replaced``, and the refits, ``Round.backfit``); no
+winner leaves it as it was.
 The rounds are swept once, in order.  This is the backfitting of additive models (Hastie and
 Tibshirani, *Generalized Additive Models*, 1990, ch. 4), over kinds instead of smooth functions;
 the joint refit of all effects' parameters follows it (:func:`diagnosis.diagnose._joint_refit`).

@@ -417,9 +417,10 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
 
     def choose_round_one():
         say("choosing")
+        segments = judge.kind == "segments"
         return _choose(nominal, fits, floor, evidence, res, exp, train, held, diverged or judge.kind != "open-loop",
-                       sim, open_loop=(nominal_judged.open_loop, measurement_floor) if judge.kind == "segments" else None,
-                       held_nominal=(nominal_judged.segments if judge.kind == "segments" and not diverged
+                       sim, open_loop=(nominal_judged.open_loop, measurement_floor) if segments else None,
+                       held_nominal=(nominal_judged.segments if segments and not diverged
                                      and _finite_over(res.simulated, n_train) else None))
 
     chosen, alternatives = choose_round_one()

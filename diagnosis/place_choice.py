@@ -19,8 +19,8 @@ from .catalogue_common import junction_elements
 from .place import Place
 
 __all__ = ["located_places", "further_places", "actuator_places", "sensor_places", "spring_places", "on_storage",
-           "without_companions",
-           "companions", "companion_candidates", "MIN_PLACE_SHARE", "PLACE_TIE", "COMPANION_KINDS"]
+           "without_companions", "companions", "companion_candidates", "MIN_PLACE_SHARE", "PLACE_TIE",
+           "COMPANION_KINDS"]
 
 #: places whose correction explains less than this share of the residual get no candidates
 MIN_PLACE_SHARE = 0.02

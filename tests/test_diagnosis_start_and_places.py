@@ -148,7 +148,8 @@ def test_a_further_round_fits_the_springs_of_its_located_torque_nodes():
     exo = library.build("exoskeleton")
     explained = {"tau_eh": 0.901, "tau_g": 0.9, "tau_s_j": 0.9, "dw_g": 0.895, "w_sext": 0.796, "dw_eh": 0.796,
                  "dw_s": 0.312, "w_h_j": 0.05}
-    scores = [SimpleNamespace(place=Place("junction", n, report_bond(exo, n)), explained=e) for n, e in explained.items()]
+    scores = [SimpleNamespace(place=Place("junction", n, report_bond(exo, n)), explained=e)
+              for n, e in explained.items()]
     assert all(s.place.bond is not None for s in scores)
     t = np.linspace(0.0, 1.0, 11)
     train = Experiment(t, {"tau_m": t, "w_h": t}, {"tau_s": t}, {"tau_m": "N*m", "w_h": "rad/s", "tau_s": "N*m"})

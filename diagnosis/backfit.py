@@ -34,7 +34,7 @@ import numpy as np
 
 from .errors import BondcosimError
 from .fit import needs_explaining, unpriced_error, usable_fits
-from .fit_in_turn import HOPELESS
+from .fit_in_turn import HOPELESS, train_cost
 
 __all__ = ["ALTERNATIVES", "alternatives", "backfit", "build_effects", "refittable"]
 
@@ -145,8 +145,7 @@ def backfit(graph, rounds, *, fit, floor: dict, judge_model, choose, with_values
             refit = fit(base, cand, names, bounds, HOPELESS * best if np.isfinite(best) else None)
             refit.n_params -= len(names)   # the others' parameters: the reference has them too
             refits.append(refit)
-            cost = refit.extra.get("train_cost", np.inf) if refit.success else np.inf
-            best = min(best, float(cost) if np.isfinite(cost) else np.inf)
+            best = min(best, train_cost(refit))
         r.backfit = refits
         winner = choose(reference, refits)
         # only a refit of the round's own choice, beaten, is replaced

@@ -43,7 +43,7 @@ import numpy as np
 
 from .kinds.base import extends
 
-__all__ = ["HOPELESS", "fit_in_turn", "nested_starts", "simpler_refits", "richer_refits"]
+__all__ = ["HOPELESS", "fit_in_turn", "train_cost", "nested_starts", "simpler_refits", "richer_refits"]
 
 #: a fit whose training cost stays above this many times the best one's so far is given up
 HOPELESS = 10.0
@@ -78,7 +78,7 @@ def fit_in_turn(candidates, fit, say, label: str, *, best: float = np.inf, suffi
         say(label, f"{cand} ({i}/{len(candidates)}{suffix})")
         result = _fit_and_say(fit, cand, HOPELESS * best if np.isfinite(best) else None, say, label)
         fits.append(result)
-        best = min(best, _train_cost(result))
+        best = min(best, train_cost(result))
     return richer_refits(simpler_refits(fits, fit, say, label), fit, say, label), best
 
 
@@ -120,10 +120,10 @@ def _refits(fits, fit, say, label: str, related, starts) -> list:
     candidate, by's)``, where the refit's training cost is lower still."""
     out = list(fits)
     for k, this in enumerate(fits):
-        own = _train_cost(this)
+        own = train_cost(this)
         if not (own < np.inf and hasattr(getattr(this, "candidate", None), "definition")):
             continue
-        donors = [(cost, f) for f in fits if f is not this and (cost := _train_cost(f)) < own
+        donors = [(cost, f) for f in fits if f is not this and (cost := train_cost(f)) < own
                   and related(this.candidate, getattr(f, "candidate", None))]
         if not donors:
             continue
@@ -131,7 +131,7 @@ def _refits(fits, fit, say, label: str, related, starts) -> list:
         cand = this.candidate.with_starts(starts(this, by))
         say(label, f"{cand} again, from the end of {by.candidate}")
         refit = _fit_and_say(fit, cand, None, say, label)
-        if _train_cost(refit) < own:
+        if train_cost(refit) < own:
             out[k] = refit
     return out
 
@@ -145,7 +145,7 @@ def _fit_and_say(fit, cand, abandon_above, say, label: str):
     return result
 
 
-def _train_cost(fit) -> float:
+def train_cost(fit) -> float:
     """A successful fit's training cost, else inf."""
     cost = fit.extra.get("train_cost", np.inf) if fit.success else np.inf
     return float(cost) if np.isfinite(cost) else np.inf

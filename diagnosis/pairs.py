@@ -30,6 +30,7 @@ from itertools import combinations
 
 import numpy as np
 
+from .fit_in_turn import train_cost
 from .kinds.base import extends
 from .twins import CandidateGroup
 
@@ -71,8 +72,8 @@ def pair_candidates(fits, n: int = SINGLES) -> list[CandidatePair]:
     lowest summed training cost first.  No pair of one place where one kind extends the other,
     and none whose members share a parameter name."""
     singles, seen = [], set()
-    for f in sorted((f for f in fits if f.success and f.candidate is not None and not hasattr(f.candidate, "members")
-                     and np.isfinite(f.extra.get("train_cost", np.inf))), key=lambda f: f.extra["train_cost"]):
+    for f in sorted((f for f in fits if f.candidate is not None and not hasattr(f.candidate, "members")
+                     and np.isfinite(train_cost(f))), key=train_cost):
         if str(f.candidate) not in seen:
             seen.add(str(f.candidate))
             singles.append(f)
@@ -83,7 +84,7 @@ def pair_candidates(fits, n: int = SINGLES) -> list[CandidatePair]:
             continue
         if {p.name for p in a.candidate.params} & {p.name for p in b.candidate.params}:
             continue
-        pairs.append((a.extra["train_cost"] + b.extra["train_cost"],
+        pairs.append((train_cost(a) + train_cost(b),
                       CandidatePair((_started(a), _started(b)))))
     return [p for _, p in sorted(pairs, key=lambda cp: cp[0])]
 

@@ -254,16 +254,17 @@ class GraphEditing:
         """
         return route_input(self, u, replacement, states=states, initial=initial, units=units)[0]
 
-    def delay_input(self, u: str, time: str, value: float, *, before: float | None = None,
-                    name: str | None = None):
+    def delay_input(self, u: str, time: str, value: float, *, before=None, name: str | None = None):
         """A copy in which every element reading input `u` reads it `value` seconds late.
 
         The elements read a new delayed input `name` (default ``<u>_late``),
         ``u(t - time)``, with `time` a new parameter (s, >= 0); `u` stays the input a run binds.
         Simulators realise the delay exactly on the recorded samples
         (:mod:`bondgraph.numerics.input_delays`); :meth:`with_delays_realised` turns it into
-        states for an FMU.  `before`: the value while ``t - time`` precedes the run (default
-        `u`'s value at the start of the run).  :mod:`bondgraph.editing_delays` does the work.
+        states for an FMU.  `before`: the value while ``t - time`` precedes the run, a number or a
+        :class:`~bondgraph.params.Param` (a new parameter holding it, which a fit can change like
+        `time`); default `u`'s value at the start of the run.  :mod:`bondgraph.editing_delays`
+        does the work.
         """
         return delay_input(self, u, time, value, before=before, name=name)
 

@@ -22,7 +22,8 @@ from .params import Param
 __all__ = ["delay_input", "with_delays_realised", "pade_states"]
 
 
-def delay_input(graph, u: str, time: str, value: float, *, before: float | None = None, name: str | None = None):
+def delay_input(graph, u: str, time: str, value: float, *, before: float | Param | None = None,
+                name: str | None = None):
     """A copy of `graph` whose elements read input `u` late by parameter `time` (`value`, s);
     :meth:`~bondgraph.editing.GraphEditing.delay_input` documents the call."""
     decl = next((d for d in graph.inputs() if d.name == u), None)
@@ -33,13 +34,20 @@ def delay_input(graph, u: str, time: str, value: float, *, before: float | None 
                          "change that delay instead")
     name = name or f"{u}_late"
     taken = set(graph.names())
-    for label, new_name in (("delayed input", name), ("delay parameter", time)):
+    named = (("delayed input", name), ("delay parameter", time))
+    if isinstance(before, Param):
+        if before.name == time:
+            raise GraphError(f"input {u!r}: the delay and the value before the run are both named {time!r}")
+        named += (("parameter of the value before the run", before.name),)
+    for label, new_name in named:
         if new_name in taken:
             raise GraphError(f"model {graph.name!r} already has a name {new_name!r} for the {label}")
     new, _ = route_input(graph, u, name)
     new.add_parameter(Param(time, value, unit="s", description=f"transport delay of input {u}", min=0.0))
+    if isinstance(before, Param):
+        new.add_parameter(before)
     new.add_input(name, default=decl.default, unit=decl.unit, description=f"{u} delayed by {time}",
-                  delay_of=u, delay=time, before=before)
+                  delay_of=u, delay=time, before=before.name if isinstance(before, Param) else before)
     return new
 
 
@@ -53,8 +61,9 @@ def pade_states(u: str, T: str, z: tuple[str, str, str]) -> tuple[str, dict]:
 
 def with_delays_realised(graph):
     """A copy of `graph` in which every delayed input is the Pade [2/3] approximant of its
-    delay (module docstring), its three states starting at rest at the input's ``before`` (at the
-    source's default without one: the states cannot know a run's first value)."""
+    delay (module docstring), its three states starting at rest at the input's ``before`` (its
+    parameter's value where a parameter holds it; the source's default without one: the states
+    cannot know a run's first value)."""
     new = graph
     for decl in [d for d in graph.inputs() if d.delay is not None]:
         users = [o for o in new.outputs.values() if mentions(str(o.expression), decl.name)]
@@ -66,10 +75,19 @@ def with_delays_realised(graph):
         expression, rates = pade_states(source, T, z)
         unit = decl.unit
         new, _ = route_input(new, decl.name, expression, states=rates,
-                             initial={z[0]: decl.default if decl.delay.before is None else decl.delay.before,
+                             initial={z[0]: _value_before(new, decl),
                                       z[1]: 0.0, z[2]: 0.0},
                              units={z[0]: unit, z[1]: f"({unit})/s" if unit else "1/s",
                                     z[2]: f"({unit})/s^2" if unit else "1/s^2"})
         del new.extra_inputs[decl.name]
         new._changed()
     return new if new is not graph else graph.copy()
+
+
+def _value_before(graph, decl) -> float:
+    """The delayed input `decl`'s value before a run: its ``before`` (a number, or the value of the
+    parameter it names), else its default."""
+    before = decl.delay.before
+    if isinstance(before, str):
+        return float(graph.parameters()[before].value)
+    return decl.default if before is None else before

@@ -150,7 +150,8 @@ def derive(graph: BondGraph) -> StateEquations:
 
 def _input_delays(graph, inputs, params) -> dict:
     """Name -> :class:`~bondgraph.elements.base.InputDelay` of the delayed inputs, each checked:
-    its source an input that is not itself delayed, its delay a parameter of the graph."""
+    its source an input that is not itself delayed, its delay (and a `before` given by name) a
+    parameter of the graph."""
     by_name = {i.name: i for i in inputs}
     delays = {}
     for i in inputs:
@@ -166,6 +167,10 @@ def _input_delays(graph, inputs, params) -> dict:
         if time not in params:
             raise DerivationError(f"input {i.name!r}: its delay {time!r} is not a parameter of model "
                                   f"{graph.name!r} (declare it with add_parameter)")
+        before = i.delay.before
+        if isinstance(before, str) and before not in params:
+            raise DerivationError(f"input {i.name!r}: its value before the run, {before!r}, is not a parameter "
+                                  f"of model {graph.name!r} (declare it with add_parameter)")
         delays[i.name] = i.delay
     return delays
 

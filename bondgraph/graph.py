@@ -113,13 +113,13 @@ class BondGraph(GraphEditing):
         return element
 
     def add_input(self, name: str, *, default: float = 0.0, unit: str = "", description: str = "",
-                  delay_of: str | None = None, delay: str | None = None, before: float | None = None):
+                  delay_of: str | None = None, delay: str | None = None, before: float | str | None = None):
         """Declare an input used by modulated elements (sources declare their own).
 
         With `delay_of` (another input's name) and `delay` (a parameter's name, s), the input is
         that input late, ``delay_of(t - delay)``, and `before` while ``t - delay`` precedes the
-        run, by default the source's value at the start
-        (:class:`~bondgraph.elements.base.InputDelay`; both names are checked when the equations
+        run: a number, a parameter's name, or by default the source's value at the start
+        (:class:`~bondgraph.elements.base.InputDelay`; the names are checked when the equations
         are derived, :meth:`equations`).  A run binds only the source: simulators delay its
         values themselves.
         """
@@ -137,7 +137,10 @@ class BondGraph(GraphEditing):
             for label, value in (("delay_of", delay_of), ("delay", delay)):
                 if not isinstance(value, str) or not value.isidentifier():
                     raise GraphError(f"input {name!r}: {label} {value!r} is not a valid identifier")
-            late = InputDelay(delay_of, delay, None if before is None else Param(name, before).value)
+            if isinstance(before, str) and not before.isidentifier():
+                raise GraphError(f"input {name!r}: before {before!r} is neither a number nor a parameter's name")
+            late = InputDelay(delay_of, delay, before if before is None or isinstance(before, str)
+                              else Param(name, before).value)
         self.extra_inputs[name] = InputDecl(name, unit, default, None, description, (self.name, "input"), late)
         self._changed()
 

@@ -45,6 +45,7 @@ _WHAT = {
     "str": "a string",
     "id": "an identifier (letters, digits and _, not starting with a digit)",
     "num": "a finite number",
+    "numid": "a finite number or a parameter's name (an identifier)",
     "pos": "a positive finite number",
     "expr": "an expression (a non-empty string) or a number",
     "domain": f"a domain name, one of {', '.join(map(repr, DOMAINS))}",
@@ -95,7 +96,7 @@ _TOP_REQUIRED = ["format", "version", "name", "elements", "bonds"]
 _PARAM_KEYS = {"name": "id", "value": "num", "unit": "str", "description": "str", "min": "num", "max": "num"}
 _GUARD_KEYS = {"expression": "expr", "min": "num", "max": "num", "unit": "str", "description": "str"}
 _INPUT_KEYS = {"name": "id", "default": "num", "unit": "str", "description": "str", "delay_of": "id",
-               "delay": "id", "before": "num"}
+               "delay": "id", "before": "numid"}
 _OUTPUT_KEYS = {"name": "id", "expression": "expr", "unit": "str", "description": "str"}
 _BOND_KEYS = {"name": "id", "tail": "end", "head": "end"}
 
@@ -461,6 +462,8 @@ def _is(tag: str, value) -> bool:
         return isinstance(value, str) and value.isidentifier()
     if tag == "num":
         return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if tag == "numid":
+        return _is("num", value) or _is("id", value)
     if tag == "pos":
         return _is("num", value) and value > 0
     if tag == "expr":

@@ -142,7 +142,8 @@ def _joined(train, holdout):
     from .recording import Experiment
     cat = lambda a, b: {k: np.concatenate([a[k], b[k]]) for k in a}  # noqa: E731
     return Experiment(np.concatenate([train.t, holdout.t]), cat(train.inputs, holdout.inputs),
-                      cat(train.outputs, holdout.outputs), dict(train.units), train.source, train.substeps)
+                      cat(train.outputs, holdout.outputs), dict(train.units), train.source, train.substeps,
+                      train.history)
 
 
 def _state_dict(graph, x0):

@@ -19,7 +19,7 @@ import numpy as np
 from .errors import RecordingError, UnitError, UnknownColumnError, UnknownNameError
 from .units import convert, parse_unit
 
-__all__ = ["Recording", "Binding", "Experiment", "bind", "TIME_NAMES"]
+__all__ = ["Recording", "Binding", "Experiment", "InputHistory", "bind", "TIME_NAMES"]
 
 #: Column names taken as time when none is given (else the first column).
 TIME_NAMES = ("t", "time", "t_s")
@@ -223,6 +223,28 @@ class Binding:
         return cls(name.strip(), column.strip(), unit.strip() or None)
 
 
+@dataclass(frozen=True)
+class InputHistory:
+    """The inputs recorded before a part of an experiment: what a delayed input reads there
+    (:mod:`bondgraph.numerics.input_delays`) while its delay reaches back before the part.
+
+    Parameters
+    ----------
+    t : ndarray, shape (m,)
+        Sample times, s, all before the part's first.
+    inputs : dict str -> ndarray, shape (m,)
+        The experiment's inputs at those times.
+    """
+
+    t: np.ndarray
+    inputs: dict
+
+    def then(self, t, inputs) -> "InputHistory":
+        """This history followed by the samples (`t`, `inputs`)."""
+        return InputHistory(np.concatenate([self.t, t]), {k: np.concatenate([self.inputs[k], inputs[k]])
+                                                          for k in inputs})
+
+
 @dataclass
 class Experiment:
     """Recorded inputs and outputs in the model's units, on one time grid.
@@ -241,6 +263,10 @@ class Experiment:
         Fewest RK4 sub-steps per sample interval a simulation on this recording takes
         (:func:`diagnosis.residuals.settle_substeps` raises it where the model's own step rule
         leaves an integration error above the noise); parts of the experiment keep it.
+    history : InputHistory, optional
+        The inputs recorded before `t[0]`, where this is a part of a longer record (its parts,
+        :meth:`samples`, :meth:`window` and :meth:`split`, keep what came before them): a delayed
+        input reads them.  None at a record's start.
     """
 
     t: np.ndarray
@@ -249,6 +275,7 @@ class Experiment:
     units: dict = field(default_factory=dict)
     source: str = "arrays"
     substeps: int = 1
+    history: InputHistory | None = None
 
     @property
     def span(self) -> tuple[float, float]:
@@ -259,15 +286,28 @@ class Experiment:
         if mask.sum() < 2:
             raise RecordingError(f"{self.source}: a part of the experiment with fewer than 2 "
                                  "samples", source=self.source)
+        where = np.flatnonzero(mask)
+        if where[-1] - where[0] + 1 == where.size:          # one run of samples: it has a history
+            return self.samples(int(where[0]), int(where[-1]) + 1)
         return Experiment(self.t[mask], {k: v[mask] for k, v in self.inputs.items()},
                           {k: v[mask] for k, v in self.outputs.items()}, dict(self.units),
                           self.source, self.substeps)
 
     def samples(self, a: int, b: int) -> "Experiment":
-        """The samples ``a`` to ``b - 1`` (indices, as a Python slice)."""
+        """The samples ``a`` to ``b - 1`` (indices, as a Python slice), with the inputs before them
+        as their :attr:`history`."""
+        a = slice(a, b).indices(self.t.size)[0]
         return Experiment(self.t[a:b], {k: v[a:b] for k, v in self.inputs.items()},
                           {k: v[a:b] for k, v in self.outputs.items()}, dict(self.units), self.source,
-                          self.substeps)
+                          self.substeps, self.history_until(a))
+
+    def history_until(self, a: int) -> InputHistory | None:
+        """The inputs recorded before sample `a` (this experiment's history, then its first `a`
+        samples); None when there are none."""
+        if a <= 0:
+            return self.history
+        first = {k: v[:a] for k, v in self.inputs.items()}
+        return InputHistory(self.t[:a], first) if self.history is None else self.history.then(self.t[:a], first)
 
     def window(self, t0: float, t1: float) -> "Experiment":
         """The samples with ``t0 <= t <= t1`` (times in s)."""

@@ -116,7 +116,7 @@ class SimRun:
     substeps: int
 
 
-def input_matrix(eqs, t, inputs: dict, params: dict | None = None) -> np.ndarray:
+def input_matrix(eqs, t, inputs: dict, params: dict | None = None, *, past=None) -> np.ndarray:
     """Input values at times `t`, shape (n, n_inputs), in the model's input order.
 
     Parameters
@@ -128,8 +128,12 @@ def input_matrix(eqs, t, inputs: dict, params: dict | None = None) -> np.ndarray
         Recorded inputs by name; others take ``input_functions`` (of ``t``) or
         ``input_defaults``.
     params : dict str -> float, optional
-        Parameter values for the delays of delayed inputs (``eqs.input_delays``, filled from
-        their sources: :mod:`bondgraph.numerics.input_delays`); default the model's.
+        Parameter values for the delays of delayed inputs and their values before the record
+        (``eqs.input_delays``, filled from their sources: :mod:`bondgraph.numerics.input_delays`);
+        default the model's.
+    past : tuple (t, U), optional
+        The inputs recorded before `t` (times, s, and the matrix in model input order), which the
+        delayed inputs read while their delay reaches back before ``t[0]``.
 
     Raises
     ------
@@ -138,7 +142,7 @@ def input_matrix(eqs, t, inputs: dict, params: dict | None = None) -> np.ndarray
     DiagnosisError
         A recorded value given for a delayed input (its source is what is recorded).
     """
-    from bondgraph.numerics.input_delays import delay_values, inputs_on_grid
+    from bondgraph.numerics.input_delays import before_values, delay_values, inputs_on_grid
     from diagnosis.errors import UnknownNameError
 
     for name in inputs:
@@ -148,8 +152,19 @@ def input_matrix(eqs, t, inputs: dict, params: dict | None = None) -> np.ndarray
             raise DiagnosisError(f"input {name!r} of model {eqs.name!r} is input "
                                  f"{eqs.input_delays[name].source!r} delayed: give that one's record")
     U = _undelayed_matrix(eqs, t, inputs)
-    _, U_grid, at = inputs_on_grid(eqs, t, U, delay_values(eqs, params))
+    _, U_grid, at = inputs_on_grid(eqs, t, U, delay_values(eqs, params), before_values(eqs, params), past=past)
     return np.ascontiguousarray(U_grid[at])
+
+
+def _past_inputs(eqs, experiment):
+    """``(t, U)`` of the inputs recorded before `experiment` (:attr:`Experiment.history
+    <diagnosis.recording.Experiment.history>`, model input order), which its delayed inputs read;
+    None without delayed inputs or history."""
+    history = getattr(experiment, "history", None)
+    if not eqs.input_delays or history is None or not history.t.size:
+        return None
+    t = np.asarray(history.t, dtype=float)
+    return t, _undelayed_matrix(eqs, t, {k: v for k, v in history.inputs.items() if k in eqs.input_names})
 
 
 def _undelayed_matrix(eqs, t, inputs: dict) -> np.ndarray:
@@ -213,7 +228,8 @@ class OutputSimulator:
         self.output_names = tuple(wanted)
         self._out_idx = [self.model.output_index[n] for n in wanted]
         self.t = np.ascontiguousarray(experiment.t, dtype=float)
-        self.U = input_matrix(self.equations, self.t, experiment.inputs)
+        self._past = _past_inputs(self.equations, experiment)
+        self.U = input_matrix(self.equations, self.t, experiment.inputs, past=self._past)
         self._dt = np.diff(self.t)
         self._stiff_limit = None       # counted when first needed (_stiff_from)
 
@@ -235,7 +251,8 @@ class OutputSimulator:
         other.equations, other.model, other.experiment = self.equations, self.model, experiment
         other.output_names, other._out_idx = self.output_names, self._out_idx
         other.t = np.ascontiguousarray(experiment.t, dtype=float)
-        other.U = input_matrix(self.equations, other.t, experiment.inputs)
+        other._past = _past_inputs(self.equations, experiment)
+        other.U = input_matrix(self.equations, other.t, experiment.inputs, past=other._past)
         other._dt = np.diff(other.t)
         other._stiff_limit = self._stiff_limit
         return other
@@ -453,24 +470,31 @@ class OutputSimulator:
         return max(step, float(np.min(self._dt)) / (2 * _STIFF_SUBSTEPS))
 
     def _inputs_by_delay(self, P) -> dict:
-        """Delays (one tuple per distinct set) -> the rows of `P` simulated with them."""
+        """Delays and values before the record (one tuple of ``(T, before)`` per distinct set) ->
+        the rows of `P` simulated with them."""
         delays = self.equations.input_delays
         index = self.model.param_index
+
+        def before(i, d):
+            return float(P[i, index[d.before]]) if isinstance(d.before, str) else d.before
+
         groups = {}
         for i in range(P.shape[0]):
-            key = tuple(float(P[i, index[d.time]]) for d in delays.values())
+            key = tuple((float(P[i, index[d.time]]), before(i, d)) for d in delays.values())
             groups.setdefault(key, []).append(i)
         return groups
 
     def _delayed_inputs(self, delays: tuple):
         """``(grid, U, at)`` of :func:`bondgraph.numerics.input_delays.inputs_on_grid` for the
-        delayed inputs late by `delays` (s, in ``input_delays`` order): the samples and the steps
-        of a delayed command between them, the inputs held over each interval, and where the
-        samples are."""
+        delayed inputs late by `delays` (``(T, before)`` pairs, s and the input's unit, in
+        ``input_delays`` order): the samples and the steps of a delayed command between them, the
+        inputs held over each interval, and where the samples are."""
         from bondgraph.numerics.input_delays import inputs_on_grid
         if not delays:
             return self.t, self.U, np.arange(self.t.size)
-        return inputs_on_grid(self.equations, self.t, self.U, dict(zip(self.equations.input_delays, delays)))
+        names = self.equations.input_delays
+        return inputs_on_grid(self.equations, self.t, self.U, {n: T for n, (T, _) in zip(names, delays)},
+                              {n: before for n, (_, before) in zip(names, delays)}, past=self._past)
 
     def _grid_substeps(self, grid, subs):
         """Sub-steps of each interval of `grid`: those of the sample interval it lies in, shared

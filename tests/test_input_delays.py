@@ -114,3 +114,63 @@ def test_an_exported_delay_is_pade_states_and_follows_the_exact_delay(msd, tmp_p
     exact = simulate(late, (0.0, 4.0), inputs={"F": ([0.0, 0.5, 2.0], [0.0, 1.0, -0.5])}, output_interval=DT)
     # Pade [2/3]: error O((sT)^6); the mass-spring (w_n = 2 rad/s) sees the steps smoothed
     assert np.abs(out["x"] - np.interp(out["time"], exact.t, exact["x"])).max() < 1e-3 * np.ptp(exact["x"])
+
+
+def test_a_parameter_holds_the_value_before_the_record_and_moves_it(msd, tmp_path):
+    # a force held at 1 N from the start, delayed 0.5 s: before the record it rested at F0 (a
+    # parameter); a constant force F0 then 1 N from 0.5 s is the undelayed model on that table
+    on = np.ones_like(T)
+    late = msd.delay_input("F", "T_F", 0.5, before=Param("F0", -2.0, unit="N"))
+    assert late.equations().input_delays["F_late"].before == "F0"
+    for F0 in (-2.0, 0.0, 3.0):
+        then = simulate(late, (0.0, T[-1]), inputs={"F": (T, on)}, params={"F0": F0}, output_interval=DT,
+                        method="RK4")
+        step = np.where(T < 0.5, F0, 1.0)
+        ref = simulate(msd, (0.0, T[-1]), inputs={"F": (T, step)}, output_interval=DT, method="RK4")
+        assert np.abs(then["x"] - ref["x"]).max() < 1e-12
+        assert then["x"][40] * F0 > 0 or F0 == 0.0                 # the value before moved the mass
+    # a batch of the diagnosis simulator: each run its own value before the record
+    exp = Experiment(T, {"F": on}, {"x": np.zeros_like(T)}, {"F": "N", "x": "m"})
+    runs = OutputSimulator(late, exp).run_batch([{"F0": -2.0}, {"F0": 3.0}, {"F0": 3.0, "T_F": 0.25}])
+    for run, (F0, delay) in zip(runs, ((-2.0, 0.5), (3.0, 0.5), (3.0, 0.25))):
+        ref = simulate(msd, (0.0, T[-1]), inputs={"F": (T, np.where(T < delay, F0, 1.0))}, output_interval=DT,
+                       method="RK4", dt=DT / 4)
+        assert np.abs(run.outputs["x"] - ref["x"]).max() < 1e-6 * np.abs(ref["x"]).max()
+    # saved and loaded, the name stays a name; exported, the Pade states start at its value
+    save(late, tmp_path / "late.json")
+    assert load(tmp_path / "late.json").equations().input_delays["F_late"].before == "F0"
+    assert late.with_delays_realised().equations().initial_state["z1_F_late"] == -2.0
+
+
+def test_a_value_before_named_but_not_declared_is_refused(msd):
+    g = msd.copy()
+    g.add_parameter(Param("T_F", 0.1, "s"))
+    g.add_input("G", delay_of="F", delay="T_F", before="F_missing")
+    with pytest.raises(DerivationError, match="'F_missing', is not a parameter"):
+        g.equations()
+    with pytest.raises(GraphError, match="neither a number nor a parameter"):
+        msd.copy().add_input("H", delay_of="F", delay="T_F", before="1 N")
+    with pytest.raises(GraphError, match="both named 'T_F'"):
+        msd.delay_input("F", "T_F", 0.1, before=Param("T_F", 0.0))
+
+
+def test_a_part_of_a_record_reads_the_commands_before_it(msd):
+    # the held-out part of a record starts mid-run: the mass there, 0.3 s late, feels the force of
+    # the training part's last 0.3 s, not the value before the record (0 N, delay_input's before)
+    late = msd.delay_input("F", "T_F", 0.3, before=0.0)
+    exp = Experiment(T, {"F": F}, {"x": np.zeros_like(T)}, {"F": "N", "x": "m"})
+    whole = OutputSimulator(late, exp).run()
+    train, hold = exp.split(0.4)
+    assert hold.history.t.size == train.t.size and hold.history.t[-1] < hold.t[0]
+    k = train.t.size
+    for part in (hold, exp.samples(k, T.size), exp.samples(k, T.size).samples(2, 100)):
+        start = int(np.searchsorted(T, part.t[0]))
+        state = dict(zip(whole.state_names, whole.states[start]))
+        seen = OutputSimulator(late, part).run(x0=state).outputs["x"]
+        assert np.abs(seen - whole.outputs["x"][start:start + part.t.size]).max() < 1e-12
+    # a part with no history (built from arrays) still takes the value before the record
+    bare = Experiment(hold.t, hold.inputs, hold.outputs, hold.units)
+    assert bare.history is None
+    state = dict(zip(whole.state_names, whole.states[k]))
+    assert np.abs(OutputSimulator(late, bare).run(x0=state).outputs["x"][:5]
+                  - whole.outputs["x"][k:k + 5]).max() > 1e-6

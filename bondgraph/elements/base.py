@@ -101,14 +101,15 @@ class InputDelay:
 
     `source` is the input delayed, `time` the name of the graph parameter :math:`T` (s), and
     `before` the value :math:`u_d` takes while :math:`t - T` lies before the start of the run
-    (where the source rested; None: the source's value at the start).  Simulators realise it
+    (where the source rested): a number, the name of a graph parameter holding it (a value a fit
+    can find, as it finds :math:`T`), or None: the source's value at the start.  Simulators realise it
     exactly on the source's samples; an FMU, which has no delay primitive, as Pade states
     (:meth:`bondgraph.editing.GraphEditing.with_delays_realised`).
     """
 
     source: str
     time: str
-    before: float | None = None
+    before: float | str | None = None
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,9 @@ zero-order-hold table, and so is its delayed copy: its steps move by :math:`T`. 
 samples keeps them on the sample grid; a fraction of a sample puts them inside the intervals, so
 the grid the model is integrated on gets those instants too (:func:`inputs_on_grid`): the state
 then sees each value for exactly as long as the delayed command holds it, and moves smoothly with
-:math:`T` (a fit can find it).  Before the record the source is at its ``before`` value.
+:math:`T` (a fit can find it).  Before the record the source is at its ``before`` value, which
+a parameter may hold (:func:`before_values`): where the source rested before a record is often
+unknown, and a fit can find it as it finds :math:`T`.
 """
 from __future__ import annotations
 
@@ -16,7 +18,7 @@ import numpy as np
 
 from ..errors import ArgumentError
 
-__all__ = ["delayed_samples", "delay_values", "inputs_on_grid"]
+__all__ = ["delayed_samples", "delay_values", "before_values", "inputs_on_grid"]
 
 #: a step this close to a grid time (as a share of the smallest sample interval) is on it
 _ON_GRID = 1e-9
@@ -82,7 +84,23 @@ def delay_values(eqs, params: dict | None = None) -> dict:
     return delays
 
 
-def inputs_on_grid(eqs, t, U, delays: dict):
+def before_values(eqs, params: dict | None = None) -> dict:
+    """Delayed input name -> its value before the record under `params` (name -> value; others at
+    their defaults): the number given, its parameter's value, or None (the source's first value)."""
+    params = params or {}
+    out = {}
+    for name, d in eqs.input_delays.items():
+        before = d.before
+        if isinstance(before, str):
+            before = float(params.get(before, eqs.param_values[before]))
+            if not np.isfinite(before):
+                raise ArgumentError(f"input {name!r} of model {eqs.name!r}: its value before the run "
+                                    f"{d.before!r} is {before!r}; expected a finite number", name=d.before)
+        out[name] = before
+    return out
+
+
+def inputs_on_grid(eqs, t, U, delays: dict, befores: dict | None = None, *, past=None):
     """The grid a run on the samples `t` is integrated on, and its inputs.
 
     Parameters
@@ -95,6 +113,12 @@ def inputs_on_grid(eqs, t, U, delays: dict):
         inputs' columns are ignored.
     delays : dict str -> float
         Delay of each delayed input, s (:func:`delay_values`).
+    befores : dict str -> float or None, optional
+        Each delayed input's value before the record (:func:`before_values`); default the model's.
+    past : tuple (t_past, U_past), optional
+        The inputs recorded before ``t[0]`` (times, s, and a matrix like `U`), where `t` is a part
+        of a longer record: a delay that reaches back before ``t[0]`` reads them, and the value
+        before the record only before ``t_past[0]``.
 
     Returns
     -------
@@ -107,8 +131,12 @@ def inputs_on_grid(eqs, t, U, delays: dict):
     t = np.asarray(t, dtype=float)
     if not eqs.input_delays:
         return t, U, np.arange(t.size)
+    t_all, U_all = t, np.asarray(U, float)
+    if past is not None and np.size(past[0]):
+        t_all = np.concatenate([np.asarray(past[0], float), t])
+        U_all = np.concatenate([np.asarray(past[1], float).reshape(-1, U_all.shape[1]), U_all])
     tol = _tolerance(t)
-    extra = np.concatenate([t + delays[name] for name in eqs.input_delays])
+    extra = np.concatenate([t_all + delays[name] for name in eqs.input_delays])
     extra = extra[(extra > t[0]) & (extra < t[-1])]
     # steps that fall on (or a rounding error from) a sample stay on it
     near = np.searchsorted(t, extra)
@@ -121,7 +149,8 @@ def inputs_on_grid(eqs, t, U, delays: dict):
     column = {name: j for j, name in enumerate(eqs.input_names)}
     parent = np.searchsorted(t, grid + tol, side="right") - 1      # the sample each grid time holds
     U_grid = np.ascontiguousarray(np.asarray(U, dtype=float)[np.clip(parent, 0, None)])
+    befores = before_values(eqs) if befores is None else befores
     for name, d in eqs.input_delays.items():
-        U_grid[:, column[name]] = delayed_samples(t, np.asarray(U, float)[:, column[d.source]], delays[name],
-                                                  d.before, at=grid)
+        U_grid[:, column[name]] = delayed_samples(t_all, U_all[:, column[d.source]], delays[name], befores[name],
+                                                  at=grid)
     return grid, np.ascontiguousarray(U_grid), at

@@ -59,7 +59,7 @@ from ..errors import ArgumentError, DomainError, ExpressionError, SimulationErro
 from .memory import check_result_size
 from .progress import Progress
 from .evaluate import compile_model
-from .input_delays import delay_values
+from .input_delays import before_values, delay_values
 from ..guards import check_param_bounds, guard_function, guard_values, raise_violation
 from .results import SimulationResult
 from ..symbols import as_expression
@@ -161,7 +161,8 @@ def simulate(system, t_span, *, inputs=None, x0=None, params=None, method="auto"
     x_init = _initial_state(model, x0)
     p = model.param_vector(params)
     check_param_bounds(eqs, p)
-    plan = _InputPlan(eqs, inputs, t0, delays=delay_values(eqs, dict(zip(model.param_names, p[0]))))
+    values = dict(zip(model.param_names, p[0]))
+    plan = _InputPlan(eqs, inputs, t0, delays=delay_values(eqs, values), befores=before_values(eqs, values))
     d0 = _initial_held(model, held0).reshape(1, -1)
     fixed = (not eqs.is_smooth) or method == "RK4"
     if not eqs.is_smooth and method not in ("auto", "RK4"):
@@ -254,9 +255,10 @@ def _initial_held(model, held0):
 class _InputPlan:
     """Input vector u(t) from constants, functions of t and zero-order-hold tables; a delayed
     input (``eqs.input_delays``, its delay in `delays`, s) is its source at ``t - T``, and its
-    ``before`` value while ``t - T < t0``: exact on tables, whose steps it moves by ``T``."""
+    ``before`` value (in `befores`, or the model's) while ``t - T < t0``: exact on tables, whose
+    steps it moves by ``T``."""
 
-    def __init__(self, eqs, inputs, t0, delays=None):
+    def __init__(self, eqs, inputs, t0, delays=None, befores=None):
         names = eqs.input_names
         given = dict(inputs or {})
         for name in given:
@@ -275,12 +277,13 @@ class _InputPlan:
                 spec = eqs.input_functions.get(name, eqs.input_defaults.get(name, 0.0))
             self._add(i, name, spec, t0)
         delays = delays or {}
+        befores = before_values(eqs) if befores is None else befores
         self.t0 = t0
         self.late = []      # (column, source column, T, before, the source's table moved by T)
         for n, d in eqs.input_delays.items():
             j, T = names.index(d.source), float(delays[n])
             table = next(((tt + T, values) for i, tt, values in self.tables if i == j), None)
-            before = float(self._undelayed(t0)[j]) if d.before is None else d.before
+            before = float(self._undelayed(t0)[j]) if befores[n] is None else befores[n]
             self.late.append((names.index(n), j, T, before, table))
         # the integration restarts where a table steps, not at every sample of it: a recording
         # of held levels changes at few of its samples (a 1 kHz table held over 7 samples cut 3 s

@@ -23,6 +23,8 @@ class InputRecord:
     values: np.ndarray
     unit: str
     rest: float
+    #: whether the initial state told where the input rested (else `rest` is its first recorded value)
+    told: bool = True
 
     @property
     def lo(self) -> float:
@@ -56,7 +58,7 @@ def _input_record(site) -> InputRecord:
     recorded = site.recorded
     values = (np.asarray(recorded, dtype=float) if recorded is not None
               else np.array([decl.default - 1.0, decl.default + 1.0]))
-    return InputRecord(values, decl.unit, resting_input(site.graph, site.name, recorded, site.x0))
+    return InputRecord(values, decl.unit, *_resting(site.graph, site.name, recorded, site.x0))
 
 
 #: the time constants or delays a fit starts from, in samples (each four times the last)
@@ -83,6 +85,12 @@ def resting_input(graph, u: str, recorded, x0=None) -> float:
     rates do not depend on the input at all (nothing says where it rested: the actuator is taken
     to have followed its first command).
     """
+    return _resting(graph, u, recorded, x0)[0]
+
+
+def _resting(graph, u: str, recorded, x0=None) -> tuple[float, bool]:
+    """:func:`resting_input`'s value, and whether the initial state told it (False: the first
+    recorded value, taken because nothing said where the input rested)."""
     from scipy.optimize import minimize_scalar
 
     from bondgraph.numerics.evaluate import compile_model
@@ -109,9 +117,9 @@ def resting_input(graph, u: str, recorded, x0=None) -> float:
 
         r = rates(options)
     except (BondcosimError, ValueError, TypeError):
-        return first
+        return first, False
     if not np.isfinite(r).all() or np.allclose(r, r[0], rtol=1e-12, atol=0.0):
-        return first
+        return first, False
     peak = r.max(axis=0)
     moving = peak > 0
 
@@ -121,14 +129,14 @@ def resting_input(graph, u: str, recorded, x0=None) -> float:
     scores = (r[:, moving] / peak[moving]).sum(axis=1)
     best = int(np.argmin(scores))
     if scores[best] == 0.0:
-        return options[best]
+        return options[best], True
     # between the best one's neighbours among all the trials: a rest outside the recorded range
     # (levels that never went down to the inflow the tanks rested at) lies between 0 and its edge
     ordered = sorted(set(options))
     k = ordered.index(options[best])
     lo, hi = ordered[max(k - 1, 0)], ordered[min(k + 1, len(ordered) - 1)]
     if hi <= lo:
-        return options[best]
+        return options[best], True
     found = minimize_scalar(lambda v: float(score([v])[0]), bounds=(lo, hi), method="bounded",
                             options={"xatol": 1e-6 * (ordered[-1] - ordered[0])})
-    return float(found.x) if found.success and found.fun < scores[best] else options[best]
+    return (float(found.x) if found.success and found.fun < scores[best] else options[best]), True

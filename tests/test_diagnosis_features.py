@@ -145,6 +145,13 @@ def test_pruning_keeps_the_best_kinds_and_candidates_without_features():
     assert [c.kind for c in kept] == ["coulomb_friction", "viscous_friction", "hysteresis", "sensor_offset"]
     weak = {PLACE: _place_evidence({k: 0.4 * s for k, s in shares.items()})}   # best under 50 %: no pruning
     assert len(prune_candidates(cands, weak)[0]) == len(cands)
+    # a richer law that nests the best kind is fitted whatever its features' validation says
+    # (seed 2323, case 023: a pressure term collinear with the sign on the first rows)
+    shares["pressure_dependent_friction"] = -1.24
+    cands.insert(0, SimpleNamespace(kind="pressure_dependent_friction", place=PLACE, regime=None, target=None))
+    kept, dropped = prune_candidates(cands, {PLACE: _place_evidence(shares)})
+    assert "pressure_dependent_friction" in [c.kind for c in kept]
+    assert [c.kind for c in dropped] == ["constant_load", "backlash"]
 
 
 def test_diagnose_reports_the_feature_regression(tmp_path):

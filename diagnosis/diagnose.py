@@ -369,7 +369,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     if diverged:
         from .graph_location_segments import locate_on_segments
         say("nominal diverges", diverged)
-        windows, rv = [], {}
+        windows, rv, flagged = [], {}, []
         say("graph location", "restarted windows of the training part")
         scores = locate_on_segments(graph, train, res.noise, progress=progress)
         place_list = ([s.place for s in without_companions(graph, scores)[:int(top)]
@@ -377,6 +377,10 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     else:
         windows = _merge([w for o in exp.outputs
                           for w in significant_windows(exp.t, res.residual[o], res.noise[o])])
+        # the outputs whose training residual exceeds the noise somewhere: where round 1 finds none,
+        # their sensors are fitted too (below)
+        flagged = [o for o in exp.outputs
+                   if significant_windows(exp.t[:n_train], res.residual[o][:n_train], res.noise[o])]
         say("regime variables")
         rv_full = regime_variables(graph, exp, res.run)
         rv = {k: (v[:n_train], d) for k, (v, d) in rv_full.items()}
@@ -424,6 +428,18 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                                      and _finite_over(res.simulated, n_train) else None))
 
     chosen, alternatives = choose_round_one()
+    sensors_left = [p for p in sensor_places(place_list, train) if p.name in flagged]
+    if chosen is None and sensors_left:
+        # a sensor's error (a range clipping a few brief excursions) shows on its own output only,
+        # and the location may score it far below the junctions behind that output, which explain
+        # the same samples through fast dynamics: further rounds fit the sensors wherever something
+        # was located (place_choice.further_places); round 1 does where it found nothing else
+        sensor_cands = [c for p in sensors_left
+                        for c in candidates(graph, p, regime_variables=rv, experiment=cand_part, x0=x0)]
+        sensor_fits, _ = fit_in_turn(sensor_cands, fit_one, say, "fitting sensors", best=best)
+        if sensor_fits:
+            fits += sensor_fits
+            chosen, alternatives = choose_round_one()
     if chosen is None and int(max_effects) >= 2 and pairs.wanted(nominal, floor):
         pair_fits, _ = fit_in_turn(pairs.pair_candidates(fits), fit_one, say, "fitting pairs", best=best)
         if pair_fits:

@@ -508,8 +508,14 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
                                 graph=model, n_simulations=objective.n_runs,
                                 extra={"train_cost": stop.args[0], "abandoned": True}, **failed)
         objective.abandon_above = None     # what follows (released limits) is not the search
-        theta, converged = result.x, bool(result.success)
-        message = f"{result.message} ({result.nfev} evaluations, {objective.n_runs} simulations)"
+        # at the evaluation limit the fit keeps the best point it reached, and the held-out part
+        # judges it like any other: a pam's Stribeck friction, its four parameters near the truth's
+        # after 40 evaluations, predicted the held-out torque best of all the fits and was dropped as
+        # failed, and a pressure-dependent friction answered (seed 2323, case 073)
+        theta, converged = result.x, bool(result.success) or result.status == 0
+        message = (f"stopped at the limit of {max_nfev} evaluations before its tolerances were met"
+                   if result.status == 0 else str(result.message))
+        message = f"{message} ({result.nfev} evaluations, {objective.n_runs} simulations)"
     else:
         theta, converged, message = theta0, True, "nothing to fit"
     released = {}

@@ -440,7 +440,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         if sensor_fits:
             fits += sensor_fits
             chosen, alternatives = choose_round_one()
-    if chosen is None and int(max_effects) >= 2 and pairs.wanted(nominal, floor):
+    left = nominal if chosen is None else chosen.holdout_nrmse     # what round 1's answer leaves
+    if int(max_effects) >= 2 and pairs.wanted(left, floor):
         pair_fits, _ = fit_in_turn(pairs.pair_candidates(fits), fit_one, say, "fitting pairs", best=best)
         if pair_fits:
             fits += pair_fits

@@ -9,14 +9,17 @@ take it below the noise (seed 5656, compound case 007: held-out NRMSE 0.103 -> 0
 0.008; the best single candidate 0.094).  Greedy rounds then answer "none" on a residual twelve
 times the noise.
 
-So when round 1 answers none although the residual is clearly beyond the noise (some output's
-held-out NRMSE at least :data:`TRIGGER` times its floor), the best :data:`SINGLES` single-place
+So when round 1's answer (none, or its choice) leaves the residual clearly beyond the noise (some
+output's held-out NRMSE at least :data:`TRIGGER` times its floor), the best :data:`SINGLES` single-place
 fits of the round, by training error (not the held-out error, which the choice is made on; a
 candidate fitted without its partner may predict the held-out part worse than the nominal and
 still fit the training part well), are fitted again in pairs (:class:`CandidatePair`), each
 member started where its own fit ended.  The pairs join the round's fits and the round's own rule
 chooses again: a pair pays for the parameters of both members, and must explain the share every
-answer must.  Pairs of one place where one kind extends the other (Coulomb and Coulomb +
+answer must.  A wrong single answer stalls the rounds as "none" does: a carriage's 1.66 s force
+lag and 2.75 N constant load were answered as a saturation of the force input, which left the
+velocity's held-out error at five times its floor, and round 2 found nothing on that model (seed
+8181, compound case 000); the pair of the two concealed effects takes it below the floor.  Pairs of one place where one kind extends the other (Coulomb and Coulomb +
 viscous friction) are not formed: the richer law is already a candidate there.
 
 This is forward selection with a two-step look-ahead where the one-step search stalls (the

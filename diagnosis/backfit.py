@@ -35,6 +35,7 @@ import numpy as np
 from .errors import BondcosimError
 from .fit import needs_explaining, unpriced_error, usable_fits
 from .fit_in_turn import HOPELESS, train_cost
+from .pairs import effect_count
 
 __all__ = ["ALTERNATIVES", "alternatives", "backfit", "build_effects", "refittable"]
 
@@ -57,13 +58,17 @@ def build_effects(graph, effects, with_values):
 def alternatives(chosen, fits, reference: dict, floor: dict, n: int = ALTERNATIVES, taken=frozenset()) -> list:
     """The round's chosen fit and the successful fits of the next best kinds or places (one fit per
     kind and place, lowest held-out error on the outputs that needed explaining first), at most
-    `n` in all, the chosen first; none with a parameter named in `taken`."""
+    `n` in all, the chosen first; none with a parameter named in `taken`, and none adding another
+    number of effects than the chosen one (:func:`~diagnosis.pairs.effect_count`): a round's pairs
+    (fitted where its choice left the residual far above the noise) must not make a single effect
+    two, beyond the diagnosis' ``max_effects`` (the cylinder rig's recording answered three)."""
     significant = needs_explaining(reference, floor) or list(reference)
     ranked = sorted(usable_fits(fits, list(reference)), key=lambda f: unpriced_error(f, significant))
+    count = effect_count(chosen.candidate)
     out, seen = [], set()
     for fit in [chosen] + ranked:
         if len(out) < n and fit.candidate is not None and _key(fit) not in seen \
-                and not taken & {p.name for p in fit.candidate.params}:
+                and effect_count(fit.candidate) == count and not taken & {p.name for p in fit.candidate.params}:
             out.append(fit)
             seen.add(_key(fit))
     return out

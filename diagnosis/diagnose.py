@@ -440,28 +440,39 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         if sensor_fits:
             fits += sensor_fits
             chosen, alternatives = choose_round_one()
-    left = nominal if chosen is None else chosen.holdout_nrmse     # what round 1's answer leaves
-    if int(max_effects) >= 2 and pairs.wanted(left, floor):
-        pair_fits, _ = fit_in_turn(pairs.pair_candidates(fits), fit_one, say, "fitting pairs", best=best)
-        if pair_fits:
-            fits += pair_fits
-            chosen, alternatives = choose_round_one()
+    fitted_pairs = False
 
-    say("improved model")
-    improved_judged = nominal_judged
-    if chosen is None:
-        improved_graph, improved, y_imp = graph, dict(nominal), res.run.outputs
-    else:
+    def with_pairs():
+        nonlocal fitted_pairs
+        fitted_pairs = True
+        pair_fits, _ = fit_in_turn(pairs.pair_candidates(fits), fit_one, say, "fitting pairs", best=best)
+        fits.extend(pair_fits)
+        return choose_round_one() if pair_fits else None
+
+    if chosen is None and int(max_effects) >= 2 and pairs.wanted(nominal, floor):
+        chosen, alternatives = with_pairs() or (chosen, alternatives)
+
+    x0_nominal, start_nominal = x0, start
+
+    def improved_model(chosen):
+        """``(graph, held-out NRMSE, outputs, judged, x0, start)`` of the nominal model with `chosen`."""
+        if chosen is None:
+            return graph, dict(nominal), res.run.outputs, nominal_judged, x0_nominal, start_nominal
         cand_names = {p.name for p in chosen.candidate.params} if chosen.candidate else set()
         base = (chosen.candidate.build(graph, {k: v for k, v in chosen.values.items() if k in cand_names})
                 if chosen.candidate is not None else graph)
-        improved_graph = _with_values(base, {k: v for k, v in chosen.values.items() if k not in cand_names})
-        x0, start = _chosen_start(chosen, x0, start)
-        improved, y_imp, improved_judged = _holdout_nrmse(OutputSimulator(improved_graph, exp), None, x0, judge)
-    rounds = [Round(chosen, fits, dict(nominal), dict(improved), seconds=_time.perf_counter() - say.start,
-                    diverged=diverged, window=[float(fit_part.t[0]), float(fit_part.t[-1])], floor=floor,
-                    start=start, features=list(evidence.values()), pruned=pruned,
-                    indistinguishable=alternatives)]
+        built = _with_values(base, {k: v for k, v in chosen.values.items() if k not in cand_names})
+        x_start, described = _chosen_start(chosen, x0_nominal, start_nominal)
+        return (built, *_holdout_nrmse(OutputSimulator(built, exp), None, x_start, judge), x_start, described)
+
+    def round_one(chosen, alternatives):
+        return Round(chosen, fits, dict(nominal), dict(improved), seconds=_time.perf_counter() - say.start,
+                     diverged=diverged, window=[float(fit_part.t[0]), float(fit_part.t[-1])], floor=floor,
+                     start=start, features=list(evidence.values()), pruned=pruned, indistinguishable=alternatives)
+
+    say("improved model")
+    improved_graph, improved, y_imp, improved_judged, x0, start = improved_model(chosen)
+    rounds = [round_one(chosen, alternatives)]
 
     if chosen is not None and chosen.candidate is not None:
         while sum(pairs.effect_count(r.chosen.candidate) for r in rounds if r.chosen is not None) < int(max_effects):
@@ -474,6 +485,17 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                 break
             x0 = found.chosen.extra.get("x0") or x0
             improved_graph, improved, y_imp, improved_judged = found.graph, found.improved, found.y, found.judged
+        # a wrong first answer stalls the rounds: nothing more is found on its model while the
+        # residual stays far above the noise; round 1's fits in pairs may answer it instead
+        stalled = (len(rounds) == 2 and rounds[1].chosen is None and pairs.effect_count(chosen.candidate) == 1
+                   and int(max_effects) >= 2 and not fitted_pairs and pairs.wanted(improved, floor))
+        paired = with_pairs() if stalled else None
+        if paired is not None and isinstance(paired[0].candidate, pairs.CandidatePair):
+            paired[0].extra["stalled"] = str(chosen.candidate)
+            chosen, alternatives = paired
+            say("improved model", f"round 1 answered again, with {chosen.candidate}")
+            improved_graph, improved, y_imp, improved_judged, x0, start = improved_model(chosen)
+            rounds = [round_one(chosen, alternatives)]
         effects = [r.chosen for r in rounds if r.chosen is not None]
         if len(effects) >= 2:
             from .backfit import backfit

@@ -246,7 +246,11 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
     else:
         first = physics[:len(getattr(chosen.candidate, "members", (None,)))]   # round 1: one per twin place
         lines.append(f"Missing physics: {_named(first)}. {'; '.join(e['explanation'] for e in first)}")
-        if isinstance(chosen.candidate, CandidatePair):
+        if isinstance(chosen.candidate, CandidatePair) and chosen.extra.get("stalled"):
+            lines.append(f"Round 1 first answered {chosen.extra['stalled']}, on whose model nothing more was found "
+                         "while the residual stayed far above the noise; these two, fitted together "
+                         "(diagnosis.pairs), explain it instead.")
+        elif isinstance(chosen.candidate, CandidatePair):
             lines.append("No single candidate explained the required share of the residual; these two were "
                          "fitted together (diagnosis.pairs).")
         if chosen.extra.get("judge") == "training":

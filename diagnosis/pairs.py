@@ -9,8 +9,8 @@ take it below the noise (seed 5656, compound case 007: held-out NRMSE 0.103 -> 0
 0.008; the best single candidate 0.094).  Greedy rounds then answer "none" on a residual twelve
 times the noise.
 
-So when round 1's answer (none, or its choice) leaves the residual clearly beyond the noise (some
-output's held-out NRMSE at least :data:`TRIGGER` times its floor), the best :data:`SINGLES` single-place
+So when round 1 answers none although the residual is clearly beyond the noise (some output's
+held-out NRMSE at least :data:`TRIGGER` times its floor), the best :data:`SINGLES` single-place
 fits of the round, by training error (not the held-out error, which the choice is made on; a
 candidate fitted without its partner may predict the held-out part worse than the nominal and
 still fit the training part well), are fitted again in pairs (:class:`CandidatePair`), each
@@ -19,7 +19,12 @@ chooses again: a pair pays for the parameters of both members, and must explain 
 answer must.  A wrong single answer stalls the rounds as "none" does: a carriage's 1.66 s force
 lag and 2.75 N constant load were answered as a saturation of the force input, which left the
 velocity's held-out error at five times its floor, and round 2 found nothing on that model (seed
-8181, compound case 000); the pair of the two concealed effects takes it below the floor.  Pairs of one place where one kind extends the other (Coulomb and Coulomb +
+8181, compound case 000).  So where round 2 finds nothing on round 1's single answer while some
+output stays at :data:`TRIGGER` times its floor, round 1's fits are paired too and its rule
+chooses again; a pair that wins replaces the single answer (the pair of the two concealed effects
+takes that velocity below its floor).  Not after round 1's choice itself: where round 2 and the
+backfit complete a first answer (:mod:`diagnosis.backfit`), a pair chosen at once stopped the
+rounds on the wrong two kinds (seed 3434, compound case 002).  Pairs of one place where one kind extends the other (Coulomb and Coulomb +
 viscous friction) are not formed: the richer law is already a candidate there.
 
 This is forward selection with a two-step look-ahead where the one-step search stalls (the

@@ -43,6 +43,15 @@ def test_the_alternatives_are_the_chosen_then_the_next_best_kinds_and_places_onc
     got = alternatives(chosen, fits, {"x": 1.0}, {"x": 0.01}, n=3, taken={"taken"})
     assert [(f.candidate.kind, f.candidate.place) for f in got] == [
         ("viscous_friction", "junction v"), ("backlash", "junction v"), ("coulomb_friction", "junction w")]
+    # a round's pair (two effects) does not stand in for its single effect, however well it fits
+    from diagnosis.catalogue import Candidate, ParamSpec
+    from diagnosis.pairs import CandidatePair
+    from diagnosis.place import Place
+    single = [Candidate(k, Place("junction", "v"), [ParamSpec(n, 1.0, 0.0, 10.0, "", "")])
+              for k, n in (("coulomb_friction", "Fc"), ("hysteresis", "Fh"))]
+    pair = CandidateFit(CandidatePair(tuple(single)), {"Fc": 1.0, "Fh": 1.0}, {}, {"x": 0.01}, 2, True, "")
+    got = alternatives(chosen, fits + [pair], {"x": 1.0}, {"x": 0.01}, n=3, taken={"taken"})
+    assert pair not in got and len(got) == 3
 
 
 def test_a_floor_above_what_a_fit_reaches_is_lowered_to_it():

@@ -60,8 +60,8 @@ def alternatives(chosen, fits, reference: dict, floor: dict, n: int = ALTERNATIV
     kind and place, lowest held-out error on the outputs that needed explaining first), at most
     `n` in all, the chosen first; none with a parameter named in `taken`, and none adding another
     number of effects than the chosen one (:func:`~diagnosis.pairs.effect_count`): a round's pairs
-    (fitted where its choice left the residual far above the noise) must not make a single effect
-    two, beyond the diagnosis' ``max_effects`` (the cylinder rig's recording answered three)."""
+    must not make a single effect two, beyond the diagnosis' ``max_effects`` (with pairs fitted
+    after every first answer, the cylinder rig's recording answered three), nor a pair one."""
     significant = needs_explaining(reference, floor) or list(reference)
     ranked = sorted(usable_fits(fits, list(reference)), key=lambda f: unpriced_error(f, significant))
     count = effect_count(chosen.candidate)

@@ -428,14 +428,18 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                                      and _finite_over(res.simulated, n_train) else None))
 
     chosen, alternatives = choose_round_one()
-    sensors_left = [p for p in sensor_places(place_list, train) if p.name in flagged]
-    if chosen is None and sensors_left:
+
+    def sensor_candidates(outputs, located=()):
+        """The sensor candidates at `outputs` not among the places `located`, on the nominal model."""
+        return [c for p in sensor_places(located, train) if p.name in outputs
+                for c in candidates(graph, p, regime_variables=rv, experiment=cand_part, x0=start_x0)]
+
+    sensor_cands = sensor_candidates(flagged, place_list) if chosen is None else []
+    if sensor_cands:
         # a sensor's error (a range clipping a few brief excursions) shows on its own output only,
         # and the location may score it far below the junctions behind that output, which explain
         # the same samples through fast dynamics: further rounds fit the sensors wherever something
         # was located (place_choice.further_places); round 1 does where it found nothing else
-        sensor_cands = [c for p in sensors_left
-                        for c in candidates(graph, p, regime_variables=rv, experiment=cand_part, x0=x0)]
         sensor_fits, _ = fit_in_turn(sensor_cands, fit_one, say, "fitting sensors", best=best)
         if sensor_fits:
             fits += sensor_fits
@@ -507,10 +511,6 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
 
             def rechoose(reference, refits):        # the held-out part's choice alone, no training fallback
                 return _choose(reference, refits, floor, None, None, exp, train, held, not_open_loop=True)[0]
-
-            def sensor_candidates(outputs):
-                return [c for p in sensor_places([], train) if p.name in outputs
-                        for c in candidates(graph, p, regime_variables=rv, experiment=cand_part, x0=start_x0)]
 
             effects, backfitted = backfit(graph, rounds, fit=refit, floor=floor, choose=rechoose,
                                           with_values=_with_values, say=say, sensors=sensor_candidates,

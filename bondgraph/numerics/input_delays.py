@@ -133,8 +133,11 @@ def inputs_on_grid(eqs, t, U, delays: dict, befores: dict | None = None, *, past
         return t, U, np.arange(t.size)
     t_all, U_all = t, np.asarray(U, float)
     if past is not None and np.size(past[0]):
-        t_all = np.concatenate([np.asarray(past[0], float), t])
-        U_all = np.concatenate([np.asarray(past[1], float).reshape(-1, U_all.shape[1]), U_all])
+        # only the past a delay reaches back into: the sample held at t[0] - (the longest delay) on
+        t_past = np.asarray(past[0], float)
+        keep = max(int(np.searchsorted(t_past, t[0] - max(delays.values()), side="right")) - 1, 0)
+        t_all = np.concatenate([t_past[keep:], t])
+        U_all = np.concatenate([np.asarray(past[1], float).reshape(-1, U_all.shape[1])[keep:], U_all])
     tol = _tolerance(t)
     extra = np.concatenate([t_all + delays[name] for name in eqs.input_delays])
     extra = extra[(extra > t[0]) & (extra < t[-1])]

@@ -24,8 +24,9 @@ output stays at :data:`TRIGGER` times its floor, round 1's fits are paired too a
 chooses again; a pair that wins replaces the single answer (the pair of the two concealed effects
 takes that velocity below its floor).  Not after round 1's choice itself: where round 2 and the
 backfit complete a first answer (:mod:`diagnosis.backfit`), a pair chosen at once stopped the
-rounds on the wrong two kinds (seed 3434, compound case 002).  Pairs of one place where one kind extends the other (Coulomb and Coulomb +
-viscous friction) are not formed: the richer law is already a candidate there.
+rounds on the wrong two kinds (seed 3434, compound case 002).  Pairs of one place where one kind
+extends the other (Coulomb and Coulomb + viscous friction) are not formed: the richer law is
+already a candidate there.
 
 This is forward selection with a two-step look-ahead where the one-step search stalls (the
 "nesting" problem of sequential selection; Pudil, Novovicova and Kittler, *Pattern Recognition

@@ -245,7 +245,8 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
                      f"({len(fits)} candidate fit(s) tried).")
     else:
         first = physics[:len(getattr(chosen.candidate, "members", (None,)))]   # round 1: one per twin place
-        lines.append(f"Missing physics: {_named(first)}. {'; '.join(e['explanation'] for e in first)}")
+        heading = "Wrong nominal value" if all(e["kind"] == "nominal_value" for e in first) else "Missing physics"
+        lines.append(f"{heading}: {_named(first)}. {'; '.join(e['explanation'] for e in first)}")
         if isinstance(chosen.candidate, CandidatePair) and chosen.extra.get("stalled"):
             lines.append(f"Round 1 first answered {chosen.extra['stalled']}, on whose model nothing more was found "
                          "while the residual stayed far above the noise; these two, fitted together "

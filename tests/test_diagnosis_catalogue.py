@@ -83,11 +83,12 @@ def pneumatic_tank():
 
 
 def test_kinds_are_the_issue_vocabulary_in_order():
-    # issue 6, section 2c, verbatim order; then issue 11's constant load and friction laws
+    # issue 6, section 2c, verbatim order; then issue 11's constant load and friction laws, and a
+    # storage element's nominal value refitted alone
     assert KINDS == ("coulomb_friction", "viscous_friction", "stribeck_friction", "pressure_dependent_friction",
                      "leak", "heat_transfer", "valve_lag", "transport_delay", "hysteresis", "backlash",
                      "nonlinear_stiffness", "saturation", "sensor_offset", "sensor_gain", "constant_load",
-                     "coulomb_viscous_friction", "modulated_friction")
+                     "coulomb_viscous_friction", "modulated_friction", "nominal_value")
 
 
 def test_places_offer_the_kinds_that_make_sense():
@@ -95,12 +96,14 @@ def test_places_offer_the_kinds_that_make_sense():
     at = lambda g, p: [c.kind for c in candidates(g, p)]  # noqa: E731
     assert at(msd, Place("junction", "v_mass")) == ["coulomb_friction", "viscous_friction", "stribeck_friction",
                                                     "hysteresis", "backlash", "nonlinear_stiffness",
-                                                    "constant_load", "coulomb_viscous_friction"]
+                                                    "constant_load", "coulomb_viscous_friction", "nominal_value",
+                                                    "nominal_value"]           # m and k
     assert at(msd, Place("input", "F")) == ["valve_lag", "transport_delay", "saturation"]
     assert at(msd, Place("output", "x")) == ["saturation", "sensor_offset", "sensor_gain"]
     cyl = hydraulic_cylinder()
     assert "pressure_dependent_friction" in at(cyl, Place("junction", "rod"))
-    assert at(cyl, Place("junction", "chamber")) == ["leak", "nonlinear_stiffness", "constant_load"]  # no heat transfer
+    assert at(cyl, Place("junction", "chamber")) == ["leak", "nonlinear_stiffness", "constant_load",
+                                                     "nominal_value"]          # no heat transfer
     assert at(pneumatic_tank(), Place("junction", "tank")) == ["leak", "heat_transfer", "nonlinear_stiffness",
                                                              "constant_load"]
 

@@ -1,0 +1,66 @@
+"""``nominal_value`` of a storage element at a junction: no physics is missing, the nominal's own
+value of a linear I or C is off (a mass or inertia from a drawing, an inductance, a stiffness or a
+capacity from a data sheet), refitted alone.
+
+A model written from a rig's documentation carries values a few per cent off; their error is a
+residual like any missing effect's, and without this kind it was answered by one: a carriage 3 %
+heavier than its nominal as a Dahl hysteresis, a load inertia 3 % off as hysteresis at the motor.
+One candidate per linear I or C on the junction, its one parameter the element's own (refitted
+under its name by :meth:`Candidate.build <diagnosis.catalogue.Candidate.build>`), within a factor 3
+either way.  An R is left out: a resistance too low is the viscous friction or leak the vocabulary
+already adds, and a C's value refitted with a cubic term is ``nonlinear_stiffness``, which the
+choice's price per parameter tells from this one.
+"""
+from __future__ import annotations
+
+from ..catalogue_common import ParamSpec
+from .base import Kind, Proposal, register
+from .storage_common import capacitors
+
+#: the factor either way a nominal value may be refitted within
+RANGE = 3.0
+
+
+@register
+class NominalValue(Kind):
+    name = "nominal_value"
+    doors = ("1", "0")
+
+    def propose(self, site):
+        out = []
+        for element in _linear_storages(site):
+            v = float(element.value.value)
+            quantity = _quantity(element)
+            out.append(Proposal(target=element.name, params=(
+                ParamSpec(element.value.name, v, v / RANGE, v * RANGE, element.value.unit,
+                          f"{quantity} of {element.name} (refitted)"),)))
+        return out
+
+    def build(self, graph, cand, values):
+        """`graph` itself: the value is refitted under the element's own parameter name."""
+        return graph
+
+    def explain(self, cand, values, show):
+        spec = cand.params[0]
+        value, nominal = values.get(spec.name, spec.guess), spec.guess
+        change = 100.0 * (value / nominal - 1.0) if nominal else float("nan")
+        quantity = spec.description.replace(" (refitted)", "")
+        was = f"{nominal:.4g} {spec.unit if spec.unit != '1' else ''}".strip()
+        return (f"the {quantity} at {cand.place.name} is {show(spec.name)}, {abs(change):.3g} % "
+                f"{'above' if change >= 0 else 'below'} its nominal {was} (no physics is missing there): "
+                f"a wrong nominal value of {cand.target}")
+
+
+def _linear_storages(site) -> list:
+    """The I and C elements on the junction whose law is their own positive value."""
+    from ..catalogue_common import junction_elements
+    inertias = [e for e, _ in junction_elements(site.graph, site.name) if e.kind == "I"]
+    return [e for e in inertias + capacitors(site)
+            if getattr(e, "value", None) is not None and float(e.value.value) > 0]
+
+
+def _quantity(element) -> str:
+    """The element's value in words: inertance, stiffness or compliance."""
+    if element.kind == "I":
+        return "inertance"
+    return "stiffness" if getattr(element, "stiffness_form", False) else "compliance"

@@ -262,6 +262,31 @@ def test_the_benchmark_command_on_a_small_seeded_subset(tmp_path, capsys):
     assert "4 cases (4 done before)" in capsys.readouterr().err
 
 
+def test_a_detuned_nominal_is_scored_on_the_concealed_effect_and_the_value_named(tmp_path):
+    """``--detune``: each nominal has one storage value a few per cent off, drawn per case (the
+    truth keeps the library's); a null answered with that value alone is no false alarm."""
+    import json
+
+    from diagnosis.benchmark.__main__ import main
+    from diagnosis.benchmark.detune import detuned_nominal
+    graph, detuned = detuned_nominal("mass-spring-damper", 12345, 0.05)
+    assert detuned == detuned_nominal("mass-spring-damper", 12345, 0.05)[1]       # the case's seed decides
+    assert detuned["parameter"] in ("m", "k") and 0.025 <= abs(detuned["factor"] - 1) <= 0.05
+    assert graph.parameters()[detuned["parameter"]].value == pytest.approx(detuned["nominal"] * detuned["factor"])
+    assert detuned_nominal("mass-spring-damper", 12345, 0.0)[1] == {}
+    assert main(["--cases", "4", "--seed", "7", "--plants", "msd", "--only", "0,3", "--detune", "0.05",
+                 "--report", str(tmp_path)]) == 0
+    results = json.loads((tmp_path / "results.json").read_text())
+    cases = {r["kind"]: r for r in results["cases"]}
+    null, effect = cases["none"], cases["coulomb_viscous_friction"]
+    assert null["answers"] == ["nominal_value @ junction v_mass"] and null["kind_ok"] and null["detuned_named"]
+    assert effect["kind_ok"] and effect["answer_kind"] == "coulomb_viscous_friction"
+    assert "nominal_value @ junction v_mass" in effect["answers"] and effect["detuned_named"]
+    head = results["summary"]["headline"]
+    assert (head["detuned_cases"], head["detuned_named"], head["false_alarms"]) == (2, 1.0, 0.0)
+    assert "| nominal detuned (2 cases, one storage value)" in (tmp_path / "results.md").read_text()
+
+
 def test_a_clipping_sensor_is_located_and_named(tmp_path):
     # the output place's correction has hinges at quantiles of the simulated output (a range),
     # and a limit the training part gives no evidence for is released, not left where it ends

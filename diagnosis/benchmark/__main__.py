@@ -1,4 +1,5 @@
-"""``python -m diagnosis.benchmark [--cases N] [--seed S] [--report DIR] [--jobs J] [--plants A,B] [--compound]``.
+"""``python -m diagnosis.benchmark [--cases N] [--seed S] [--report DIR] [--jobs J] [--plants A,B] [--compound]
+[--detune F]``.
 
 Draws N cases (default 80), diagnoses each recording as a user would, and
 writes into DIR (default ``benchmark-report``): one JSON file per case
@@ -6,7 +7,9 @@ writes into DIR (default ``benchmark-report``): one JSON file per case
 ``results.json`` (all scores and the summary), ``results.md`` (the tables)
 and ``results.png`` (confusion matrix, held-out improvement, time per case).
 With ``--compound`` every effect case conceals a second effect too
-(:mod:`diagnosis.benchmark.compound`); use a report directory of its own.
+(:mod:`diagnosis.benchmark.compound`); with ``--detune F`` each nominal has one storage
+element's value off by up to the fraction F (:mod:`diagnosis.benchmark.detune`).  Each variant
+needs a report directory of its own (a case's file is named by its draw).
 """
 from __future__ import annotations
 
@@ -27,10 +30,10 @@ from .run import run_case
 
 
 def _work(args):
-    spec, workdir, max_effects, second = args
+    spec, workdir, max_effects, second, detune = args
     import os
     os.environ.setdefault("OMP_NUM_THREADS", "1")
-    return run_case(spec, PLANTS, workdir, max_effects=max_effects, second=second)
+    return run_case(spec, PLANTS, workdir, max_effects=max_effects, second=second, detune=detune)
 
 
 def main(argv=None) -> int:
@@ -44,9 +47,13 @@ def main(argv=None) -> int:
     ap.add_argument("--max-effects", type=int, default=2, help="passed to diagnose (default 2)")
     ap.add_argument("--compound", action="store_true",
                     help="a second concealed effect in every effect case (diagnosis.benchmark.compound)")
+    ap.add_argument("--detune", type=float, default=0.0,
+                    help="each nominal's one storage value off by up to this fraction (diagnosis.benchmark.detune)")
     a = ap.parse_args(argv)
     if a.cases < 1 or a.jobs < 1:
         ap.error("--cases and --jobs must be positive")
+    if not 0.0 <= a.detune < 1.0:
+        ap.error(f"--detune must be a fraction in [0, 1), got {a.detune}")
     plants = PLANTS
     if a.plants:
         unknown = [p for p in a.plants.split(",") if p not in PLANTS]
@@ -71,7 +78,7 @@ def main(argv=None) -> int:
     print(f"benchmark: {len(specs)} cases ({len(results)} done before), seed {a.seed}, {a.jobs} job(s)",
           file=sys.stderr, flush=True)
     start = time.perf_counter()
-    jobs = [(s, out / "recordings", a.max_effects, seconds[s.index]) for s in todo]
+    jobs = [(s, out / "recordings", a.max_effects, seconds[s.index], a.detune) for s in todo]
     done = 0
 
     def record(r):
@@ -89,6 +96,10 @@ def main(argv=None) -> int:
             verdict += (f"; found: first {r['first_found']}, second {r['also_found']} ({', '.join(r['answers'])}); "
                         f"effect-to-noise with both: {r.get('first_visible', np.nan):.3g} / "
                         f"{r.get('also_visible', np.nan):.3g}")
+        if r.get("detuned"):
+            d = r["detuned"]
+            verdict += (f"; nominal {d['parameter']} x {d['factor']:.3f} "
+                        f"{'named' if r['detuned_named'] else 'not named'} ({', '.join(r['answers']) or 'none'})")
         print(f"benchmark: [{done}/{len(todo)} {el:6.0f} s, eta {eta:5.0f} s] {r['label']}: {verdict}",
               file=sys.stderr, flush=True)
 

@@ -45,6 +45,7 @@ def summarise(results: list[dict]) -> dict:
         "glitchy_cases": sum(1 for r in scored if r.get("glitches")),
         "glitchy_right": sum(1 for r in scored if r.get("glitches") and r["kind_ok"]),
         **_compound_headline(effects),
+        **_detuned_headline(scored),
         "seconds_per_case_median": float(np.median(secs)) if secs else float("nan"),
         "seconds_per_case_max": float(np.max(secs)) if secs else float("nan"),
     }
@@ -69,6 +70,15 @@ def summarise(results: list[dict]) -> dict:
             "by_plant": group("plant"),
             "improvement_quantiles": {q: float(np.nanquantile(imp, q)) if imp else float("nan")
                                       for q in (0.1, 0.25, 0.5, 0.75, 0.9)}}
+
+
+def _detuned_headline(scored: list) -> dict:
+    """Of the cases with a detuned nominal (``--detune``): how many, and the share whose answers
+    refitted the detuned value (``nominal_value``)."""
+    detuned = [r for r in scored if r.get("detuned")]
+    if not detuned:
+        return {}
+    return {"detuned_cases": len(detuned), "detuned_named": _share(r["detuned_named"] for r in detuned)}
 
 
 def _compound_headline(effects: list) -> dict:
@@ -119,6 +129,8 @@ def markdown(summary: dict, *, seed: int | None = None) -> str:
                 f"{h.get('second_visible', h['compound_cases'])}, both in {h.get('both_visible', h['compound_cases'])})"
                 f": some answer names the first / the second / both | {_pct(h['first_found'])} / "
                 f"{_pct(h['second_found'])} / {_pct(h['both_found'])} | |"] if "compound_cases" in h else []),
+             *([f"| nominal detuned ({h['detuned_cases']} cases, one storage value): the value refitted "
+                f"(nominal_value) | {_pct(h['detuned_named'])} | |"] if "detuned_cases" in h else []),
              f"| time per case, median / max | {h['seconds_per_case_median']:.0f} s / "
              f"{h['seconds_per_case_max']:.0f} s | |", "",
              "| held-out improvement quantile | " + " | ".join(f"{int(q * 100)} %" for q in

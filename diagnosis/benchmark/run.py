@@ -53,6 +53,10 @@ class Score:
     also_visible: float = float("nan")
     answers: list = field(default_factory=list)
     parameters: dict = field(default_factory=dict)
+    # a detuned nominal (--detune, detune.py): what was detuned, and whether a nominal_value answer
+    # refitted that parameter (None without detuning)
+    detuned: dict = field(default_factory=dict)
+    detuned_named: bool | None = None
     seconds_generate: float = 0.0
     seconds_diagnose: float = 0.0
     error: str = ""
@@ -108,8 +112,10 @@ def bindings(rec: Realised, constant=()) -> tuple[list[str], list[str]]:
             [f"{o.name}={o.name}:{o.unit}" for o in rec.plant.outputs if o.name not in constant])
 
 
-def score_case(rec: Realised, report) -> Score:
-    """Compare the diagnosis `report` (its JSON form) with the truth of `rec`."""
+def score_case(rec: Realised, report, detuned: dict | None = None) -> Score:
+    """Compare the diagnosis `report` (its JSON form) with the truth of `rec`.  With `detuned` (a
+    nominal detuned by :func:`~diagnosis.benchmark.detune.detuned_nominal`), the answers but the
+    ``nominal_value`` ones are scored and whether one of those refitted the detuned value is noted."""
     spec, eff = rec.spec, rec.effect
     s = Score(spec.label, spec.plant, rec.plant.model, spec.kind,
               "" if eff is None else eff.place, change=rec.change, ratio=spec.ratio,
@@ -117,6 +123,11 @@ def score_case(rec: Realised, report) -> Score:
     data = report if isinstance(report, dict) else report.to_json()
     found = [e for e in data.get("missing_physics", []) if e.get("kind", "none") != "none"]
     s.answers = [f"{e['kind']} @ {e['attached_to']}" for e in found]
+    if detuned:
+        s.detuned = dict(detuned)
+        s.detuned_named = any(e["kind"] == "nominal_value" and detuned["parameter"] in e.get("parameters", {})
+                              for e in found)
+        found = [e for e in found if e["kind"] != "nominal_value"]
     s.judge = str(data.get("fit", {}).get("judge", ""))
     s.answer_kind = found[0]["kind"] if found else "none"
     s.answer_place = found[0]["attached_to"] if found else ""
@@ -155,11 +166,14 @@ def _names(found: list, kind: str, places: set) -> bool:
 
 
 def run_case(spec: CaseSpec, plants: dict, workdir: Path, *, max_effects: int = 2,
-             second: CaseSpec | None = None) -> dict:
+             second: CaseSpec | None = None, detune: float = 0.0) -> dict:
     """Realise, write, diagnose and score one case (with the `second` effect too: a compound case,
-    :mod:`diagnosis.benchmark.compound`); never raises (errors are scored)."""
+    :mod:`diagnosis.benchmark.compound`; against a nominal detuned by the fraction `detune`:
+    :mod:`diagnosis.benchmark.detune`); never raises (errors are scored)."""
     from ..diagnose import diagnose
+    from .detune import detuned_nominal
     plant = plants[spec.plant]()
+    nominal, detuned = detuned_nominal(plant.model, spec.seed, detune)
     label = compound_label(spec, second)
     t0 = time.perf_counter()
     try:
@@ -175,11 +189,11 @@ def run_case(spec: CaseSpec, plants: dict, workdir: Path, *, max_effects: int = 
     ins, outs = bindings(rec, constant)
     try:
         # the recording starts where the plant rests, which a user states (diagnose's x0)
-        report = diagnose(plant.model, str(path), inputs=ins, outputs=outs, max_effects=max_effects,
+        report = diagnose(nominal, str(path), inputs=ins, outputs=outs, max_effects=max_effects,
                           x0=plant.nominal_x0)
-        score = score_case(rec, report)
+        score = score_case(rec, report, detuned)
     except Exception as exc:
-        score = score_case(rec, {"missing_physics": [], "fit": {"nominal": {}, "improved": {}}})
+        score = score_case(rec, {"missing_physics": [], "fit": {"nominal": {}, "improved": {}}}, detuned)
         score.kind_ok = score.place_ok = score.kind_or_indistinguishable_ok = False
         score.answer_kind = "error"
         score.error = f"{type(exc).__name__}: {exc}"

@@ -682,10 +682,16 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
         return Round(None, [], dict(reference), dict(reference), scores=[],
                      note=f"graph location failed: {type(exc).__name__}: {exc}")
     places, springs = further_places(graph, scores, top, train)
-    done = {(c.kind, c.place) for r in rounds if r.chosen is not None and r.chosen.candidate is not None
-            for c in getattr(r.chosen.candidate, "members", (r.chosen.candidate,))}
+    earlier = [c for r in rounds if r.chosen is not None and r.chosen.candidate is not None
+               for c in getattr(r.chosen.candidate, "members", (r.chosen.candidate,))]
+    done = {(c.kind, c.place) for c in earlier}
+    # an element an earlier round changed (a storage's value or law) is not changed again: a spring's
+    # value refitted in round 1 and refitted again with a cubic term in round 2 answered the rest of
+    # round 1's fit as a cubic spring (a detuned hydraulic null, oil volume C2)
+    targets = {c.target for c in earlier if c.target is not None}
     cands = [c for s in places for c in candidates(graph, s.place, regime_variables=rv, experiment=train, x0=x0)
-             if (c.kind, c.place) not in done and (s not in springs or on_storage(graph, c))]
+             if (c.kind, c.place) not in done and c.target not in targets - {None}
+             and (s not in springs or on_storage(graph, c))]
     evidence, cands, pruned = _features(graph, scores, [s.place for s in places], train, x0, rv, cands, say,
                                         f"{label}: feature regression")
     fit_part, fit_x0 = _fit_window(train, res.run, x0)

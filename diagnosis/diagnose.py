@@ -688,9 +688,9 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     # an element an earlier round changed (a storage's value or law) is not changed again: a spring's
     # value refitted in round 1 and refitted again with a cubic term in round 2 answered the rest of
     # round 1's fit as a cubic spring (a detuned hydraulic null, oil volume C2)
-    targets = {c.target for c in earlier if c.target is not None}
+    changed = set().union(*(pairs.targets(c) for c in earlier))
     cands = [c for s in places for c in candidates(graph, s.place, regime_variables=rv, experiment=train, x0=x0)
-             if (c.kind, c.place) not in done and c.target not in targets - {None}
+             if (c.kind, c.place) not in done and not pairs.targets(c) & changed
              and (s not in springs or on_storage(graph, c))]
     evidence, cands, pruned = _features(graph, scores, [s.place for s in places], train, x0, rv, cands, say,
                                         f"{label}: feature regression")

@@ -43,7 +43,7 @@ from .fit_in_turn import train_cost
 from .kinds.base import extends
 from .twins import CandidateGroup
 
-__all__ = ["CandidatePair", "TRIGGER", "SINGLES", "wanted", "pair_candidates", "effect_count"]
+__all__ = ["CandidatePair", "TRIGGER", "SINGLES", "wanted", "pair_candidates", "effect_count", "targets"]
 
 #: pairs are fitted when some output's held-out NRMSE is at least this many times its floor
 TRIGGER = 2.0
@@ -67,6 +67,14 @@ def effect_count(candidate) -> int:
     return len(candidate.members) if isinstance(candidate, CandidatePair) else 1
 
 
+def targets(candidate) -> set:
+    """The elements `candidate` (a single, a pair or a group of twins) changes: its members'
+    :attr:`~diagnosis.catalogue.Candidate.target` (a storage's value or law).  Two effects on one
+    element are not combined: each kind rewrites the element's law from the one it finds, so the
+    order of their builds would decide the model."""
+    return {c.target for c in getattr(candidate, "members", (candidate,)) if getattr(c, "target", None)}
+
+
 def wanted(nominal: dict, floor: dict) -> bool:
     """Whether the nominal model's held-out NRMSE (`nominal`, per output) is at least
     :data:`TRIGGER` times the noise floor (`floor`) on some output: a residual no single
@@ -79,7 +87,7 @@ def pair_candidates(fits, n: int = SINGLES) -> list[CandidatePair]:
     (``extra["train_cost"]``; one per kind and place), each member started where its fit ended
     (values clipped into its bounds: a saturation's unused limit is settled beyond them);
     lowest summed training cost first.  No pair of one place where one kind extends the other,
-    and none whose members share a parameter name."""
+    and none whose members share a parameter name or change one element (:func:`targets`)."""
     singles, seen = [], set()
     for f in sorted((f for f in fits if f.candidate is not None and not hasattr(f.candidate, "members")
                      and np.isfinite(train_cost(f))), key=train_cost):
@@ -91,7 +99,8 @@ def pair_candidates(fits, n: int = SINGLES) -> list[CandidatePair]:
     for a, b in combinations(singles, 2):
         if extends(a.candidate, b.candidate) or extends(b.candidate, a.candidate):
             continue
-        if {p.name for p in a.candidate.params} & {p.name for p in b.candidate.params}:
+        if ({p.name for p in a.candidate.params} & {p.name for p in b.candidate.params}
+                or targets(a.candidate) & targets(b.candidate)):
             continue
         pairs.append((train_cost(a) + train_cost(b),
                       CandidatePair((_started(a), _started(b)))))

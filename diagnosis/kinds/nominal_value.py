@@ -3,9 +3,10 @@ value of a linear I or C is off (a mass or inertia from a drawing, an inductance
 capacity from a data sheet), refitted alone.
 
 A model written from a rig's documentation carries values a few per cent off; their error is a
-residual like any missing effect's, and without this kind it was answered by one: a carriage 3 %
-heavier than its nominal as a Dahl hysteresis, a load inertia 3 % off as hysteresis at the motor.
-One candidate per linear I or C on the junction, its one parameter the element's own (refitted
+residual like any missing effect's, and without this kind it was answered by one: null recordings
+of a mass-spring-damper against a nominal spring 3 % stiff or mass 3 % heavy, of an RLC circuit
+against an inductance or a capacitance 3 % off and of a hydraulic circuit against a pipe's
+inertance 3 % high all answered a cubic spring (seed 2323).  One candidate per linear I or C on the junction, its one parameter the element's own (refitted
 under its name by :meth:`Candidate.build <diagnosis.catalogue.Candidate.build>`), within a factor 3
 either way.  An R is left out: a resistance too low is the viscous friction or leak the vocabulary
 already adds, and a C's value refitted with a cubic term is ``nonlinear_stiffness``, which the
@@ -13,7 +14,7 @@ choice's price per parameter tells from this one.
 """
 from __future__ import annotations
 
-from ..catalogue_common import ParamSpec
+from ..catalogue_common import ParamSpec, junction_elements
 from .base import Kind, Proposal, register
 from .storage_common import capacitors
 
@@ -53,7 +54,6 @@ class NominalValue(Kind):
 
 def _linear_storages(site) -> list:
     """The I and C elements on the junction whose law is their own positive value."""
-    from ..catalogue_common import junction_elements
     inertias = [e for e, _ in junction_elements(site.graph, site.name) if e.kind == "I"]
     return [e for e in inertias + capacitors(site)
             if getattr(e, "value", None) is not None and float(e.value.value) > 0]

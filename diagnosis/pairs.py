@@ -68,11 +68,14 @@ def effect_count(candidate) -> int:
 
 
 def targets(candidate) -> set:
-    """The elements `candidate` (a single, a pair or a group of twins) changes: its members'
-    :attr:`~diagnosis.catalogue.Candidate.target` (a storage's value or law).  Two effects on one
-    element are not combined: each kind rewrites the element's law from the one it finds, so the
-    order of their builds would decide the model."""
-    return {c.target for c in getattr(candidate, "members", (candidate,)) if getattr(c, "target", None)}
+    """The elements whose law `candidate` (a single, a pair or a group of twins) rewrites: its
+    members' :attr:`~diagnosis.catalogue.Candidate.target` (a storage's cubic term, dead band or end
+    stop; not a value refitted alone, :attr:`Kind.rewrites_target
+    <diagnosis.kinds.base.Kind.rewrites_target>`).  Two such effects on one element are not
+    combined: each rewrites the element's law from the one it finds, so the order of their builds
+    would decide the model.  (Two that refit one parameter share its name, checked apart.)"""
+    return {c.target for c in getattr(candidate, "members", (candidate,))
+            if getattr(c, "target", None) and c.definition.rewrites_target}
 
 
 def wanted(nominal: dict, floor: dict) -> bool:

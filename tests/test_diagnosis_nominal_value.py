@@ -90,3 +90,29 @@ def test_two_effects_are_not_combined_on_one_element(tmp_path):
     assert (r["label"], r["detuned"]["parameter"]) == ("022-msd-backlash@storage:k", "m")
     assert r["answers"] == ["nominal_value @ junction v_mass", "backlash @ junction v_mass"]
     assert r["kind_ok"] and r["detuned_named"] and r["improvement"] > 0.9
+
+
+def test_a_value_refitted_alone_combines_with_a_law_rewritten_on_its_element():
+    """A spring's value refitted and a dead band cut into its law give one model in either order
+    of their builds; two law rewrites (a dead band and a cubic term) do not, and are never combined
+    (pairs.targets)."""
+    import sympy as sp
+
+    from diagnosis.pairs import targets
+    msd = library.build("mass-spring-damper")
+    at = candidates(msd, Place("junction", "v_mass"))
+    value = next(c for c in at if c.kind == "nominal_value" and c.target == "k")
+    play = next(c for c in at if c.kind == "backlash")
+    cubic = next(c for c in at if c.kind == "nonlinear_stiffness")
+    assert targets(value) == set() and targets(play) == targets(cubic) == {"k"}
+
+    def rates(first, second, values):
+        g = second.build(first.build(msd, {k: v for k, v in values.items() if k in first.guesses()}),
+                         {k: v for k, v in values.items() if k in second.guesses()})
+        eqs = g.equations()
+        params = {sp.Symbol(n): p.value for n, p in g.parameters().items()}
+        return [sp.simplify(f.subs(params)) for f in eqs.f]
+
+    values = {"k": 4.4, "b_play_k": 0.05, "k3_k": 2.0}
+    assert rates(value, play, values) == rates(play, value, values)
+    assert rates(cubic, play, values) != rates(play, cubic, values)

@@ -125,6 +125,10 @@ class Kind:
     #: parameter index}; the other parameters at 0 reduce this law to the simpler one
     #: (:meth:`start_from`)
     nests: ClassVar[dict] = {}
+    #: whether :meth:`build` rewrites the law of the candidate's target element (a storage kind's
+    #: cubic term, dead band or end stop); a kind that only refits the target's own value does not,
+    #: and so combines with one that does (:func:`diagnosis.pairs.targets`)
+    rewrites_target: ClassVar[bool] = True
 
     def propose(self, site: Site) -> list[Proposal]:
         """The candidates of this kind at `site` (none where the domain does not fit)."""

@@ -26,6 +26,7 @@ RANGE = 3.0
 class NominalValue(Kind):
     name = "nominal_value"
     doors = ("1", "0")
+    rewrites_target = False
 
     def propose(self, site):
         out = []

@@ -90,7 +90,7 @@ def pair_candidates(fits, n: int = SINGLES) -> list[CandidatePair]:
     (``extra["train_cost"]``; one per kind and place), each member started where its fit ended
     (values clipped into its bounds: a saturation's unused limit is settled beyond them);
     lowest summed training cost first.  No pair of one place where one kind extends the other,
-    and none whose members share a parameter name or change one element (:func:`targets`)."""
+    and none whose members share a parameter name or rewrite one element's law (:func:`targets`)."""
     singles, seen = [], set()
     for f in sorted((f for f in fits if f.candidate is not None and not hasattr(f.candidate, "members")
                      and np.isfinite(train_cost(f))), key=train_cost):

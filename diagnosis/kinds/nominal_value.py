@@ -6,11 +6,12 @@ A model written from a rig's documentation carries values a few per cent off; th
 residual like any missing effect's, and without this kind it was answered by one: null recordings
 of a mass-spring-damper against a nominal spring 3 % stiff or mass 3 % heavy, of an RLC circuit
 against an inductance or a capacitance 3 % off and of a hydraulic circuit against a pipe's
-inertance 3 % high all answered a cubic spring (seed 2323).  One candidate per linear I or C on the junction, its one parameter the element's own (refitted
-under its name by :meth:`Candidate.build <diagnosis.catalogue.Candidate.build>`), within a factor 3
-either way.  An R is left out: a resistance too low is the viscous friction or leak the vocabulary
-already adds, and a C's value refitted with a cubic term is ``nonlinear_stiffness``, which the
-choice's price per parameter tells from this one.
+inertance 3 % high all answered a cubic spring (seed 2323).  One candidate per linear I or C on
+the junction, its one parameter the element's own (refitted under its name by
+:meth:`Candidate.build <diagnosis.catalogue.Candidate.build>`), within a factor 3 either way.
+An R is left out: a resistance too low is the viscous friction or leak the vocabulary already
+adds, and one too high would tie with them.  A C's value refitted with a cubic term is
+``nonlinear_stiffness``, which the choice's price per parameter tells from this one.
 """
 from __future__ import annotations
 

@@ -35,7 +35,7 @@ import numpy as np
 from .errors import BondcosimError
 from .fit import needs_explaining, unpriced_error, usable_fits
 from .fit_in_turn import HOPELESS, train_cost
-from .pairs import effect_count, targets
+from .pairs import claims, clashes, effect_count
 
 __all__ = ["ALTERNATIVES", "alternatives", "backfit", "build_effects", "refittable"]
 
@@ -59,8 +59,8 @@ def alternatives(chosen, fits, reference: dict, floor: dict, n: int = ALTERNATIV
                  changed=frozenset()) -> list:
     """The round's chosen fit and the successful fits of the next best kinds or places (one fit per
     kind and place, lowest held-out error on the outputs that needed explaining first), at most
-    `n` in all, the chosen first; none with a parameter named in `taken` or changing an element
-    in `changed` (the other effects': :func:`~diagnosis.pairs.targets`), and none adding another
+    `n` in all, the chosen first; none with a parameter named in `taken` or rewriting an element
+    in `changed` (the other effects' claims: :func:`~diagnosis.pairs.clashes`), and none adding another
     number of effects than the chosen one (:func:`~diagnosis.pairs.effect_count`): a round's pairs
     must not make a single effect two, beyond the diagnosis' ``max_effects`` (with pairs fitted
     after every first answer, the cylinder rig's recording answered three), nor a pair one."""
@@ -70,8 +70,7 @@ def alternatives(chosen, fits, reference: dict, floor: dict, n: int = ALTERNATIV
     out, seen = [], set()
     for fit in [chosen] + ranked:
         if len(out) < n and fit.candidate is not None and _key(fit) not in seen \
-                and effect_count(fit.candidate) == count and not taken & {p.name for p in fit.candidate.params} \
-                and not changed & targets(fit.candidate):
+                and effect_count(fit.candidate) == count and not clashes(fit.candidate, (taken, changed)):
             out.append(fit)
             seen.add(_key(fit))
     return out
@@ -136,19 +135,17 @@ def backfit(graph, rounds, *, fit, floor: dict, judge_model, choose, with_values
             say("backfitting", f"round {rounds.index(r) + 1} left as chosen: without it, {exc}")
             continue
         # a candidate named for the nominal model may clash with the others' names (not with the
-        # nominal's: a storage kind refits its element's own linear value)
-        taken = {p.name for o in others for p in o.candidate.params}
-        # nor change an element another effect changes: a backlash in front of a spring that a later
-        # round gave a cubic term, fitted on that model, was built before the cubic term in the final
-        # one, whose held-out error was five times the nominal's (the detuned benchmark's msd, seed
-        # 6363 on the fast plants, case 022)
-        changed = set().union(*(targets(o.candidate) for o in others))
-        tried = [(f.candidate, f.values)
-                 for f in alternatives(r.chosen, r.fits, r.reference, floor, n, taken, changed)]
+        # nominal's: a storage kind refits its element's own linear value), nor rewrite an element
+        # another effect rewrites: a backlash in front of a spring that a later round gave a cubic
+        # term, fitted on that model, was built before the cubic term in the final one, whose
+        # held-out error was five times the nominal's (the detuned benchmark's msd, seed 6363 on the
+        # fast plants, case 022)
+        claimed = claims(o.candidate for o in others)
+        tried = [(f.candidate, f.values) for f in alternatives(r.chosen, r.fits, r.reference, floor, n, *claimed)]
         keys = {_key(c) for c, _ in tried}
         unexplained = needs_explaining(reference, floor)
         tried += [(c, None) for c in (sensors(unexplained) if sensors is not None else [])
-                  if _key(c) not in keys and not taken & {p.name for p in c.params}]
+                  if _key(c) not in keys and not clashes(c, claimed)]
         refits, best = [], np.inf
         for k, (cand, ended) in enumerate(tried, 1):
             if ended is not None and hasattr(cand, "with_starts"):     # a group of twins: its own guesses

@@ -685,15 +685,14 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     earlier = [c for r in rounds if r.chosen is not None and r.chosen.candidate is not None
                for c in getattr(r.chosen.candidate, "members", (r.chosen.candidate,))]
     done = {(c.kind, c.place) for c in earlier}
-    # nor is an element's law an earlier round rewrote rewritten again (pairs.targets), nor a
-    # parameter an earlier round fitted fitted again: a spring's value refitted in round 1 and
-    # refitted with a cubic term in round 2 answered the rest of round 1's fit as a cubic spring
-    # (a detuned hydraulic null, oil volume C2)
-    changed = set().union(*(pairs.targets(c) for c in earlier))
-    fitted = {p.name for c in earlier for p in c.params}
+    # nor is a parameter an earlier round fitted fitted again, nor an element's law it rewrote
+    # rewritten again (pairs.clashes): a spring's value refitted in round 1 and refitted with a
+    # cubic term in round 2 answered the rest of round 1's fit as a cubic spring (a detuned
+    # hydraulic null, oil volume C2)
+    claimed = pairs.claims(earlier)
     cands = [c for s in places for c in candidates(graph, s.place, regime_variables=rv, experiment=train, x0=x0)
-             if (c.kind, c.place) not in done and not pairs.targets(c) & changed
-             and not fitted & {p.name for p in c.params} and (s not in springs or on_storage(graph, c))]
+             if (c.kind, c.place) not in done and not pairs.clashes(c, claimed)
+             and (s not in springs or on_storage(graph, c))]
     evidence, cands, pruned = _features(graph, scores, [s.place for s in places], train, x0, rv, cands, say,
                                         f"{label}: feature regression")
     fit_part, fit_x0 = _fit_window(train, res.run, x0)

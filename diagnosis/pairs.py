@@ -43,7 +43,8 @@ from .fit_in_turn import train_cost
 from .kinds.base import extends
 from .twins import CandidateGroup
 
-__all__ = ["CandidatePair", "TRIGGER", "SINGLES", "wanted", "pair_candidates", "effect_count", "targets"]
+__all__ = ["CandidatePair", "TRIGGER", "SINGLES", "wanted", "pair_candidates", "effect_count", "targets", "claims",
+           "clashes"]
 
 #: pairs are fitted when some output's held-out NRMSE is at least this many times its floor
 TRIGGER = 2.0
@@ -78,6 +79,21 @@ def targets(candidate) -> set:
             if getattr(c, "target", None) and c.definition.rewrites_target}
 
 
+def claims(candidates) -> tuple[set, set]:
+    """``(parameter names, rewritten elements)`` of `candidates` together: what another effect
+    joining them must not fit again or rewrite again (:func:`clashes`)."""
+    candidates = list(candidates)
+    return ({p.name for c in candidates for p in c.params}, set().union(*(targets(c) for c in candidates)))
+
+
+def clashes(candidate, claimed: tuple) -> bool:
+    """Whether `candidate` fits a parameter named in `claimed` (:func:`claims`) or rewrites the law
+    of an element claimed there: one model with both would refit one value twice, or depend on the
+    order of the two builds.  The one rule of the rounds, the pairs and the backfit."""
+    names, rewritten = claimed
+    return bool(names & {p.name for p in candidate.params} or rewritten & targets(candidate))
+
+
 def wanted(nominal: dict, floor: dict) -> bool:
     """Whether the nominal model's held-out NRMSE (`nominal`, per output) is at least
     :data:`TRIGGER` times the noise floor (`floor`) on some output: a residual no single
@@ -90,7 +106,7 @@ def pair_candidates(fits, n: int = SINGLES) -> list[CandidatePair]:
     (``extra["train_cost"]``; one per kind and place), each member started where its fit ended
     (values clipped into its bounds: a saturation's unused limit is settled beyond them);
     lowest summed training cost first.  No pair of one place where one kind extends the other,
-    and none whose members share a parameter name or rewrite one element's law (:func:`targets`)."""
+    and none whose members share a parameter name or rewrite one element's law (:func:`clashes`)."""
     singles, seen = [], set()
     for f in sorted((f for f in fits if f.candidate is not None and not hasattr(f.candidate, "members")
                      and np.isfinite(train_cost(f))), key=train_cost):
@@ -102,8 +118,7 @@ def pair_candidates(fits, n: int = SINGLES) -> list[CandidatePair]:
     for a, b in combinations(singles, 2):
         if extends(a.candidate, b.candidate) or extends(b.candidate, a.candidate):
             continue
-        if ({p.name for p in a.candidate.params} & {p.name for p in b.candidate.params}
-                or targets(a.candidate) & targets(b.candidate)):
+        if clashes(a.candidate, claims([b.candidate])):
             continue
         pairs.append((train_cost(a) + train_cost(b),
                       CandidatePair((_started(a), _started(b)))))

@@ -66,8 +66,8 @@ def test_a_wrong_first_answer_that_leaves_the_residual_far_above_the_noise_is_me
     """Seed 8181, compound case 000: a carriage whose 1.66 s force lag and 2.75 N constant load
     each fit poorly alone.  Round 1 chose a saturation of the force input (velocity held-out NRMSE
     1.61 -> 0.79, five times its floor), and round 2 found nothing on that wrong model.  Pairs are
-    now fitted wherever round 1's answer leaves some output at twice its floor or more, and the
-    pair of the two concealed effects wins with both values."""
+    now fitted where round 2 finds nothing on round 1's single answer while some output stays at
+    twice its floor or more, and the pair of the two concealed effects wins with both values."""
     spec = draw_cases(40, 8181, PLANTS)[0]
     second = second_effect(spec, PLANTS[spec.plant]())
     r = run_case(spec, PLANTS, tmp_path, second=second)

@@ -297,7 +297,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     """
     from .catalogue import candidates
     from .fit import fit_candidate, noise_floor
-    from .fit_in_turn import fit_in_turn
+    from .fit_in_turn import fit_in_turn, member_refits
     from .graph_location import locate_on_graph
     from .initial_state import estimate_initial_state
     from .locate import locate_regime, regime_variables, significant_windows
@@ -414,6 +414,9 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     fits, best = fit_in_turn(cands, fit_one, say, "fitting")
     fits += _companion_fits(graph, fits, place_list, cand_part, rv, fit_one, say, "fitting", best, x0)
     fits += _twin_fits(graph, fits, cand_part, rv, fit_one, say, "fitting", best, x0, len(place_list))
+    if int(max_effects) >= 2:      # an effect beside a storage value a few per cent off (pairs.value_pairs)
+        valued = fit_in_turn(pairs.value_pairs(fits), fit_one, say, "fitting", best=best, suffix=", with values")[0]
+        fits = member_refits(fits + valued, fit_one, say, "fitting", "nominal_value")
     if uncertain:
         say("fitting", f"nominal parameters {', '.join(uncertain)} alone")
         fits.append(fit_candidate(graph, None, fit_part, held, uncertain=uncertain, x0=fit_x0,

@@ -43,13 +43,15 @@ from .fit_in_turn import train_cost
 from .kinds.base import extends
 from .twins import CandidateGroup
 
-__all__ = ["CandidatePair", "TRIGGER", "SINGLES", "wanted", "pair_candidates", "effect_count", "targets", "claims",
-           "clashes"]
+__all__ = ["CandidatePair", "TRIGGER", "SINGLES", "VALUED", "wanted", "pair_candidates", "value_pairs", "effect_count",
+           "targets", "claims", "clashes"]
 
 #: pairs are fitted when some output's held-out NRMSE is at least this many times its floor
 TRIGGER = 2.0
 #: the single-place fits (lowest training error first) whose pairs are fitted: at most 15 pairs
 SINGLES = 6
+#: the effect fits (lowest training error first) refitted with their place's storage value
+VALUED = 3
 
 
 @dataclass(frozen=True)
@@ -64,8 +66,11 @@ class CandidatePair(CandidateGroup):
 
 def effect_count(candidate) -> int:
     """The effects a round's chosen `candidate` adds: two for a pair, else one (a group of twins
-    is one effect at several places)."""
-    return len(candidate.members) if isinstance(candidate, CandidatePair) else 1
+    is one effect at several places).  A storage value refitted beside an effect
+    (:func:`value_pairs`) adds no physics: such a pair is one effect."""
+    if not isinstance(candidate, CandidatePair):
+        return 1
+    return max(1, sum(m.kind != "nominal_value" for m in candidate.members))
 
 
 def targets(candidate) -> set:
@@ -131,3 +136,21 @@ def _started(fit):
     cand = fit.candidate
     ended = {p.name: float(np.clip(fit.values.get(p.name, p.guess), p.lower, p.upper)) for p in cand.params}
     return replace(cand, starts=(ended,) + tuple(cand.starts))
+
+
+def value_pairs(fits, n: int = VALUED) -> list[CandidatePair]:
+    """The `n` successful single-place effect fits of `fits` with the lowest training cost, each
+    paired with the ``nominal_value`` fit at its own place that fitted best alone and whose value
+    the effect does not refit itself (:func:`clashes`), each member started where its fit ended:
+    the effect with its junction's mass, inertia, inductance or spring refitted beside it."""
+    singles = [f for f in fits if f.candidate is not None and not hasattr(f.candidate, "members")
+               and np.isfinite(train_cost(f))]
+    values = sorted((f for f in singles if f.candidate.kind == "nominal_value"), key=train_cost)
+    out, seen = [], set()
+    for f in sorted((f for f in singles if f.candidate.kind != "nominal_value"), key=train_cost):
+        value = next((v for v in values if str(v.candidate.place) == str(f.candidate.place)
+                      and not clashes(f.candidate, claims([v.candidate]))), None)
+        if value is not None and str(f.candidate) not in seen and len(out) < n:
+            seen.add(str(f.candidate))
+            out.append(CandidatePair((_started(f), _started(value))))
+    return out

@@ -82,13 +82,13 @@ def test_two_effects_are_not_combined_on_one_element(tmp_path):
     and the backfit replaced round 1's answer by a backlash in front of that spring, fitted on the
     model with the cubic term built first and built after it in the final model, whose held-out
     error was five times the nominal's.  Now no two effects change one element (pairs.targets):
-    the mass's value, then the backlash."""
+    the backlash and the mass's value."""
     from diagnosis.benchmark.run import run_case
     fast = {name: PLANTS[name] for name in ("msd", "rlc", "geared-inertias", "carriage", "hydraulic",
                                             "drivetrain", "dc-motor", "tanks")}
     r = run_case(draw_cases(40, 6363, fast)[22], fast, tmp_path, detune=0.05)
     assert (r["label"], r["detuned"]["parameter"]) == ("022-msd-backlash@storage:k", "m")
-    assert r["answers"] == ["nominal_value @ junction v_mass", "backlash @ junction v_mass"]
+    assert sorted(r["answers"]) == ["backlash @ junction v_mass", "nominal_value @ junction v_mass"]
     assert r["kind_ok"] and r["detuned_named"] and r["improvement"] > 0.9
 
 
@@ -116,3 +116,20 @@ def test_a_value_refitted_alone_combines_with_a_law_rewritten_on_its_element():
     values = {"k": 4.4, "b_play_k": 0.05, "k3_k": 2.0}
     assert rates(value, play, values) == rates(play, value, values)
     assert rates(cubic, play, values) != rates(play, cubic, values)
+
+
+def test_friction_beside_a_wrong_inertia_is_found_with_it(tmp_path):
+    """The detuned benchmark's geared pair of inertias with Coulomb + viscous friction at the
+    output shaft and that shaft's inertia 3 % heavy in the nominal (seed 7474 on the fast plants,
+    case 032).  Each friction alone absorbed part of the inertia's error, a Dahl friction's elastic
+    phase most, and won (held-out error 1.5 times the floor); the inertia refitted afterwards could
+    no longer pay.  Now the best effects are fitted with their junction's value beside them
+    (pairs.value_pairs): the friction and the inertia together, the error at the floor."""
+    from diagnosis.benchmark.run import run_case
+    fast = {name: PLANTS[name] for name in ("msd", "rlc", "geared-inertias", "carriage", "hydraulic",
+                                            "drivetrain", "dc-motor", "tanks")}
+    r = run_case(draw_cases(40, 7474, fast)[32], fast, tmp_path, detune=0.05)
+    assert (r["label"], r["detuned"]["parameter"]) == ("032-geared-inertias-coulomb_viscous_friction@junction:w2", "J2")
+    assert r["answers"] == ["coulomb_viscous_friction @ junction w2", "nominal_value @ junction w2"]
+    assert r["parameters"]["Fc_w2"] == pytest.approx(r["effect"]["magnitude"], rel=0.05)
+    assert r["kind_ok"] and r["detuned_named"] and r["improvement"] > 0.7

@@ -7,7 +7,7 @@ from diagnosis.benchmark.plants import PLANTS
 from diagnosis.benchmark.run import run_case
 from diagnosis.catalogue import Candidate, ParamSpec
 from diagnosis.fit import CandidateFit
-from diagnosis.pairs import effect_count, pair_candidates, wanted
+from diagnosis.pairs import effect_count, pair_candidates, value_pairs, wanted
 from diagnosis.place import Place
 
 
@@ -38,6 +38,24 @@ def test_pairs_are_of_the_best_singles_by_training_error_started_where_each_ende
         "valve_lag at input F and coulomb_friction at junction v"]
     assert got[1].starts[0] == {"y_max": 10.0, "tau": 0.12}
     assert effect_count(got[0]) == 2 and effect_count(fits[0].candidate) == 1
+
+
+def test_the_best_effects_are_paired_with_their_own_places_storage_value():
+    fits = [_fit("coulomb_friction", "junction v", ["Fc"], 0.050),
+            _fit("hysteresis", "junction v", ["Fh", "sigma"], 0.040, {"Fh": 3.0, "sigma": 4.0}),
+            _fit("nominal_value", "junction v", ["m"], 0.300, {"m": 1.1}),
+            _fit("nominal_value", "junction v", ["k"], 0.200, {"k": 3.9}),      # the better value alone
+            _fit("nonlinear_stiffness", "junction v", ["k", "k3"], 0.030),    # refits k itself: with m
+            _fit("valve_lag", "input F", ["tau"], 0.035),                      # no value at an input
+            _fit("viscous_friction", "junction v", ["b"], 0.060)]              # beyond the best 3
+    got = value_pairs(fits, n=3)
+    assert [str(p) for p in got] == ["nonlinear_stiffness at junction v and nominal_value at junction v",
+                                     "hysteresis at junction v and nominal_value at junction v",
+                                     "coulomb_friction at junction v and nominal_value at junction v"]
+    assert [p.members[1].params[0].name for p in got] == ["m", "k", "k"]
+    assert got[1].starts[0] == {"Fh": 3.0, "sigma": 4.0, "k": 3.9}
+    assert effect_count(got[0]) == 1         # a value refitted beside an effect is no physics of its own
+    assert effect_count(pair_candidates(fits)[0]) == 2
 
 
 def test_pairs_are_wanted_only_where_the_residual_is_clearly_beyond_the_noise():

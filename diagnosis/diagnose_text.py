@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .pairs import CandidatePair
+from .pairs import CandidatePair, effect_count
 from .report import DiagnosisReport, PlotData
 
 __all__ = ["assemble"]
@@ -251,6 +251,8 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
             lines.append(f"Round 1 first answered {chosen.extra['stalled']}, on whose model nothing more was found "
                          "while the residual stayed far above the noise; these two, fitted together "
                          "(diagnosis.pairs), explain it instead.")
+        elif isinstance(chosen.candidate, CandidatePair) and effect_count(chosen.candidate) == 1:
+            lines.append("The effect was fitted with the nominal value beside it (diagnosis.pairs.value_pairs).")
         elif isinstance(chosen.candidate, CandidatePair):
             lines.append("No single candidate explained the required share of the residual; these two were "
                          "fitted together (diagnosis.pairs).")

@@ -41,19 +41,26 @@ def test_pairs_are_of_the_best_singles_by_training_error_started_where_each_ende
 
 
 def test_the_best_effects_are_paired_with_their_own_places_storage_value():
+    given_up = _fit("nominal_value", "junction v", ["k"], np.inf, {"k": 4.0}, success=False)
+    given_up.extra.update(train_cost=0.150, abandoned=True)     # beside the effect's error: ranked all the same
     fits = [_fit("coulomb_friction", "junction v", ["Fc"], 0.050),
             _fit("hysteresis", "junction v", ["Fh", "sigma"], 0.040, {"Fh": 3.0, "sigma": 4.0}),
             _fit("nominal_value", "junction v", ["m"], 0.300, {"m": 1.1}),
-            _fit("nominal_value", "junction v", ["k"], 0.200, {"k": 3.9}),      # the better value alone
+            given_up,
+            _fit("nominal_value", "junction w", ["J"], 0.100, {"J": 2.1}),      # the best, at another place
             _fit("nonlinear_stiffness", "junction v", ["k", "k3"], 0.030),    # refits k itself: with m
-            _fit("valve_lag", "input F", ["tau"], 0.035),                      # no value at an input
-            _fit("viscous_friction", "junction v", ["b"], 0.060)]              # beyond the best 3
-    got = value_pairs(fits, n=3)
+            _fit("viscous_friction", "junction u", ["b"], 0.031),              # no value at u: no pair
+            _fit("sensor_offset", "output x", ["off"], 0.035),                  # a sensor: the best value
+            _fit("coulomb_viscous_friction", "junction v", ["Fc2", "b2"], 0.045),
+            _fit("valve_lag", "input F", ["tau"], 0.060)]                      # beyond the best 4
+    got = value_pairs(fits, n=4)
     assert [str(p) for p in got] == ["nonlinear_stiffness at junction v and nominal_value at junction v",
+                                     "sensor_offset at output x and nominal_value at junction w",
                                      "hysteresis at junction v and nominal_value at junction v",
-                                     "coulomb_friction at junction v and nominal_value at junction v"]
-    assert [p.members[1].params[0].name for p in got] == ["m", "k", "k"]
-    assert got[1].starts[0] == {"Fh": 3.0, "sigma": 4.0, "k": 3.9}
+                                     "coulomb_viscous_friction at junction v and nominal_value at junction v",
+                                     "coulomb_friction at junction v and nominal_value at junction v"]  # nested
+    assert [p.members[1].params[0].name for p in got] == ["m", "J", "k", "k", "k"]
+    assert got[2].starts[0] == {"Fh": 3.0, "sigma": 4.0, "k": 4.0}
     assert effect_count(got[0]) == 1         # a value refitted beside an effect is no physics of its own
     assert effect_count(pair_candidates(fits)[0]) == 2
 

@@ -54,6 +54,40 @@ def test_the_alternatives_are_the_chosen_then_the_next_best_kinds_and_places_onc
     assert pair not in got and len(got) == 3
 
 
+def test_a_value_pairs_members_alone_follow_it_among_the_alternatives():
+    """A value pair is one effect (pairs.effect_count); its members alone are refitted right after
+    it, beyond the n best: its effect may end idle beside another round's effect (seed 7474's
+    detuned carriage, case 024, in the test below)."""
+    from diagnosis.catalogue import Candidate, ParamSpec
+    from diagnosis.pairs import CandidatePair
+    from diagnosis.place import Place
+    load, mass = (Candidate(k, Place("junction", "v"), [ParamSpec(n, 1.0, 0.0, 10.0, "", "")])
+                  for k, n in (("constant_load", "F0"), ("nominal_value", "m")))
+    pair = CandidateFit(CandidatePair((load, mass)), {"F0": 1.0, "m": 1.0}, {}, {"x": 0.1}, 2, True, "")
+    fits = [pair, _fit("coulomb_friction", "junction v", {"x": 0.2}), _fit("backlash", "junction v", {"x": 0.25}),
+            CandidateFit(mass, {"m": 1.0}, {}, {"x": 0.5}, 1, True, ""),
+            CandidateFit(load, {"F0": 1.0}, {}, {"x": 0.6}, 1, True, "")]
+    got = alternatives(pair, fits, {"x": 1.0}, {"x": 0.01}, n=2)
+    assert [str(f.candidate) for f in got[:3]] == ["constant_load at junction v and nominal_value at junction v",
+                                                   "nominal_value at junction v", "constant_load at junction v"]
+    assert [f.candidate.kind for f in got[3:]] == ["coulomb_friction"]
+
+
+def test_rounds_before_one_the_backfit_replaced_are_swept_again(tmp_path):
+    """Seed 7474's detuned benchmark on the fast plants, case 024: a carriage whose force arrives
+    0.05 s late, its mass 5 % light in the nominal.  Round 1 answered an input saturation, round 2 a
+    force lag; the backfit replaced round 1's by a constant load beside the mass (fitted beside the
+    lag), then round 2's lag by the delay, beside which the load ended at 5e-5 N, and the answer
+    kept it.  Round 1 is now swept again beside the delay (backfit.SWEEPS), its reference without
+    its own refitted mass: the mass alone."""
+    fast = {name: PLANTS[name] for name in ("msd", "rlc", "geared-inertias", "carriage", "hydraulic",
+                                            "drivetrain", "dc-motor", "tanks")}
+    r = run_case(draw_cases(40, 7474, fast)[24], fast, tmp_path, detune=0.05)
+    assert (r["label"], r["detuned"]["parameter"]) == ("024-carriage-transport_delay@input:F", "m")
+    assert r["answers"] == ["nominal_value @ junction v_cart", "transport_delay @ input F"]
+    assert r["kind_ok"] and r["detuned_named"] and r["improvement"] > 0.9
+
+
 def test_a_floor_above_what_a_fit_reaches_is_lowered_to_it():
     fits = [_fit("a", "p", {"x": 0.128, "v": 0.5}), _fit("b", "p", {"x": 0.2, "v": 0.01}),
             _fit("c", "p", {"x": 0.001, "v": 0.001}, success=False)]

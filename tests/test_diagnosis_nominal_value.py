@@ -26,15 +26,22 @@ def _diagnose_detuned(tmp_path, seed, index, detuned):
     return spec, diagnose(graph, str(path), inputs=inputs, outputs=outputs, x0=plant.nominal_x0)
 
 
-def test_the_candidates_are_the_linear_storages_own_values():
+def test_the_candidates_are_the_linear_storages_and_resistors_own_values():
     msd = library.build("mass-spring-damper")
     cands = [c for c in candidates(msd, Place("junction", "v_mass")) if c.kind == "nominal_value"]
-    assert [(c.target, c.params[0].name, c.params[0].guess) for c in cands] == [("m", "m", 1.0), ("k", "k", 4.0)]
+    assert [(c.target, c.params[0].name, c.params[0].guess) for c in cands] == [("m", "m", 1.0), ("k", "k", 4.0),
+                                                                                ("b", "b", 0.4)]
+    # the damper only down: more damping at the 1-junction is a viscous friction (e = b f beside e = R f)
     assert [(c.params[0].lower, c.params[0].upper) for c in cands] == [(pytest.approx(1 / 3), 3.0),
-                                                                        (pytest.approx(4 / 3), 12.0)]
+                                                                        (pytest.approx(4 / 3), 12.0),
+                                                                        (pytest.approx(0.4 / 3), 0.4)]
+    assert "resistance of b at v_mass is 0.38 N s/m, 5 % below its nominal 0.4 N s/m" in cands[2].explain({"b": 0.38})
     built = cands[0].build(msd, {"m": 1.2})
     assert built.parameters()["m"].value == 1.2 and set(built.elements) == set(msd.elements)
     assert "20 % above its nominal 1 kg" in cands[0].explain({"m": 1.2})
+    hydraulic = load(PLANTS["hydraulic"]().model)  # the outlet's resistance only up: less is a leak (f = e / R)
+    out = next(c for c in candidates(hydraulic, Place("junction", "p2")) if c.target == "R_out")
+    assert (out.params[0].lower, out.params[0].upper) == (6e10, pytest.approx(1.8e11))
     carriage = library.build("carriage")        # its position is a zero-stiffness law: no value to refit
     assert [c.target for c in candidates(carriage, Place("junction", "v_cart")) if c.kind == "nominal_value"] == ["m"]
 

@@ -9,9 +9,11 @@ against an inductance or a capacitance 3 % off and of a hydraulic circuit agains
 inertance 3 % high all answered a cubic spring (seed 2323).  One candidate per linear I or C on
 the junction, its one parameter the element's own (refitted under its name by
 :meth:`Candidate.build <diagnosis.catalogue.Candidate.build>`), within a factor 3 either way.
-An R is left out: a resistance too low is the viscous friction or leak the vocabulary already
-adds, and one too high would tie with them.  A C's value refitted with a cubic term is
-``nonlinear_stiffness``, which the choice's price per parameter tells from this one.
+A linear R's resistance is refitted too, but only the way no other kind goes: down at a
+1-junction (a resistance too low there is the viscous friction the vocabulary adds, e = b f beside
+e = R f) and up at a 0-junction (one too low there is a leak, f = e / R beside another flow).  Both
+ways, the two kinds would be one model and tie on every recording.  A C's value refitted with a
+cubic term is ``nonlinear_stiffness``, which the choice's price per parameter tells from this one.
 """
 from __future__ import annotations
 
@@ -31,12 +33,14 @@ class NominalValue(Kind):
 
     def propose(self, site):
         out = []
-        for element in _linear_storages(site):
+        for element in _linear_storages(site) + _linear_resistors(site):
             v = float(element.value.value)
-            quantity = _quantity(element)
+            lower, upper = v / RANGE, v * RANGE
+            if element.kind == "R":     # only the way no other kind goes (module docstring)
+                lower, upper = (lower, v) if site.door == "1" else (v, upper)
             out.append(Proposal(target=element.name, params=(
-                ParamSpec(element.value.name, v, v / RANGE, v * RANGE, element.value.unit,
-                          f"{quantity} of {element.name} (refitted)"),)))
+                ParamSpec(element.value.name, v, lower, upper, element.value.unit,
+                          f"{_quantity(element)} of {element.name} (refitted)"),)))
         return out
 
     def build(self, graph, cand, values):
@@ -61,8 +65,14 @@ def _linear_storages(site) -> list:
             if getattr(e, "value", None) is not None and float(e.value.value) > 0]
 
 
+def _linear_resistors(site) -> list:
+    """The R elements on the junction whose law is their own positive resistance."""
+    return [e for e, _ in junction_elements(site.graph, site.name)
+            if e.kind == "R" and getattr(e, "value", None) is not None and float(e.value.value) > 0]
+
+
 def _quantity(element) -> str:
-    """The element's value in words: inertance, stiffness or compliance."""
-    if element.kind == "I":
-        return "inertance"
+    """The element's value in words: inertance, resistance, stiffness or compliance."""
+    if element.kind in ("I", "R"):
+        return "inertance" if element.kind == "I" else "resistance"
     return "stiffness" if getattr(element, "stiffness_form", False) else "compliance"

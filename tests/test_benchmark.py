@@ -20,6 +20,7 @@ from diagnosis.benchmark.plants import PLANTS
 from diagnosis.benchmark.report import markdown, summarise
 from diagnosis.benchmark.run import run_case
 from diagnosis.benchmark.simulate import simulate_truth
+from diagnosis.errors import BenchmarkError
 
 TEXTBOOK = [tb.mass_spring_damper, tb.dc_motor, tb.rlc, tb.coupled_tanks, tb.geared_inertias]
 
@@ -274,6 +275,11 @@ def test_a_detuned_nominal_is_scored_on_the_concealed_effect_and_the_value_named
     assert detuned["parameter"] in ("m", "k") and 0.025 <= abs(detuned["factor"] - 1) <= 0.05
     assert graph.parameters()[detuned["parameter"]].value == pytest.approx(detuned["nominal"] * detuned["factor"])
     assert detuned_nominal("mass-spring-damper", 12345, 0.0)[1] == {}
+    # --detune-elements ICR: a linear R may be drawn too (here the damper, for some seeds)
+    drawn = {detuned_nominal("mass-spring-damper", seed, 0.05, "ICR")[1]["parameter"] for seed in range(12)}
+    assert drawn == {"m", "k", "b"}
+    with pytest.raises(BenchmarkError, match="IC or ICR"):
+        detuned_nominal("mass-spring-damper", 1, 0.05, "R")
     assert main(["--cases", "4", "--seed", "7", "--plants", "msd", "--only", "0,3", "--detune", "0.05",
                  "--report", str(tmp_path)]) == 0
     results = json.loads((tmp_path / "results.json").read_text())

@@ -30,10 +30,11 @@ from .run import run_case
 
 
 def _work(args):
-    spec, workdir, max_effects, second, detune = args
+    spec, workdir, max_effects, second, detune, detune_kinds = args
     import os
     os.environ.setdefault("OMP_NUM_THREADS", "1")
-    return run_case(spec, PLANTS, workdir, max_effects=max_effects, second=second, detune=detune)
+    return run_case(spec, PLANTS, workdir, max_effects=max_effects, second=second, detune=detune,
+                    detune_kinds=detune_kinds)
 
 
 def main(argv=None) -> int:
@@ -49,6 +50,8 @@ def main(argv=None) -> int:
                     help="a second concealed effect in every effect case (diagnosis.benchmark.compound)")
     ap.add_argument("--detune", type=float, default=0.0,
                     help="each nominal's one storage value off by up to this fraction (diagnosis.benchmark.detune)")
+    ap.add_argument("--detune-elements", default="IC", choices=("IC", "ICR"),
+                    help="the elements --detune may pick: storages (IC, default) or resistances too (ICR)")
     a = ap.parse_args(argv)
     if a.cases < 1 or a.jobs < 1:
         ap.error("--cases and --jobs must be positive")
@@ -78,7 +81,8 @@ def main(argv=None) -> int:
     print(f"benchmark: {len(specs)} cases ({len(results)} done before), seed {a.seed}, {a.jobs} job(s)",
           file=sys.stderr, flush=True)
     start = time.perf_counter()
-    jobs = [(s, out / "recordings", a.max_effects, seconds[s.index], a.detune) for s in todo]
+    jobs = [(s, out / "recordings", a.max_effects, seconds[s.index], a.detune, a.detune_elements)
+            for s in todo]
     done = 0
 
     def record(r):

@@ -166,14 +166,15 @@ def _names(found: list, kind: str, places: set) -> bool:
 
 
 def run_case(spec: CaseSpec, plants: dict, workdir: Path, *, max_effects: int = 2,
-             second: CaseSpec | None = None, detune: float = 0.0) -> dict:
+             second: CaseSpec | None = None, detune: float = 0.0, detune_kinds: str = "IC") -> dict:
     """Realise, write, diagnose and score one case (with the `second` effect too: a compound case,
-    :mod:`diagnosis.benchmark.compound`; against a nominal detuned by the fraction `detune`:
-    :mod:`diagnosis.benchmark.detune`); never raises (errors are scored)."""
+    :mod:`diagnosis.benchmark.compound`; against a nominal detuned by the fraction `detune`, an
+    element of `detune_kinds` picked: :mod:`diagnosis.benchmark.detune`); never raises (errors are
+    scored)."""
     from ..diagnose import diagnose
     from .detune import detuned_nominal
     plant = plants[spec.plant]()
-    nominal, detuned = detuned_nominal(plant.model, spec.seed, detune)
+    nominal, detuned = detuned_nominal(plant.model, spec.seed, detune, detune_kinds)
     label = compound_label(spec, second)
     t0 = time.perf_counter()
     try:

@@ -31,6 +31,16 @@ already a candidate there.
 This is forward selection with a two-step look-ahead where the one-step search stalls (the
 "nesting" problem of sequential selection; Pudil, Novovicova and Kittler, *Pattern Recognition
 Letters* 15, 1994, on floating search).
+
+**Value pairs** (:func:`value_pairs`) are fitted in every round 1: a nominal written from a rig's
+documentation has its values a few per cent off, and an effect fitted alone then takes in part of
+a value's error.  A geared pair's Coulomb + viscous friction beside its output inertia 3 % heavy
+was answered as a Dahl friction, whose elastic phase after each reversal stood in for the inertia
+(held-out error 1.5 times the floor), and the inertia refitted in round 2 could no longer pay
+(detuned benchmark, seed 7474, case 032); with the inertia refitted beside the friction the right
+law reaches the floor.  The round's best effects are each fitted with a value beside them; such a
+pair is one effect (:func:`effect_count`), and competes only where it finishes the diagnosis
+(:func:`finishing`).
 """
 from __future__ import annotations
 

@@ -53,8 +53,8 @@ from .fit_in_turn import train_cost
 from .kinds.base import extends
 from .twins import CandidateGroup
 
-__all__ = ["CandidatePair", "TRIGGER", "SINGLES", "VALUED", "FINISHED", "wanted", "pair_candidates", "value_pairs",
-           "finishing", "effect_count", "targets", "claims", "clashes"]
+__all__ = ["CandidatePair", "TRIGGER", "SINGLES", "VALUED", "FINISHED", "ANYWHERE", "wanted", "pair_candidates",
+           "value_pairs", "finishing", "effect_count", "targets", "claims", "clashes"]
 
 #: pairs are fitted when some output's held-out NRMSE is at least this many times its floor
 TRIGGER = 2.0
@@ -64,6 +64,8 @@ SINGLES = 6
 VALUED = 3
 #: a value pair competes only where it takes every output within this many times its floor
 FINISHED = 1.5
+#: the values (lowest training cost alone first) a sensor's or an input's effect is paired with
+ANYWHERE = 2
 
 
 @dataclass(frozen=True)
@@ -157,13 +159,16 @@ def value_pairs(fits, n: int = VALUED) -> list[CandidatePair]:
     member started where its fit ended: the effect with its junction's mass, inertia, inductance,
     spring or damper refitted beside it.
 
-    The value is the one whose fit alone reached the lowest training cost, at the effect's own
-    place for an effect at a junction (none there: no pair), anywhere for a sensor's or an
-    input's: an RLC's voltage sensor offset beside an inductance 4 % off was answered as a constant
-    load at the loop when only the junction effects were paired (detuned benchmark, seed 6363,
-    case 024).  A value fit given up as hopeless beside the effect's error (:mod:`~diagnosis.
-    fit_in_turn`) counts with its training cost when given up: a motor's inertia 4.6 % off beside
-    a Coulomb friction (case 013).  The simpler kinds join because a richer kind's pair may end
+    The value is the one whose fit alone reached the lowest training cost at the effect's own
+    place, for an effect at a junction (none there: no pair); for a sensor's or an input's, each of
+    the :data:`ANYWHERE` values with the lowest anywhere: an RLC's voltage sensor offset beside an
+    inductance 4 % off was answered as a constant load at the loop when only the junction effects
+    were paired (detuned benchmark, seed 6363, case 024), and a pressure sensor's offset as a Dahl
+    friction beside a pipe's inertance 2.8 % off when the one value that fitted best alone, an
+    outlet's resistance, was its only partner (seed 8585, case 037).  A value fit given up as
+    hopeless beside the effect's error (:mod:`~diagnosis.fit_in_turn`) counts with its training
+    cost when given up: a motor's inertia 4.6 % off beside a Coulomb friction (seed 6363, case
+    013).  The simpler kinds join because a richer kind's pair may end
     with its extra terms idle, and the choice then drops it (:func:`diagnosis.fit.choose`): there
     the Coulomb + viscous friction beside the inertia ended with no viscous term, and Coulomb
     friction itself was the fourth-best effect."""
@@ -173,23 +178,23 @@ def value_pairs(fits, n: int = VALUED) -> list[CandidatePair]:
     effects = sorted((f for f in singles if f.candidate.kind != "nominal_value" and np.isfinite(train_cost(f))),
                      key=train_cost)
 
-    def partner(f):
+    def partners(f):
         fitting = [v for v in values if not clashes(f.candidate, claims([v.candidate]))]
         if f.candidate.place.kind in ("junction", "law"):
-            return next((v for v in fitting if str(v.candidate.place) == str(f.candidate.place)), None)
-        return next(iter(fitting), None)
+            return [v for v in fitting if str(v.candidate.place) == str(f.candidate.place)][:1]
+        return fitting[:ANYWHERE]
 
     chosen, seen = [], set()
     for f in effects:
-        if len(chosen) < n and str(f.candidate) not in seen and partner(f) is not None:
+        if len(chosen) < n and str(f.candidate) not in seen and partners(f):
             seen.add(str(f.candidate))
             chosen.append(f)
     for f in list(chosen):
         for g in effects:
-            if extends(f.candidate, g.candidate) and str(g.candidate) not in seen and partner(g) is not None:
+            if extends(f.candidate, g.candidate) and str(g.candidate) not in seen and partners(g):
                 seen.add(str(g.candidate))
                 chosen.append(g)
-    return [CandidatePair((_started(f), _started(partner(f)))) for f in chosen]
+    return [CandidatePair((_started(f), _started(v))) for f in chosen for v in partners(f)]
 
 
 def finishing(fits, floor: dict) -> list:

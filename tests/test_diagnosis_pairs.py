@@ -56,11 +56,12 @@ def test_the_best_effects_are_paired_with_their_own_places_storage_value():
     got = value_pairs(fits, n=4)
     assert [str(p) for p in got] == ["nonlinear_stiffness at junction v and nominal_value at junction v",
                                      "sensor_offset at output x and nominal_value at junction w",
+                                     "sensor_offset at output x and nominal_value at junction v",  # 2 anywhere
                                      "hysteresis at junction v and nominal_value at junction v",
                                      "coulomb_viscous_friction at junction v and nominal_value at junction v",
                                      "coulomb_friction at junction v and nominal_value at junction v"]  # nested
-    assert [p.members[1].params[0].name for p in got] == ["m", "J", "k", "k", "k"]
-    assert got[2].starts[0] == {"Fh": 3.0, "sigma": 4.0, "k": 4.0}
+    assert [p.members[1].params[0].name for p in got] == ["m", "J", "k", "k", "k", "k"]
+    assert got[3].starts[0] == {"Fh": 3.0, "sigma": 4.0, "k": 4.0}
     assert effect_count(got[0]) == 1         # a value refitted beside an effect is no physics of its own
     assert effect_count(pair_candidates(fits)[0]) == 2
 

@@ -22,9 +22,11 @@ larger residual hides from graph location).  The round's own rule (:func:`diagno
 chooses among them against that model's held-out error.  A different winner replaces the effect
 (the round keeps the one it replaced, ``Round.replaced``, and the refits, ``Round.backfit``); no
 winner leaves it as it was.
-The rounds are swept once, in order.  This is the backfitting of additive models (Hastie and
-Tibshirani, *Generalized Additive Models*, 1990, ch. 4), over kinds instead of smooth functions;
-the joint refit of all effects' parameters follows it (:func:`diagnosis.diagnose._joint_refit`).
+The rounds are swept in order, and once more up to the last one the first sweep replaced
+(:data:`SWEEPS`): those before it were chosen beside the effect it replaced.  This is the
+backfitting of additive models (Hastie and Tibshirani, *Generalized Additive Models*, 1990, ch.
+4), over kinds instead of smooth functions; the joint refit of all effects' parameters follows it
+(:func:`diagnosis.diagnose._joint_refit`).
 """
 from __future__ import annotations
 
@@ -145,11 +147,13 @@ def backfit(graph, rounds, *, fit, floor: dict, judge_model, choose, with_values
     # a second sweep over the rounds before the last one the first sweep replaced: they were
     # chosen beside the effect it replaced (SWEEPS)
     todo = list(chosen)
-    for sweep in range(SWEEPS):
-        replaced = [k for k, r in enumerate(todo) if _sweep(graph, r, chosen, rounds, tuned, fit=fit, floor=floor,
-                                                            judge_model=judge_model, choose=choose,
-                                                            with_values=with_values, say=say, sensors=sensors, n=n)]
-        todo = todo[:max(replaced, default=0)]
+    for _ in range(SWEEPS):
+        last = 0                # the rounds before the last one replaced are swept again
+        for k, r in enumerate(todo):
+            if _sweep(graph, r, chosen, rounds, tuned, fit=fit, floor=floor, judge_model=judge_model,
+                      choose=choose, with_values=with_values, say=say, sensors=sensors, n=n):
+                last = k
+        todo = todo[:last]
         if not todo:
             break
     effects = [r.chosen for r in chosen]

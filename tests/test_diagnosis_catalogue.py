@@ -97,7 +97,7 @@ def test_places_offer_the_kinds_that_make_sense():
     assert at(msd, Place("junction", "v_mass")) == ["coulomb_friction", "viscous_friction", "stribeck_friction",
                                                     "hysteresis", "backlash", "nonlinear_stiffness",
                                                     "constant_load", "coulomb_viscous_friction", "nominal_value",
-                                                    "nominal_value"]           # m and k
+                                                    "nominal_value", "nominal_value"]      # m, k and b
     assert at(msd, Place("input", "F")) == ["valve_lag", "transport_delay", "saturation"]
     assert at(msd, Place("output", "x")) == ["saturation", "sensor_offset", "sensor_gain"]
     cyl = hydraulic_cylinder()

@@ -24,8 +24,9 @@ candidates.  Which kinds at which place (:func:`candidates`):
   (with the C's own linear value refitted), ``saturation`` (end stops);
 * 0-junction: ``leak``, ``heat_transfer`` (pneumatic / thermal only),
   ``nonlinear_stiffness`` and ``saturation`` (an overflow) for each C on it;
-* 0- and 1-junction: ``constant_load``, and ``nominal_value`` for each linear I or C on it
-  (its own value refitted alone: no physics missing, the nominal's value off);
+* 0- and 1-junction: ``constant_load``, and ``nominal_value`` for each linear I, C or R on it
+  (its own value refitted alone: no physics missing, the nominal's value off; an R's only down
+  at a 1-junction and up at a 0-junction);
 * input: ``valve_lag``, ``transport_delay``, ``saturation``;
 * output: ``saturation`` (the sensor's range), ``sensor_offset``, ``sensor_gain``;
 * law (a constitutive law whose bond ends at no junction, :mod:`diagnosis.law_places`: a

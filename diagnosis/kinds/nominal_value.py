@@ -1,6 +1,6 @@
-"""``nominal_value`` of a storage element at a junction: no physics is missing, the nominal's own
-value of a linear I or C is off (a mass or inertia from a drawing, an inductance, a stiffness or a
-capacity from a data sheet), refitted alone.
+"""``nominal_value`` of an element at a junction: no physics is missing, the nominal's own value of
+a linear I, C or R is off (a mass or inertia from a drawing, an inductance, a stiffness, a capacity
+or a resistance from a data sheet), refitted alone.
 
 A model written from a rig's documentation carries values a few per cent off; their error is a
 residual like any missing effect's, and without this kind it was answered by one: null recordings
@@ -10,9 +10,9 @@ inertance 3 % high all answered a cubic spring (seed 2323).  One candidate per l
 the junction, its one parameter the element's own (refitted under its name by
 :meth:`Candidate.build <diagnosis.catalogue.Candidate.build>`), within a factor 3 either way.
 A linear R's resistance is refitted too, but only the way no other kind goes: down at a
-1-junction (a resistance too low there is the viscous friction the vocabulary adds, e = b f beside
-e = R f) and up at a 0-junction (one too low there is a leak, f = e / R beside another flow).  Both
-ways, the two kinds would be one model and tie on every recording.  A C's value refitted with a
+1-junction (a nominal resistance too low there is the viscous friction the vocabulary adds,
+e = b f beside e = R f) and up at a 0-junction (one too high there is a leak, f = e / R beside
+another flow).  Both ways, the two kinds would be one model and tie on every recording.  A C's value refitted with a
 cubic term is ``nonlinear_stiffness``, which the choice's price per parameter tells from this one.
 """
 from __future__ import annotations

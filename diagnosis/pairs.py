@@ -32,7 +32,7 @@ This is forward selection with a two-step look-ahead where the one-step search s
 "nesting" problem of sequential selection; Pudil, Novovicova and Kittler, *Pattern Recognition
 Letters* 15, 1994, on floating search).
 
-**Value pairs** (:func:`value_pairs`) are fitted in every round 1: a nominal written from a rig's
+**Value pairs** (:func:`value_pairs`) are fitted in round 1 (``max_effects`` >= 2): a nominal written from a rig's
 documentation has its values a few per cent off, and an effect fitted alone then takes in part of
 a value's error.  A geared pair's Coulomb + viscous friction beside its output inertia 3 % heavy
 was answered as a Dahl friction, whose elastic phase after each reversal stood in for the inertia

@@ -144,14 +144,64 @@ def backfit(graph, rounds, *, fit, floor: dict, judge_model, choose, with_values
     """
     chosen = [r for r in rounds if r.chosen is not None and r.chosen.candidate is not None]
     tuned = {}                  # the other effects' values refitted alongside a replacing effect
+
+    def chosen_again(r) -> bool:
+        """Round `r`'s effect chosen again with the other rounds' in place; whether it was replaced."""
+        others = [c.chosen for c in chosen if c is not r]
+        try:
+            base = build_effects(graph, others, with_values)
+            # the others' values as refitted beside a replacing effect; not this round's own (a mass
+            # refitted beside a later round's effect is this round's to refit, not the reference's)
+            theirs = {p.name for o in others for p in o.candidate.params}
+            base = with_values(base, {k: v for k, v in tuned.items() if k in theirs and k in base.parameters()})
+            names, bounds = refittable(base, others)
+            reference = judge_model(base)
+        except BondcosimError as exc:     # a later effect placed on the earlier one's element, a run diverging
+            say("backfitting", f"round {rounds.index(r) + 1} left as chosen: without it, {exc}")
+            return False
+        # a candidate named for the nominal model may clash with the others' names (not with the
+        # nominal's: a storage kind refits its element's own linear value), nor rewrite an element
+        # another effect rewrites: a backlash in front of a spring that a later round gave a cubic
+        # term, fitted on that model, was built before the cubic term in the final one, whose
+        # held-out error was five times the nominal's (the detuned benchmark's msd, seed 6363 on the
+        # fast plants, case 022)
+        claimed = claims(o.candidate for o in others)
+        tried = [(f.candidate, f.values) for f in alternatives(r.chosen, r.fits, r.reference, floor, n, *claimed)]
+        keys = {_key(c) for c, _ in tried}
+        unexplained = needs_explaining(reference, floor)
+        tried += [(c, None) for c in (sensors(unexplained) if sensors is not None else [])
+                  if _key(c) not in keys and not clashes(c, claimed)]
+        refits, best = [], np.inf
+        for k, (cand, ended) in enumerate(tried, 1):
+            if ended is not None and hasattr(cand, "with_starts"):     # a group of twins: its own guesses
+                cand = cand.with_starts([_ended(cand, {**ended, **tuned})])
+            say("backfitting", f"round {rounds.index(r) + 1}: {cand} ({k}/{len(tried)})")
+            # the round's own choice comes first and is fitted fully; a hopeless one after it is
+            # given up as in the rounds (diagnosis.fit_in_turn)
+            refit = fit(base, cand, names, bounds, HOPELESS * best if np.isfinite(best) else None)
+            refit.n_params -= len(names)   # the others' parameters: the reference has them too
+            refits.append(refit)
+            best = min(best, train_cost(refit))
+        r.backfit = refits
+        winner = choose(reference, refits)
+        # only a refit of the round's own choice, beaten, is replaced
+        kept = any(_key(f) == _key(r.chosen) and f.success for f in refits)
+        if kept and winner is not None and _key(winner) != _key(r.chosen):
+            say("backfitting", f"round {rounds.index(r) + 1}: {winner.candidate} replaces {r.chosen.candidate}")
+            tuned.update({k: v for k, v in winner.values.items() if k in names})
+            own = {p.name for p in winner.candidate.params}
+            r.replaced, r.chosen = r.replaced or r.chosen, replace(winner, values={
+                k: v for k, v in winner.values.items() if k in own or k not in names})
+            return True
+        return False
+
     # a second sweep over the rounds before the last one the first sweep replaced: they were
     # chosen beside the effect it replaced (SWEEPS)
     todo = list(chosen)
     for _ in range(SWEEPS):
-        last = 0                # the rounds before the last one replaced are swept again
+        last = 0
         for k, r in enumerate(todo):
-            if _sweep(graph, r, chosen, rounds, tuned, fit=fit, floor=floor, judge_model=judge_model,
-                      choose=choose, with_values=with_values, say=say, sensors=sensors, n=n):
+            if chosen_again(r):
                 last = k
         todo = todo[:last]
         if not todo:
@@ -159,58 +209,6 @@ def backfit(graph, rounds, *, fit, floor: dict, judge_model, choose, with_values
     effects = [r.chosen for r in chosen]
     final = build_effects(graph, effects, with_values)
     return effects, with_values(final, {k: v for k, v in tuned.items() if k in final.parameters()})
-
-
-def _sweep(graph, r, chosen, rounds, tuned, *, fit, floor, judge_model, choose, with_values, say, sensors, n):
-    """Round `r`'s effect chosen again with the other rounds' (`chosen`) in place (:func:`backfit`);
-    whether it was replaced.  `tuned` collects the others' values refitted beside a replacing one."""
-    others = [c.chosen for c in chosen if c is not r]
-    try:
-        base = build_effects(graph, others, with_values)
-        # the others' values as refitted beside a replacing effect; not this round's own (a mass
-        # refitted beside a later round's effect is this round's to refit, not the reference's)
-        theirs = {p.name for o in others for p in o.candidate.params}
-        base = with_values(base, {k: v for k, v in tuned.items() if k in theirs and k in base.parameters()})
-        names, bounds = refittable(base, others)
-        reference = judge_model(base)
-    except BondcosimError as exc:     # a later effect placed on the earlier one's element, a run diverging
-        say("backfitting", f"round {rounds.index(r) + 1} left as chosen: without it, {exc}")
-        return False
-    # a candidate named for the nominal model may clash with the others' names (not with the
-    # nominal's: a storage kind refits its element's own linear value), nor rewrite an element
-    # another effect rewrites: a backlash in front of a spring that a later round gave a cubic
-    # term, fitted on that model, was built before the cubic term in the final one, whose
-    # held-out error was five times the nominal's (the detuned benchmark's msd, seed 6363 on the
-    # fast plants, case 022)
-    claimed = claims(o.candidate for o in others)
-    tried = [(f.candidate, f.values) for f in alternatives(r.chosen, r.fits, r.reference, floor, n, *claimed)]
-    keys = {_key(c) for c, _ in tried}
-    unexplained = needs_explaining(reference, floor)
-    tried += [(c, None) for c in (sensors(unexplained) if sensors is not None else [])
-              if _key(c) not in keys and not clashes(c, claimed)]
-    refits, best = [], np.inf
-    for k, (cand, ended) in enumerate(tried, 1):
-        if ended is not None and hasattr(cand, "with_starts"):     # a group of twins: its own guesses
-            cand = cand.with_starts([_ended(cand, {**ended, **tuned})])
-        say("backfitting", f"round {rounds.index(r) + 1}: {cand} ({k}/{len(tried)})")
-        # the round's own choice comes first and is fitted fully; a hopeless one after it is
-        # given up as in the rounds (diagnosis.fit_in_turn)
-        refit = fit(base, cand, names, bounds, HOPELESS * best if np.isfinite(best) else None)
-        refit.n_params -= len(names)   # the others' parameters: the reference has them too
-        refits.append(refit)
-        best = min(best, train_cost(refit))
-    r.backfit = refits
-    winner = choose(reference, refits)
-    # only a refit of the round's own choice, beaten, is replaced
-    kept = any(_key(f) == _key(r.chosen) and f.success for f in refits)
-    if kept and winner is not None and _key(winner) != _key(r.chosen):
-        say("backfitting", f"round {rounds.index(r) + 1}: {winner.candidate} replaces {r.chosen.candidate}")
-        tuned.update({k: v for k, v in winner.values.items() if k in names})
-        own = {p.name for p in winner.candidate.params}
-        r.replaced, r.chosen = r.replaced or r.chosen, replace(winner, values={
-            k: v for k, v in winner.values.items() if k in own or k not in names})
-        return True
-    return False
 
 
 def refittable(graph, effects) -> tuple[list, dict]:

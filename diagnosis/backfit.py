@@ -174,7 +174,7 @@ def backfit(graph, rounds, *, fit, floor: dict, judge_model, choose, with_values
         refits, best = [], np.inf
         for k, (cand, ended) in enumerate(tried, 1):
             if ended is not None and hasattr(cand, "with_starts"):     # a group of twins: its own guesses
-                cand = cand.with_starts([_ended(cand, {**ended, **tuned})])
+                cand = cand.with_starts([cand.within_bounds({**ended, **tuned})])
             say("backfitting", f"round {rounds.index(r) + 1}: {cand} ({k}/{len(tried)})")
             # the round's own choice comes first and is fitted fully; a hopeless one after it is
             # given up as in the rounds (diagnosis.fit_in_turn)
@@ -220,12 +220,6 @@ def refittable(graph, effects) -> tuple[list, dict]:
     names = [p.name for e in effects for p in e.candidate.params
              if p.name not in values or not released(values[p.name].value)]
     return names, {p.name: (p.lower, p.upper) for e in effects for p in e.candidate.params}
-
-
-def _ended(cand, values: dict) -> dict:
-    """Where a fit of `cand` ended, as a start: its own parameters' `values` within their bounds (a
-    saturation limit the data gave no evidence for was released beyond its bound)."""
-    return {p.name: min(max(float(values[p.name]), p.lower), p.upper) for p in cand.params if p.name in values}
 
 
 def _key(fit_or_candidate) -> tuple:

@@ -116,6 +116,13 @@ class Candidate:
         """Starting values by parameter name."""
         return {p.name: p.guess for p in self.params}
 
+    def within_bounds(self, values) -> dict[str, float]:
+        """`values` of this candidate's own parameters (others left out), each clipped into its
+        bounds: where a fit ended, as a start (a saturation limit the data gave no evidence for
+        was released beyond its bound)."""
+        return {p.name: float(min(max(float(values[p.name]), p.lower), p.upper)) for p in self.params
+                if p.name in values}
+
     def with_starts(self, starts) -> "Candidate":
         """This candidate with the fit starts `starts` (dicts name -> value) after its own; itself
         when there are none."""

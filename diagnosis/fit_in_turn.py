@@ -127,11 +127,7 @@ def member_refits(fits, fit, say, label: str, kind: str) -> list:
     def related(this, other):
         return this.kind == kind and str(this) in {str(m) for m in getattr(other, "members", ())}
 
-    def ended(this, by):
-        return [{p.name: float(np.clip(by.values[p.name], p.lower, p.upper)) for p in this.candidate.params
-                 if p.name in by.values}]
-
-    return _refits(fits, fit, say, label, related, ended)
+    return _refits(fits, fit, say, label, related, lambda this, by: [this.candidate.within_bounds(by.values)])
 
 
 def _refits(fits, fit, say, label: str, related, starts) -> list:

@@ -148,7 +148,7 @@ def _started(fit):
     """`fit`'s candidate with its first start where it ended, within its bounds (first: a group
     tries its members' i-th starts side by side)."""
     cand = fit.candidate
-    ended = {p.name: float(np.clip(fit.values.get(p.name, p.guess), p.lower, p.upper)) for p in cand.params}
+    ended = cand.within_bounds({**cand.guesses(), **fit.values})
     return replace(cand, starts=(ended,) + tuple(cand.starts))
 
 

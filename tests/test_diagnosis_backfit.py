@@ -5,6 +5,7 @@ from types import SimpleNamespace
 import pytest
 
 from diagnosis.backfit import alternatives
+from diagnosis.catalogue import Candidate
 from diagnosis.benchmark.compound import second_effect
 from diagnosis.benchmark.draw import draw_cases
 from diagnosis.benchmark.plants import PLANTS
@@ -167,6 +168,7 @@ def _candidate(kind, place, names):
                                                            for n in names])
     cand.build = lambda graph, values: _Graph(graph.names | set(names))
     cand.with_starts = lambda starts: cand
+    cand.within_bounds = lambda values: Candidate.within_bounds(cand, values)     # the real clipping
     return cand
 
 

@@ -168,10 +168,10 @@ def value_pairs(fits, n: int = VALUED) -> list[CandidatePair]:
     outlet's resistance, was its only partner (seed 8585, case 037).  A value fit given up as
     hopeless beside the effect's error (:mod:`~diagnosis.fit_in_turn`) counts with its training
     cost when given up: a motor's inertia 4.6 % off beside a Coulomb friction (seed 6363, case
-    013).  The simpler kinds join because a richer kind's pair may end
-    with its extra terms idle, and the choice then drops it (:func:`diagnosis.fit.choose`): there
-    the Coulomb + viscous friction beside the inertia ended with no viscous term, and Coulomb
-    friction itself was the fourth-best effect."""
+    013).  The simpler kinds join because a richer kind's pair may end with its extra terms idle,
+    and the choice then drops it (:func:`diagnosis.fit.choose`): there the Coulomb + viscous
+    friction beside the inertia ended with no viscous term, and Coulomb friction itself was the
+    fourth-best effect."""
     singles = [f for f in fits if f.candidate is not None and not hasattr(f.candidate, "members")]
     values = sorted((f for f in singles if f.candidate.kind == "nominal_value"
                      and np.isfinite(f.extra.get("train_cost", np.inf))), key=lambda f: f.extra["train_cost"])
@@ -184,17 +184,15 @@ def value_pairs(fits, n: int = VALUED) -> list[CandidatePair]:
             return [v for v in fitting if str(v.candidate.place) == str(f.candidate.place)][:1]
         return fitting[:ANYWHERE]
 
-    chosen, seen = [], set()
+    paired = {}                   # str(effect) -> (its fit, its partners), the first fit of each
     for f in effects:
-        if len(chosen) < n and str(f.candidate) not in seen and partners(f):
-            seen.add(str(f.candidate))
-            chosen.append(f)
-    for f in list(chosen):
-        for g in effects:
-            if extends(f.candidate, g.candidate) and str(g.candidate) not in seen and partners(g):
-                seen.add(str(g.candidate))
-                chosen.append(g)
-    return [CandidatePair((_started(f), _started(v))) for f in chosen for v in partners(f)]
+        paired.setdefault(str(f.candidate), (f, partners(f)))
+    effects = [f for f, with_values in paired.values() if with_values]
+    chosen = effects[:n]
+    for f in effects[:n]:         # the simpler kinds each extends, after the best n
+        taken = {str(c.candidate) for c in chosen}
+        chosen += [g for g in effects if str(g.candidate) not in taken and extends(f.candidate, g.candidate)]
+    return [CandidatePair((_started(f), _started(v))) for f in chosen for v in paired[str(f.candidate)][1]]
 
 
 def finishing(fits, floor: dict) -> list:

@@ -6,20 +6,20 @@ A model written from a rig's documentation carries values a few per cent off; th
 residual like any missing effect's, and without this kind it was answered by one: null recordings
 of a mass-spring-damper against a nominal spring 3 % stiff or mass 3 % heavy, of an RLC circuit
 against an inductance or a capacitance 3 % off and of a hydraulic circuit against a pipe's
-inertance 3 % high all answered a cubic spring (seed 2323).  One candidate per linear I or C on
+inertance 3 % high all answered a cubic spring (seed 2323).  One candidate per linear I, C or R on
 the junction, its one parameter the element's own (refitted under its name by
-:meth:`Candidate.build <diagnosis.catalogue.Candidate.build>`), within a factor 3 either way.
-A linear R's resistance is refitted too, but only the way no other kind goes: down at a
-1-junction (a nominal resistance too low there is the viscous friction the vocabulary adds,
-e = b f beside e = R f) and up at a 0-junction (one too high there is a leak, f = e / R beside
-another flow).  Both ways, the two kinds would be one model and tie on every recording.  A C's value refitted with a
-cubic term is ``nonlinear_stiffness``, which the choice's price per parameter tells from this one.
+:meth:`Candidate.build <diagnosis.catalogue.Candidate.build>`), within a factor 3 either way for
+an I or a C.  An R's resistance is refitted only the way no other kind goes: down at a 1-junction
+(a nominal resistance too low there is the viscous friction the vocabulary adds, e = b f beside
+e = R f) and up at a 0-junction (one too high there is a leak, f = e / R beside another flow).
+Both ways, the two kinds would be one model and tie on every recording.  A C's value refitted
+with a cubic term is ``nonlinear_stiffness``, which the choice's price per parameter tells from
+this one.
 """
 from __future__ import annotations
 
 from ..catalogue_common import ParamSpec, junction_elements
 from .base import Kind, Proposal, register
-from .storage_common import capacitors
 
 #: the factor either way a nominal value may be refitted within
 RANGE = 3.0
@@ -33,7 +33,7 @@ class NominalValue(Kind):
 
     def propose(self, site):
         out = []
-        for element in _linear_storages(site) + _linear_resistors(site):
+        for element in _linear_elements(site):
             v = float(element.value.value)
             lower, upper = v / RANGE, v * RANGE
             if element.kind == "R":     # only the way no other kind goes (module docstring)
@@ -58,21 +58,16 @@ class NominalValue(Kind):
                 f"a wrong nominal value of {cand.target}")
 
 
-def _linear_storages(site) -> list:
-    """The I and C elements on the junction whose law is their own positive value."""
-    inertias = [e for e, _ in junction_elements(site.graph, site.name) if e.kind == "I"]
-    return [e for e in inertias + capacitors(site)
-            if getattr(e, "value", None) is not None and float(e.value.value) > 0]
-
-
-def _linear_resistors(site) -> list:
-    """The R elements on the junction whose law is their own positive resistance."""
-    return [e for e, _ in junction_elements(site.graph, site.name)
-            if e.kind == "R" and getattr(e, "value", None) is not None and float(e.value.value) > 0]
+def _linear_elements(site) -> list:
+    """The I, C and R elements on the junction (in that order, each in bond order) whose law is
+    their own positive value."""
+    on = [e for e, _ in junction_elements(site.graph, site.name)
+          if e.kind in ("I", "C", "R") and getattr(e, "value", None) is not None and float(e.value.value) > 0]
+    return [e for kind in ("I", "C", "R") for e in on if e.kind == kind]
 
 
 def _quantity(element) -> str:
     """The element's value in words: inertance, resistance, stiffness or compliance."""
-    if element.kind in ("I", "R"):
-        return "inertance" if element.kind == "I" else "resistance"
-    return "stiffness" if getattr(element, "stiffness_form", False) else "compliance"
+    if element.kind == "C":
+        return "stiffness" if getattr(element, "stiffness_form", False) else "compliance"
+    return {"I": "inertance", "R": "resistance"}[element.kind]

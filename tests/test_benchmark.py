@@ -293,6 +293,38 @@ def test_a_detuned_nominal_is_scored_on_the_concealed_effect_and_the_value_named
     assert "| nominal detuned (2 cases, one storage value)" in (tmp_path / "results.md").read_text()
 
 
+def test_sampling_scales_each_recordings_rate_and_length_and_is_reported(tmp_path):
+    """``--sampling F``: a case is recorded at its plant's rate times a factor in [1/F, F] and for
+    its duration times one in [1/sqrt F, sqrt F], drawn per case; the recording's time column
+    carries it and the diagnosis is told nothing else."""
+    import json
+
+    from diagnosis.benchmark.__main__ import main
+    from diagnosis.benchmark.sampling import resampled
+    plant = PLANTS["msd"]()
+    factors = [resampled(plant, seed, 2.0)[1] for seed in range(40)]
+    assert all(0.5 <= d["rate_factor"] <= 2.0 and 2 ** -0.5 <= d["duration_factor"] <= 2 ** 0.5 for d in factors)
+    assert min(d["rate_factor"] for d in factors) < 0.7 and max(d["rate_factor"] for d in factors) > 1.4
+    assert resampled(plant, 3, 2.0)[1] == resampled(plant, 3, 2.0)[1]          # the case's seed decides
+    assert resampled(plant, 3, 1.0) == (plant, {})
+    with pytest.raises(BenchmarkError, match="at least 1"):
+        resampled(plant, 3, 0.5)
+    spec = draw_cases(4, 7, {"msd": PLANTS["msd"]})[1]
+    scaled, drawn = resampled(plant, spec.seed, 2.0)
+    rec = realise(spec, scaled)
+    assert np.diff(rec.t) == pytest.approx(1.0 / (plant.rate * drawn["rate_factor"]))
+    assert rec.t[-1] == pytest.approx(plant.duration * drawn["duration_factor"], abs=1.0 / scaled.rate)
+    assert main(["--cases", "4", "--seed", "7", "--plants", "msd", "--only", "1", "--sampling", "2",
+                 "--max-effects", "1", "--report", str(tmp_path)]) == 0
+    results = json.loads((tmp_path / "results.json").read_text())
+    case = results["cases"][0]
+    assert case["sampling"]["rate"] == pytest.approx(scaled.rate)
+    t = np.loadtxt(next((tmp_path / "recordings").glob("*.csv")), delimiter=",", skiprows=1, usecols=0)
+    assert np.median(np.diff(t)) == pytest.approx(1.0 / scaled.rate, rel=1e-3)
+    assert results["summary"]["headline"]["resampled_cases"] == 1
+    assert "| recorded at another rate and length (1 cases)" in (tmp_path / "results.md").read_text()
+
+
 def test_a_clipping_sensor_is_located_and_named(tmp_path):
     # the output place's correction has hinges at quantiles of the simulated output (a range),
     # and a limit the training part gives no evidence for is released, not left where it ends

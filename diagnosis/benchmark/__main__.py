@@ -1,5 +1,5 @@
 """``python -m diagnosis.benchmark [--cases N] [--seed S] [--report DIR] [--jobs J] [--plants A,B] [--compound]
-[--detune F]``.
+[--detune F] [--sampling F]``.
 
 Draws N cases (default 80), diagnoses each recording as a user would, and
 writes into DIR (default ``benchmark-report``): one JSON file per case
@@ -8,7 +8,8 @@ writes into DIR (default ``benchmark-report``): one JSON file per case
 and ``results.png`` (confusion matrix, held-out improvement, time per case).
 With ``--compound`` every effect case conceals a second effect too
 (:mod:`diagnosis.benchmark.compound`); with ``--detune F`` each nominal has one storage
-element's value off by up to the fraction F (:mod:`diagnosis.benchmark.detune`).  Each variant
+element's value off by up to the fraction F (:mod:`diagnosis.benchmark.detune`); with ``--sampling F``
+each recording's rate and length are scaled by up to F (:mod:`diagnosis.benchmark.sampling`).  Each variant
 needs a report directory of its own (a case's file is named by its draw).
 """
 from __future__ import annotations
@@ -30,11 +31,11 @@ from .run import run_case
 
 
 def _work(args):
-    spec, workdir, max_effects, second, detune, detune_kinds = args
+    spec, workdir, max_effects, second, detune, detune_kinds, sampling = args
     import os
     os.environ.setdefault("OMP_NUM_THREADS", "1")
     return run_case(spec, PLANTS, workdir, max_effects=max_effects, second=second, detune=detune,
-                    detune_kinds=detune_kinds)
+                    detune_kinds=detune_kinds, sampling=sampling)
 
 
 def main(argv=None) -> int:
@@ -52,11 +53,16 @@ def main(argv=None) -> int:
                     help="each nominal's one storage value off by up to this fraction (diagnosis.benchmark.detune)")
     ap.add_argument("--detune-elements", default="IC", choices=("IC", "ICR"),
                     help="the elements --detune may pick: storages (IC, default) or resistances too (ICR)")
+    ap.add_argument("--sampling", type=float, default=1.0,
+                    help="each recording's rate scaled by up to this factor either way, its duration by its "
+                         "square root (diagnosis.benchmark.sampling; default 1: as the plant records)")
     a = ap.parse_args(argv)
     if a.cases < 1 or a.jobs < 1:
         ap.error("--cases and --jobs must be positive")
     if not 0.0 <= a.detune < 1.0:
         ap.error(f"--detune must be a fraction in [0, 1), got {a.detune}")
+    if not a.sampling >= 1.0:
+        ap.error(f"--sampling must be a factor of at least 1, got {a.sampling}")
     plants = PLANTS
     if a.plants:
         unknown = [p for p in a.plants.split(",") if p not in PLANTS]
@@ -81,7 +87,7 @@ def main(argv=None) -> int:
     print(f"benchmark: {len(specs)} cases ({len(results)} done before), seed {a.seed}, {a.jobs} job(s)",
           file=sys.stderr, flush=True)
     start = time.perf_counter()
-    jobs = [(s, out / "recordings", a.max_effects, seconds[s.index], a.detune, a.detune_elements)
+    jobs = [(s, out / "recordings", a.max_effects, seconds[s.index], a.detune, a.detune_elements, a.sampling)
             for s in todo]
     done = 0
 

@@ -46,6 +46,7 @@ def summarise(results: list[dict]) -> dict:
         "glitchy_right": sum(1 for r in scored if r.get("glitches") and r["kind_ok"]),
         **_compound_headline(effects),
         **_detuned_headline(scored),
+        **_sampling_headline(scored),
         "seconds_per_case_median": float(np.median(secs)) if secs else float("nan"),
         "seconds_per_case_max": float(np.max(secs)) if secs else float("nan"),
     }
@@ -79,6 +80,18 @@ def _detuned_headline(scored: list) -> dict:
     if not detuned:
         return {}
     return {"detuned_cases": len(detuned), "detuned_named": _share(r["detuned_named"] for r in detuned)}
+
+
+def _sampling_headline(scored: list) -> dict:
+    """Of the cases recorded at a scaled rate and length (``--sampling``): how many, and the
+    smallest and largest factors drawn."""
+    drawn = [r["sampling"] for r in scored if r.get("sampling")]
+    if not drawn:
+        return {}
+    return {"resampled_cases": len(drawn),
+            "rate_factors": [min(d["rate_factor"] for d in drawn), max(d["rate_factor"] for d in drawn)],
+            "duration_factors": [min(d["duration_factor"] for d in drawn),
+                                 max(d["duration_factor"] for d in drawn)]}
 
 
 def _compound_headline(effects: list) -> dict:
@@ -131,6 +144,9 @@ def markdown(summary: dict, *, seed: int | None = None) -> str:
                 f"{_pct(h['second_found'])} / {_pct(h['both_found'])} | |"] if "compound_cases" in h else []),
              *([f"| nominal detuned ({h['detuned_cases']} cases, one storage value): the value refitted "
                 f"(nominal_value) | {_pct(h['detuned_named'])} | |"] if "detuned_cases" in h else []),
+             *([f"| recorded at another rate and length ({h['resampled_cases']} cases): rate x "
+                f"{h['rate_factors'][0]:.2f}-{h['rate_factors'][1]:.2f}, duration x "
+                f"{h['duration_factors'][0]:.2f}-{h['duration_factors'][1]:.2f} | | |"] if "resampled_cases" in h else []),
              f"| time per case, median / max | {h['seconds_per_case_median']:.0f} s / "
              f"{h['seconds_per_case_max']:.0f} s | |", "",
              "| held-out improvement quantile | " + " | ".join(f"{int(q * 100)} %" for q in

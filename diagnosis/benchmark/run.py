@@ -166,14 +166,17 @@ def _names(found: list, kind: str, places: set) -> bool:
 
 
 def run_case(spec: CaseSpec, plants: dict, workdir: Path, *, max_effects: int = 2,
-             second: CaseSpec | None = None, detune: float = 0.0, detune_kinds: str = "IC") -> dict:
+             second: CaseSpec | None = None, detune: float = 0.0, detune_kinds: str = "IC",
+             sampling: float = 1.0) -> dict:
     """Realise, write, diagnose and score one case (with the `second` effect too: a compound case,
     :mod:`diagnosis.benchmark.compound`; against a nominal detuned by the fraction `detune`, an
-    element of `detune_kinds` picked: :mod:`diagnosis.benchmark.detune`); never raises (errors are
-    scored)."""
+    element of `detune_kinds` picked: :mod:`diagnosis.benchmark.detune`; recorded at a rate and for
+    a duration scaled by factors drawn within `sampling`: :mod:`diagnosis.benchmark.sampling`);
+    never raises (errors are scored)."""
     from ..diagnose import diagnose
     from .detune import detuned_nominal
-    plant = plants[spec.plant]()
+    from .sampling import resampled
+    plant, drawn = resampled(plants[spec.plant](), spec.seed, sampling)
     nominal, detuned = detuned_nominal(plant.model, spec.seed, detune, detune_kinds)
     label = compound_label(spec, second)
     t0 = time.perf_counter()
@@ -207,4 +210,6 @@ def run_case(spec: CaseSpec, plants: dict, workdir: Path, *, max_effects: int = 
     out["effect"] = None if rec.effect is None else rec.effect.describe()
     out["sigma"], out["quantum"] = rec.sigma, rec.quantum
     out["calibration_runs"] = rec.calibration_runs
+    if drawn:
+        out["sampling"] = drawn
     return json.loads(json.dumps(out, default=float))

@@ -415,7 +415,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     fits += _companion_fits(graph, fits, place_list, cand_part, rv, fit_one, say, "fitting", best, x0)
     fits += _twin_fits(graph, fits, cand_part, rv, fit_one, say, "fitting", best, x0, len(place_list))
     if int(max_effects) >= 2:      # an effect beside a storage value a few per cent off (pairs.value_pairs)
-        valued = fit_in_turn(pairs.value_pairs(fits), fit_one, say, "fitting", best=best, suffix=", with values")[0]
+        valued = fit_in_turn(pairs.value_pairs(fits, evidence=_lookup(evidence)), fit_one, say, "fitting", best=best,
+                             suffix=", with values")[0]
         fits = member_refits(fits + pairs.finishing(valued, floor), fit_one, say, "fitting", "nominal_value")
     if uncertain:
         say("fitting", f"nominal parameters {', '.join(uncertain)} alone")

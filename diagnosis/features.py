@@ -74,13 +74,14 @@ from .catalogue_common import junction_elements
 from .kinds import REGISTRY
 from .kinds.feature_signals import SIGN_FRACTION, FeatureSignals, dahl_state
 from .kinds.modulated_friction import modulating_signals
+from .kinds.nominal_value import value_columns
 from .catalogue_scales import pressure_variables
 from .errors import BondcosimError
 from .law_places import at_junction
 
 __all__ = ["KIND_FEATURES", "SIGN_FRACTION", "FEATURE_PRICE", "MAX_SELECTED", "KindEvidence", "FeatureEvidence",
            "evidence_lookup", "prune_candidates", "with_feature_starts", "prefer_by_evidence",
-           "feature_evidence", "regress_kinds", "dahl_state"]
+           "feature_evidence", "regress_kinds", "left_with", "dahl_state"]
 
 #: kind -> (junction kinds it applies at, the feature columns in words, the parameters it is
 #: priced by), read off each kind's class (:attr:`~diagnosis.kinds.base.Kind.feature_doors`,
@@ -132,6 +133,12 @@ class KindEvidence:
         Drop of the weighted validation SSE, in noise variances.
     grid : tuple of float
         The variant's free choice as numbers (``FeatureGroup.grid``: an end stop's limits), or ().
+    with_values : float
+        What this kind's features leave of the residual with the junction's own I and C values
+        refitted beside them (:func:`~diagnosis.kinds.nominal_value.value_columns`), in noise
+        variances per validation value (:func:`left_with`; about 1: only the noise); NaN where
+        the junction has none.  The kind that leaves least is the one to refit beside them
+        (:func:`diagnosis.pairs.value_pairs`).
     """
 
     kind: str
@@ -144,6 +151,7 @@ class KindEvidence:
     excess_share: float = 0.0
     drop: float = 0.0
     grid: tuple = ()
+    with_values: float = float("nan")
 
     @property
     def label(self) -> str:
@@ -274,13 +282,7 @@ def regress_kinds(responses: dict, r, w, *, price: float = FEATURE_PRICE, valida
         return {}, [], 0.0
 
     def fit(S):
-        A = S * sw[None, :, None]
-        A_fit, A_val = A[:split].reshape(-1, S.shape[2]), A[split:].reshape(-1, S.shape[2])
-        scale = np.sqrt(np.sum(A_fit ** 2, axis=0))
-        scale[~(scale > 0)] = 1.0
-        coef, _, rank, _ = np.linalg.lstsq(A_fit / scale, b_fit, rcond=1e-10)
-        err = b_val - (A_val / scale) @ coef
-        return float(err @ err), int(rank)
+        return _validated_sse(S, sw, b_fit, b_val, split)
 
     noise = float(b_val.size)
     excess0 = max(sse0 - noise, MIN_DROP_PER_COLUMN)
@@ -324,6 +326,49 @@ def regress_kinds(responses: dict, r, w, *, price: float = FEATURE_PRICE, valida
         current, sse_now = score, sse
     best_share = 1.0 - sse_now / sse0
     return out, selected, best_share
+
+
+def _validated_sse(S, sw, b_fit, b_val, split: int) -> tuple[float, int]:
+    """``(validation SSE, rank)`` of the least-squares fit of the weighted residual (`b_fit`, the
+    first `split` rows; `b_val`, the rest) on the responses `S` (rows, ny, m), weights `sw`."""
+    A = S * sw[None, :, None]
+    A_fit, A_val = A[:split].reshape(-1, S.shape[2]), A[split:].reshape(-1, S.shape[2])
+    scale = np.sqrt(np.sum(A_fit ** 2, axis=0))
+    scale[~(scale > 0)] = 1.0
+    coef, _, rank, _ = np.linalg.lstsq(A_fit / scale, b_fit, rcond=1e-10)
+    err = b_val - (A_val / scale) @ coef
+    return float(err @ err), int(rank)
+
+
+def left_with(responses: dict, beside, r, w, *, validation: float = VALIDATION) -> dict:
+    """What each group of `responses` (key -> (names, S)) leaves of the weighted residual `r`
+    (rows, ny; weights `w`, 1/sigma^2) with the columns `beside` (rows, ny, m) fitted alongside:
+    the validation rows' mean squared weighted error (the same time split as
+    :func:`regress_kinds`), in noise variances (about 1 where only the noise is left); NaN for a
+    group whose responses are not finite.
+
+    Examples
+    --------
+    A residual made of two columns' responses and unit noise: either column alone leaves part of
+    it, each with the other beside it only the noise:
+
+    >>> rng = np.random.default_rng(0)
+    >>> a, b = rng.standard_normal((2, 2000, 1, 1))
+    >>> r = (3 * a + 2 * b)[:, :, 0] + rng.standard_normal((2000, 1))
+    >>> {k: round(v, 1) for k, v in left_with({"a": ([], a)}, b, r, np.ones(1)).items()}
+    {'a': 1.0}
+    """
+    rows = r.shape[0]
+    split = int(round((1.0 - validation) * rows))
+    sw = np.sqrt(np.asarray(w, float))
+    b = r * sw[None, :]
+    b_fit, b_val = b[:split].reshape(-1), b[split:].reshape(-1)
+    out = {}
+    for key, (_, S) in responses.items():
+        ok = np.isfinite(S).all() and S.shape[0] == rows and b_val.size
+        out[key] = (_validated_sse(np.concatenate([S, beside], axis=2), sw, b_fit, b_val, split)[0] / b_val.size
+                    if ok else float("nan"))
+    return out
 
 
 def feature_evidence(graph, places, experiment, *, x0=None, regime_variables=None, estimates=None) -> dict:
@@ -420,20 +465,25 @@ def _evidence_at(graph, p, experiment, x0, regime_variables, d_hat):
     if not groups:
         return None
     keys = list(groups)
-    F_all = np.concatenate([d_hat[:, None]] + [groups[k][1] for k in keys], axis=1)
+    own = value_columns(graph, p.name, FeatureSignals(np.asarray(t, float), values, one,
+                                                     junction_domain(graph, p.name)))
+    beside = [] if own is None else [own.columns]
+    F_all = np.concatenate([d_hat[:, None]] + [groups[k][1] for k in keys] + beside, axis=1)
     S_all = lin.response(np.zeros(F_all.shape[1], dtype=int), F_all, rows)
     r = np.stack([residual[o][rows] for o in outputs], axis=1) + S_all[:, :, 0]   # linearised nominal residual
     edges = 1 + np.cumsum([0] + [groups[k][1].shape[1] for k in keys])
     responses = {k: (groups[k][0], S_all[:, :, a:b]) for k, a, b in zip(keys, edges[:-1], edges[1:])}
     prices = {k: REGISTRY[k[0]].feature_price for k in keys}
     ranked, selected, joint = regress_kinds(responses, r, w, parameters=prices)
+    with_values = left_with(responses, S_all[:, :, edges[-1]:], r, w) if beside else {}
     best = {}
     for (kind, variant, detail), (share, score, beta, sig, excess, drop) in ranked.items():
         if (kind, variant) not in best or score < best[(kind, variant)].score:
             names = responses[(kind, variant, detail)][0]
             best[(kind, variant)] = KindEvidence(kind, variant, detail, float(share), float(score),
                                                  {nm: -float(c) for nm, c in zip(names, beta)}, sig,
-                                                 excess, float(drop), grids[(kind, variant, detail)])
+                                                 excess, float(drop), grids[(kind, variant, detail)],
+                                                 with_values.get((kind, variant, detail), float("nan")))
     kinds = sorted(best.values(), key=lambda k: k.score)
     chosen = [f"{k[0]} ({k[1]})" if k[1] else k[0] for k in selected]
     return FeatureEvidence(p, kinds, chosen, float(joint), junction_unit(graph, p.name))

@@ -152,7 +152,7 @@ def _started(fit):
     return replace(cand, starts=(ended,) + tuple(cand.starts))
 
 
-def value_pairs(fits, n: int = VALUED) -> list[CandidatePair]:
+def value_pairs(fits, n: int = VALUED, evidence=None) -> list[CandidatePair]:
     """The `n` successful single-place effect fits of `fits` with the lowest training cost, and the
     simpler kinds each extends at its place (:func:`~diagnosis.kinds.base.extends`), each paired
     with a ``nominal_value`` fit whose value it does not refit itself (:func:`clashes`), each
@@ -171,7 +171,16 @@ def value_pairs(fits, n: int = VALUED) -> list[CandidatePair]:
     013).  The simpler kinds join because a richer kind's pair may end with its extra terms idle,
     and the choice then drops it (:func:`diagnosis.fit.choose`): there the Coulomb + viscous
     friction beside the inertia ended with no viscous term, and Coulomb friction itself was the
-    fourth-best effect."""
+    fourth-best effect.
+
+    An effect that fits badly alone may be the one the value needs beside it: a carriage's mass
+    4.5 % light beside a viscous friction, which alone cannot stand in for the mass, fitted worst
+    of the frictions alone, and a Dahl friction beside the mass (its elastic phase again standing
+    in for the mass) answered (detuned benchmark, seed 8585, case 007).  So with `evidence`
+    (``fit -> KindEvidence or None``, :func:`diagnosis.features.evidence_lookup`), at each place
+    the effect whose kind's features leave least of the located estimate with the place's values
+    fitted beside them (:attr:`KindEvidence.with_values <diagnosis.features.KindEvidence>`, priced
+    per parameter as the regression is) is paired too."""
     singles = [f for f in fits if f.candidate is not None and not hasattr(f.candidate, "members")]
     values = sorted((f for f in singles if f.candidate.kind == "nominal_value"
                      and np.isfinite(f.extra.get("train_cost", np.inf))), key=lambda f: f.extra["train_cost"])
@@ -192,7 +201,23 @@ def value_pairs(fits, n: int = VALUED) -> list[CandidatePair]:
     for f in effects[:n]:         # the simpler kinds each extends, after the best n
         taken = {str(c.candidate) for c in chosen}
         chosen += [g for g in effects if str(g.candidate) not in taken and extends(f.candidate, g.candidate)]
+    taken = {str(c.candidate) for c in chosen}
+    chosen += [f for f in _best_with_values(effects, evidence) if str(f.candidate) not in taken]
     return [CandidatePair((_started(f), _started(v))) for f in chosen for v in paired[str(f.candidate)][1]]
+
+
+def _best_with_values(effects, evidence) -> list:
+    """Per place, the fit of `effects` whose kind's evidence leaves least with the place's values
+    beside it (:func:`value_pairs`), its price per parameter as the feature regression's."""
+    from .features import FEATURE_PRICE
+    best = {}
+    for f in effects:
+        ev = evidence(f) if evidence is not None else None
+        left = getattr(ev, "with_values", np.nan) * (1.0 + FEATURE_PRICE) ** f.candidate.definition.feature_price
+        place = str(f.candidate.place)
+        if np.isfinite(left) and (place not in best or left < best[place][0]):
+            best[place] = (left, f)
+    return [f for _, f in best.values()]
 
 
 def finishing(fits, floor: dict) -> list:

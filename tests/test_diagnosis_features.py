@@ -25,12 +25,13 @@ def _truth(extra, seed, m=1.0, b=0.4, k=4.0, substeps=10):
     return Experiment(t, {"F": force}, {"x": x}, {"F": "N", "x": "m"}, "truth")
 
 
-def _evidence(extra, seed) -> FeatureEvidence:
-    """The regression along the run corrected by the graph location's estimate at v_mass."""
+def _evidence(extra, seed, m=1.0) -> FeatureEvidence:
+    """The regression along the run corrected by the graph location's estimate at v_mass (the
+    truth's mass `m`, the nominal's 1 kg)."""
     from diagnosis.graph_location import locate_on_graph
     from plants import library
     graph = library.build("mass-spring-damper")
-    exp = _truth(extra, seed)
+    exp = _truth(extra, seed, m=m)
     scores = locate_on_graph(graph, exp, places=[PLACE])
     return feature_evidence(graph, [PLACE, Place("output", "x")], exp,
                             estimates={s.place: s.estimate for s in scores})[PLACE]
@@ -54,6 +55,18 @@ def test_viscous_ranks_first_and_its_coefficient_is_recovered():
     assert ev.kinds[0].coefficients["v"] == pytest.approx(0.3, rel=0.03)
     # the Coulomb features leave over ten times what the viscous ones leave unexplained
     assert 1.0 - _by_kind(ev)["coulomb_friction"].share > 10 * (1.0 - ev.kinds[0].share)
+
+
+def test_with_the_junctions_values_beside_the_right_kind_leaves_only_the_noise():
+    """A viscous friction under a mass 5 % heavier than the nominal's: with the mass's and the
+    spring's columns (dv/dt, q) fitted beside each kind's features (KindEvidence.with_values, in
+    noise variances), the viscous friction leaves about the noise and the least of the frictions,
+    although alone (the mass's error unexplained) it leaves far more."""
+    ev = _by_kind(_evidence(lambda x, v: 0.3 * v, seed=2, m=1.05))
+    assert ev["viscous_friction"].with_values < 1.3
+    assert all(ev[k].with_values > 3 * ev["viscous_friction"].with_values
+               for k in ("coulomb_friction", "constant_load", "hysteresis"))
+    assert ev["viscous_friction"].share < 0.95        # alone it leaves 9 % of the residual, the mass's part
 
 
 def test_cubic_stiffness_ranks_first_and_its_coefficient_is_recovered():

@@ -140,3 +140,21 @@ def test_friction_beside_a_wrong_inertia_is_found_with_it(tmp_path):
     assert r["answers"] == ["coulomb_viscous_friction @ junction w2", "nominal_value @ junction w2"]
     assert r["parameters"]["Fc_w2"] == pytest.approx(r["effect"]["magnitude"], rel=0.05)
     assert r["kind_ok"] and r["detuned_named"] and r["improvement"] > 0.7
+
+
+def test_a_friction_that_fits_worst_alone_is_refitted_beside_the_mass_its_features_ask_for(tmp_path):
+    """The detuned benchmark's carriage with a viscous friction and its mass 4.5 % light in the
+    nominal (seed 8585 on the fast plants, case 007).  Alone, the viscous friction cannot stand in
+    for the mass and fitted worst of the frictions; the best three alone were paired with the mass
+    and a Dahl friction's elastic phase, again standing in for the mass, answered (velocity
+    held-out error 0.0102).  The feature regression with the mass's column dv/dt beside each kind's
+    (features.left_with) leaves least for the viscous friction, which is now refitted beside the
+    mass too: the velocity's error halves again and the mass comes within 0.1 % of the truth's."""
+    from diagnosis.benchmark.run import run_case
+    fast = {name: PLANTS[name] for name in ("msd", "rlc", "geared-inertias", "carriage", "hydraulic",
+                                            "drivetrain", "dc-motor", "tanks")}
+    r = run_case(draw_cases(80, 8585, fast)[7], fast, tmp_path, detune=0.05)
+    assert (r["label"], r["detuned"]["parameter"]) == ("007-carriage-viscous_friction@junction:v_cart", "m")
+    assert r["answers"] == ["viscous_friction @ junction v_cart", "nominal_value @ junction v_cart"]
+    assert r["parameters"]["m"] == pytest.approx(r["detuned"]["nominal"], rel=0.002)
+    assert r["improved_nrmse"] < 0.007 and r["kind_ok"] and r["detuned_named"]

@@ -18,8 +18,11 @@ this one.
 """
 from __future__ import annotations
 
+import numpy as np
+
 from ..catalogue_common import ParamSpec, junction_elements
 from .base import Kind, Proposal, register
+from .feature_signals import FeatureGroup
 
 #: the factor either way a nominal value may be refitted within
 RANGE = 3.0
@@ -33,7 +36,7 @@ class NominalValue(Kind):
 
     def propose(self, site):
         out = []
-        for element in _linear_elements(site):
+        for element in _linear_elements(site.graph, site.name):
             v = float(element.value.value)
             lower, upper = v / RANGE, v * RANGE
             if element.kind == "R":     # only the way no other kind goes (module docstring)
@@ -58,10 +61,32 @@ class NominalValue(Kind):
                 f"a wrong nominal value of {cand.target}")
 
 
-def _linear_elements(site) -> list:
-    """The I, C and R elements on the junction (in that order, each in bond order) whose law is
+def value_columns(graph, junction: str, signals) -> FeatureGroup | None:
+    """What the I and C values refitted at `junction` add to it, as feature columns for the feature
+    regression (:mod:`diagnosis.features`) to fit beside a kind's: a value :math:`\\Delta m` off
+    adds the effort :math:`\\Delta m\\,\\dot v` at a 1-junction (an I) or :math:`\\Delta k\\,q` (a C,
+    its content q), and the flow :math:`\\Delta C\\,\\dot e` at a 0-junction (a C).  One column per
+    distinct signal (two masses on one 1-junction are one column); an I on a 0-junction and the
+    R elements have none (an R's value is the viscous friction's or the leak's own column).  None
+    when the junction has no such value.  `signals` is the junction's
+    :class:`~diagnosis.kinds.feature_signals.FeatureSignals`."""
+    columns = {}
+    for element in _linear_elements(graph, junction):
+        if element.kind == "I" and signals.one:
+            columns["dv/dt"] = np.gradient(signals.v, signals.t)
+        elif element.kind == "C" and signals.one and f"content:{element.name}" in signals.values:
+            columns[f"q({element.name})"] = np.asarray(signals.values[f"content:{element.name}"], float)
+        elif element.kind == "C" and not signals.one:
+            columns["de/dt"] = np.gradient(np.asarray(signals.values["effort"], float), signals.t)
+    if not columns:
+        return None
+    return FeatureGroup(None, "", list(columns), np.stack(list(columns.values()), axis=1))
+
+
+def _linear_elements(graph, junction: str) -> list:
+    """The I, C and R elements on `junction` (in that order, each in bond order) whose law is
     their own positive value."""
-    on = [e for e, _ in junction_elements(site.graph, site.name)
+    on = [e for e, _ in junction_elements(graph, junction)
           if e.kind in ("I", "C", "R") and getattr(e, "value", None) is not None and float(e.value.value) > 0]
     return [e for kind in ("I", "C", "R") for e in on if e.kind == kind]
 

@@ -8,7 +8,7 @@ from diagnosis.backfit import alternatives
 from diagnosis.catalogue import Candidate
 from diagnosis.benchmark.compound import second_effect
 from diagnosis.benchmark.draw import draw_cases
-from diagnosis.benchmark.plants import PLANTS
+from diagnosis.benchmark.plants import FAST, PLANTS
 from diagnosis.benchmark.run import run_case
 from diagnosis.fit import CandidateFit, floor_within_reach
 
@@ -81,9 +81,7 @@ def test_rounds_before_one_the_backfit_replaced_are_swept_again(tmp_path):
     lag), then round 2's lag by the delay, beside which the load ended at 5e-5 N, and the answer
     kept it.  Round 1 is now swept again beside the delay (backfit.SWEEPS), its reference without
     its own refitted mass: the mass alone."""
-    fast = {name: PLANTS[name] for name in ("msd", "rlc", "geared-inertias", "carriage", "hydraulic",
-                                            "drivetrain", "dc-motor", "tanks")}
-    r = run_case(draw_cases(40, 7474, fast)[24], fast, tmp_path, detune=0.05)
+    r = run_case(draw_cases(40, 7474, FAST)[24], FAST, tmp_path, detune=0.05)
     assert (r["label"], r["detuned"]["parameter"]) == ("024-carriage-transport_delay@input:F", "m")
     assert r["answers"] == ["nominal_value @ junction v_cart", "transport_delay @ input F"]
     assert r["kind_ok"] and r["detuned_named"] and r["improvement"] > 0.9

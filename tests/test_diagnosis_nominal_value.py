@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from diagnosis.benchmark.draw import draw_cases, realise
-from diagnosis.benchmark.plants import PLANTS
+from diagnosis.benchmark.plants import FAST, PLANTS
 from diagnosis.benchmark.run import bindings, write_csv
 from diagnosis.catalogue import candidates
 from diagnosis.diagnose import diagnose
@@ -74,10 +74,8 @@ def test_a_later_round_does_not_change_an_element_an_earlier_one_refitted(tmp_pa
     and round 2 refitted it again with a cubic term, the rest of round 1's fit answered as a
     cubic spring, a false alarm.  An element an earlier round changed is not offered again."""
     from diagnosis.benchmark.run import run_case
-    fast = {name: PLANTS[name] for name in ("msd", "rlc", "geared-inertias", "carriage", "hydraulic",
-                                            "drivetrain", "dc-motor", "tanks")}
-    spec = draw_cases(40, 6363, fast)[9]
-    r = run_case(spec, fast, tmp_path, detune=0.05)
+    spec = draw_cases(40, 6363, FAST)[9]
+    r = run_case(spec, FAST, tmp_path, detune=0.05)
     assert (r["label"], r["detuned"]["parameter"]) == ("009-hydraulic-none", "C2")
     assert r["answers"][0] == "nominal_value @ junction p2" and r["detuned_named"]
     assert r["kind_ok"] and not any(a.startswith("nonlinear_stiffness") for a in r["answers"])
@@ -91,9 +89,7 @@ def test_two_effects_are_not_combined_on_one_element(tmp_path):
     error was five times the nominal's.  Now no two effects change one element (pairs.targets):
     the backlash and the mass's value."""
     from diagnosis.benchmark.run import run_case
-    fast = {name: PLANTS[name] for name in ("msd", "rlc", "geared-inertias", "carriage", "hydraulic",
-                                            "drivetrain", "dc-motor", "tanks")}
-    r = run_case(draw_cases(40, 6363, fast)[22], fast, tmp_path, detune=0.05)
+    r = run_case(draw_cases(40, 6363, FAST)[22], FAST, tmp_path, detune=0.05)
     assert (r["label"], r["detuned"]["parameter"]) == ("022-msd-backlash@storage:k", "m")
     assert sorted(r["answers"]) == ["backlash @ junction v_mass", "nominal_value @ junction v_mass"]
     assert r["kind_ok"] and r["detuned_named"] and r["improvement"] > 0.9
@@ -133,9 +129,7 @@ def test_friction_beside_a_wrong_inertia_is_found_with_it(tmp_path):
     no longer pay.  Now the best effects are fitted with their junction's value beside them
     (pairs.value_pairs): the friction and the inertia together, the error at the floor."""
     from diagnosis.benchmark.run import run_case
-    fast = {name: PLANTS[name] for name in ("msd", "rlc", "geared-inertias", "carriage", "hydraulic",
-                                            "drivetrain", "dc-motor", "tanks")}
-    r = run_case(draw_cases(40, 7474, fast)[32], fast, tmp_path, detune=0.05)
+    r = run_case(draw_cases(40, 7474, FAST)[32], FAST, tmp_path, detune=0.05)
     assert (r["label"], r["detuned"]["parameter"]) == ("032-geared-inertias-coulomb_viscous_friction@junction:w2", "J2")
     assert r["answers"] == ["coulomb_viscous_friction @ junction w2", "nominal_value @ junction w2"]
     assert r["parameters"]["Fc_w2"] == pytest.approx(r["effect"]["magnitude"], rel=0.05)
@@ -151,9 +145,7 @@ def test_a_friction_that_fits_worst_alone_is_refitted_beside_the_mass_its_featur
     (features.left_with) leaves least for the viscous friction, which is now refitted beside the
     mass too: the velocity's error halves again and the mass comes within 0.1 % of the truth's."""
     from diagnosis.benchmark.run import run_case
-    fast = {name: PLANTS[name] for name in ("msd", "rlc", "geared-inertias", "carriage", "hydraulic",
-                                            "drivetrain", "dc-motor", "tanks")}
-    r = run_case(draw_cases(80, 8585, fast)[7], fast, tmp_path, detune=0.05)
+    r = run_case(draw_cases(80, 8585, FAST)[7], FAST, tmp_path, detune=0.05)
     assert (r["label"], r["detuned"]["parameter"]) == ("007-carriage-viscous_friction@junction:v_cart", "m")
     assert r["answers"] == ["viscous_friction @ junction v_cart", "nominal_value @ junction v_cart"]
     assert r["parameters"]["m"] == pytest.approx(r["detuned"]["nominal"], rel=0.002)

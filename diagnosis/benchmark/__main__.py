@@ -25,7 +25,7 @@ import numpy as np
 
 from .compound import compound_label, second_effect
 from .draw import draw_cases
-from .plants import PLANTS
+from .plants import FAST, PLANTS
 from .report import summarise, write_report
 from .run import run_case
 
@@ -44,7 +44,8 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=2026, help="benchmark seed (default 2026)")
     ap.add_argument("--report", default="benchmark-report", help="output directory")
     ap.add_argument("--jobs", type=int, default=1, help="cases diagnosed in parallel (processes)")
-    ap.add_argument("--plants", default="", help="comma-separated plant names (default: all)")
+    ap.add_argument("--plants", default="",
+                    help="comma-separated plant names, or 'fast' (diagnosis.benchmark.plants.FAST; default: all)")
     ap.add_argument("--only", default="", help="comma-separated case indices to run")
     ap.add_argument("--max-effects", type=int, default=2, help="passed to diagnose (default 2)")
     ap.add_argument("--compound", action="store_true",
@@ -64,7 +65,9 @@ def main(argv=None) -> int:
     if not a.sampling >= 1.0:
         ap.error(f"--sampling must be a factor of at least 1, got {a.sampling}")
     plants = PLANTS
-    if a.plants:
+    if a.plants == "fast":
+        plants = FAST
+    elif a.plants:
         unknown = [p for p in a.plants.split(",") if p not in PLANTS]
         if unknown:
             ap.error(f"unknown plant(s) {', '.join(unknown)}; known: {', '.join(PLANTS)}")

@@ -11,7 +11,7 @@ from .plants_hydraulic import hydraulic
 from .plants_pam import pam, pam_frictionless
 from .plants_textbook import coupled_tanks, dc_motor, geared_inertias, mass_spring_damper, rlc
 
-__all__ = ["PLANTS", "plant"]
+__all__ = ["PLANTS", "FAST", "plant"]
 
 #: Benchmark plant name -> factory returning a fresh :class:`TruthPlant`.
 PLANTS: dict[str, Callable[[], TruthPlant]] = {
@@ -29,6 +29,11 @@ PLANTS: dict[str, Callable[[], TruthPlant]] = {
     "carriage": carriage,
     "hydraulic": hydraulic,
 }
+
+#: The plants whose truths and diagnoses take seconds (all but the PAM joints, the exoskeleton and
+#: the cylinders): the detuned and resampled runs' ``--plants``, and the tests' cases.
+FAST: dict[str, Callable[[], TruthPlant]] = {name: PLANTS[name] for name in (
+    "msd", "rlc", "geared-inertias", "carriage", "hydraulic", "drivetrain", "dc-motor", "tanks")}
 
 
 def plant(name: str) -> TruthPlant:

@@ -158,6 +158,12 @@ class KindEvidence:
         """``kind`` or ``kind (variant)``."""
         return f"{self.kind} ({self.variant})" if self.variant else self.kind
 
+    @property
+    def with_values_score(self) -> float:
+        """:attr:`with_values` priced per parameter as the regression's scores are
+        (:data:`FEATURE_PRICE`); NaN where the junction has no values."""
+        return self.with_values * (1.0 + FEATURE_PRICE) ** REGISTRY[self.kind].feature_price
+
 
 @dataclass
 class FeatureEvidence:
@@ -199,6 +205,12 @@ class FeatureEvidence:
     def best(self) -> KindEvidence | None:
         """The best significant kind, or None."""
         return next((k for k in self.kinds if k.significant), None)
+
+    def best_with_values(self) -> KindEvidence | None:
+        """The kind that leaves least with the junction's values beside it
+        (:attr:`KindEvidence.with_values_score`), or None where the junction has no values."""
+        scored = [k for k in self.kinds if np.isfinite(k.with_values_score)]
+        return min(scored, key=lambda k: k.with_values_score) if scored else None
 
     def to_json(self) -> dict:
         """JSON form: place, unit, selected kinds and per kind its share and coefficients."""
@@ -530,7 +542,11 @@ def prune_candidates(cands: list, evidence: dict) -> tuple[list, list]:
     where its extra term may meet values the first rows never had.  A cylinder's pressure held at
     other levels in the last rows than in the first made the pressure term's fit on the first rows
     collinear with the sign: it validated at -124 % with coefficients on all rows equal to the
-    truth's, and Coulomb friction answered (seed 2323, case 023).
+    truth's, and Coulomb friction answered (seed 2323, case 023).  The kind that leaves least with
+    the junction's values beside it (:meth:`FeatureEvidence.best_with_values`) is kept too, to be
+    refitted beside them (:func:`diagnosis.pairs.value_pairs`): a carriage's hardening spring
+    validated at -990 % alone, its linear term standing in for a mass 3 % light, and at the noise
+    with the mass beside it (detuned benchmark, seed 7474, case 035).
     """
     keep, dropped = [], []
     for cand in cands:
@@ -542,7 +558,7 @@ def prune_candidates(cands: list, evidence: dict) -> tuple[list, list]:
         if ev is None or best is None or best.excess_share < PRUNE_FROM or ev in place_ev.kinds[:PRUNE_KEEP]:
             keep.append(cand)
             continue
-        if best.kind in getattr(REGISTRY.get(cand.kind), "nests", {}):
+        if best.kind in getattr(REGISTRY.get(cand.kind), "nests", {}) or ev is place_ev.best_with_values():
             keep.append(cand)
             continue
         left, best_left = 1.0 - ev.excess_share, max(1.0 - best.excess_share, 0.0)

@@ -180,12 +180,15 @@ def value_pairs(fits, n: int = VALUED, evidence=None) -> list[CandidatePair]:
     (``fit -> KindEvidence or None``, :func:`diagnosis.features.evidence_lookup`), at each place
     the effect whose kind's features leave least of the located estimate with the place's values
     fitted beside them (:attr:`KindEvidence.with_values <diagnosis.features.KindEvidence>`, priced
-    per parameter as the regression is) is paired too."""
+    per parameter as the regression is) is paired too, even where its fit alone was given up: a
+    carriage's hardening spring, whose linear term alone stood in for the mass 3 % light, fitted so
+    badly alone that it was given up (seed 7474, case 035)."""
     singles = [f for f in fits if f.candidate is not None and not hasattr(f.candidate, "members")]
     values = sorted((f for f in singles if f.candidate.kind == "nominal_value"
                      and np.isfinite(f.extra.get("train_cost", np.inf))), key=lambda f: f.extra["train_cost"])
-    effects = sorted((f for f in singles if f.candidate.kind != "nominal_value" and np.isfinite(train_cost(f))),
-                     key=train_cost)
+    # the successful effect fits by training cost, then those given up (the evidence may ask for one)
+    effects = sorted((f for f in singles if f.candidate.kind != "nominal_value"),
+                     key=lambda f: (train_cost(f), f.extra.get("train_cost", np.inf)))
 
     def partners(f):
         fitting = [v for v in values if not clashes(f.candidate, claims([v.candidate]))]
@@ -197,23 +200,24 @@ def value_pairs(fits, n: int = VALUED, evidence=None) -> list[CandidatePair]:
     for f in effects:
         paired.setdefault(str(f.candidate), (f, partners(f)))
     effects = [f for f, with_values in paired.values() if with_values]
+    asked = _best_with_values(effects, evidence)
+    effects = [f for f in effects if np.isfinite(train_cost(f))]
     chosen = effects[:n]
     for f in effects[:n]:         # the simpler kinds each extends, after the best n
         taken = {str(c.candidate) for c in chosen}
         chosen += [g for g in effects if str(g.candidate) not in taken and extends(f.candidate, g.candidate)]
     taken = {str(c.candidate) for c in chosen}
-    chosen += [f for f in _best_with_values(effects, evidence) if str(f.candidate) not in taken]
+    chosen += [f for f in asked if str(f.candidate) not in taken]
     return [CandidatePair((_started(f), _started(v))) for f in chosen for v in paired[str(f.candidate)][1]]
 
 
 def _best_with_values(effects, evidence) -> list:
     """Per place, the fit of `effects` whose kind's evidence leaves least with the place's values
-    beside it (:func:`value_pairs`), its price per parameter as the feature regression's."""
-    from .features import FEATURE_PRICE
+    beside it (:attr:`KindEvidence.with_values_score <diagnosis.features.KindEvidence>`)."""
     best = {}
     for f in effects:
         ev = evidence(f) if evidence is not None else None
-        left = getattr(ev, "with_values", np.nan) * (1.0 + FEATURE_PRICE) ** f.candidate.definition.feature_price
+        left = getattr(ev, "with_values_score", np.nan)
         place = str(f.candidate.place)
         if np.isfinite(left) and (place not in best or left < best[place][0]):
             best[place] = (left, f)

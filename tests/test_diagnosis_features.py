@@ -165,6 +165,14 @@ def test_pruning_keeps_the_best_kinds_and_candidates_without_features():
     kept, dropped = prune_candidates(cands, {PLACE: _place_evidence(shares)})
     assert "pressure_dependent_friction" in [c.kind for c in kept]
     assert [c.kind for c in dropped] == ["constant_load", "backlash"]
+    # the kind that leaves least with the junction's values beside it is fitted, to be paired with
+    # them (seed 7474's detuned case 035: a hardening spring beside a carriage's mass 3 % light)
+    ev = _place_evidence(shares)
+    for k in ev.kinds:
+        k.with_values = 1.1 if k.kind == "backlash" else 200.0
+    assert ev.best_with_values().kind == "backlash"
+    kept, dropped = prune_candidates(cands, {PLACE: ev})
+    assert [c.kind for c in dropped] == ["constant_load"]
 
 
 def test_diagnose_reports_the_feature_regression(tmp_path):

@@ -115,19 +115,19 @@ def test_the_text_names_each_kind_of_a_pair_at_its_place():
 
 def test_the_effect_the_values_evidence_asks_for_is_paired_too_however_it_fits_alone():
     """With the feature evidence, each place's effect whose kind leaves least of the located
-    estimate with the place's values fitted beside it (KindEvidence.with_values, priced per
-    parameter) joins the value pairs, though it fitted worst alone."""
+    estimate with the place's values fitted beside it (KindEvidence.with_values_score) joins the
+    value pairs, though it fitted worst alone."""
     from types import SimpleNamespace
     fits = [_fit("coulomb_friction", "junction v", ["Fc"], 0.030),
             _fit("hysteresis", "junction v", ["Fh", "sigma"], 0.031),
             _fit("viscous_friction", "junction v", ["b"], 0.090),
             _fit("coulomb_viscous_friction", "junction v", ["Fc2", "b2"], 0.080),
             _fit("nominal_value", "junction v", ["m"], 0.300, {"m": 1.1})]
-    left = {"coulomb_friction": 4.4, "hysteresis": 3.8, "viscous_friction": 1.17,
-            "coulomb_viscous_friction": 1.16}           # one parameter more: 1.16 x 1.05 > 1.17
+    left = {"coulomb_friction": 4.6, "hysteresis": 4.2, "viscous_friction": 1.23,
+            "coulomb_viscous_friction": 1.28}     # KindEvidence.with_values_score: priced per parameter
 
     def evidence(fit):
-        return SimpleNamespace(with_values=left[fit.candidate.kind]) if fit.candidate.kind in left else None
+        return SimpleNamespace(with_values_score=left[fit.candidate.kind]) if fit.candidate.kind in left else None
 
     without = [str(p) for p in value_pairs(fits, n=1)]
     assert without == ["coulomb_friction at junction v and nominal_value at junction v"]

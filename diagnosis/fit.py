@@ -788,15 +788,18 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
 
 
 def _no_idle_terms(fits, train) -> list:
-    """`fits` without those whose law extends another fit's at its place
-    (:func:`~diagnosis.kinds.base.extends`) but reach no lower training error (`train`, the sum of
-    squared training NRMSEs): their extra terms explain nothing of the training part, which the
-    law they extend, at those terms' 0, fits as well, and a lead on the held-out part is where the
-    optimiser stopped, not physics (seed 4747, case 047: a pressure-dependent friction with a
-    pressure term of -6.8e-13 N m/Pa on a level of 2.2e-6 N m, its training error above the Coulomb
-    fit's and its held-out error 4 % below it, z = 7)."""
-    from .kinds.base import extends
-    return [f for f in fits if not any(extends(f.candidate, g.candidate) and np.isfinite(train(g))
+    """`fits` without those whose model holds another fit's (:func:`~diagnosis.kinds.base.holds`: a
+    law that extends another's at its place, or a pair or group with a member more or extended)
+    but reach no lower training error (`train`, the sum of squared training NRMSEs): their extra
+    terms explain nothing of the training part, which the model they hold, at those terms' neutral
+    values, fits as well, and a lead on the held-out part is where the optimiser stopped, not
+    physics (seed 4747, case 047: a pressure-dependent friction with a pressure term of -6.8e-13 N
+    m/Pa on a level of 2.2e-6 N m, its training error above the Coulomb fit's and its held-out error
+    4 % below it, z = 7; detuned benchmark, seed 7474, case 010: a Stribeck friction beside a
+    refitted inertia, its training error above that of Coulomb friction beside it and its held-out
+    error 2 % below it, z = 3.2)."""
+    from .kinds.base import holds
+    return [f for f in fits if not any(holds(f.candidate, g.candidate) and np.isfinite(train(g))
                                        and train(g) <= train(f) for g in fits)]
 
 

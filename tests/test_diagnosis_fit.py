@@ -511,6 +511,21 @@ def test_a_richer_law_that_fits_the_training_part_no_better_is_not_chosen(rng):
         pressure = fit("pressure_dependent_friction", 3, truth, train)
         assert choose({"x": 0.5}, [coulomb, pressure], noise=floor, measured=held) is (
             pressure if richer_wins else coulomb)
+    # the same between pairs: a Stribeck friction beside a refitted inertia holds Coulomb friction
+    # beside it (detuned benchmark, seed 7474, case 010), and both hold Coulomb friction alone
+    inertia = SimpleNamespace(kind="nominal_value", place=place, regime=None, target="J",
+                              definition=kind_named("nominal_value"))
+
+    def beside(f, n_params, train):
+        pair = SimpleNamespace(members=(f.candidate, inertia), kind=f.candidate.kind, place=place)
+        return CandidateFit(pair, {}, {"x": train}, f.holdout_nrmse, n_params, True, "", extra=dict(f.extra))
+
+    coulomb_j = beside(coulomb, 3, 0.0950)
+    for train, richer_wins in ((0.0951, False), (0.0940, True)):
+        stribeck_j = beside(fit("stribeck_friction", 5, truth, train), 5, train)
+        assert choose({"x": 0.5}, [coulomb_j, stribeck_j], noise=floor, measured=held) is (
+            stribeck_j if richer_wins else coulomb_j)
+    assert choose({"x": 0.5}, [coulomb, beside(coulomb, 3, 0.1000)], noise=floor, measured=held) is coulomb
 
 
 def test_a_richer_fit_the_held_out_part_resolves_is_not_priced_out(rng):

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
+from itertools import permutations
 from typing import ClassVar
 
 import numpy as np
@@ -24,7 +25,7 @@ from ..catalogue_scales import Scales
 from ..errors import DiagnosisError
 from ..place import Place
 
-__all__ = ["Kind", "Site", "Proposal", "DOORS", "REGISTRY", "register", "kind_named", "hang"]
+__all__ = ["Kind", "Site", "Proposal", "DOORS", "REGISTRY", "register", "kind_named", "hang", "extends", "holds"]
 
 #: The places a kind may attach to: a 1-junction, a 0-junction, a recorded input, a measured output.
 DOORS = ("1", "0", "input", "output")
@@ -260,3 +261,36 @@ def extends(richer, simpler) -> bool:
             and not hasattr(simpler, "members") and richer.place == simpler.place
             and richer.kind != simpler.kind and simpler.kind in richer.definition.nests
             and getattr(simpler, "regime", None) in (None, getattr(richer, "regime", None)))
+
+
+def holds(richer, simpler) -> bool:
+    """Whether model `richer` holds `simpler`: each member of `simpler` (a candidate, or a pair or
+    group of candidates, each member with parameters of its own) is one of `richer`'s (same kind,
+    place, regime and element) or extended by one (:func:`extends`), each matched once, and
+    `richer` adds something (a member more, or an extension).  At its extra parameters' neutral
+    values (a friction's extra terms at 0, a value refitted at the nominal) `richer` is then
+    `simpler`: a Stribeck friction beside an inertia refitted holds a Coulomb friction beside it,
+    and a Coulomb friction alone.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as NS
+    >>> coulomb, value = NS(kind="coulomb_friction", place="w"), NS(kind="nominal_value", place="w")
+    >>> pair = NS(members=(coulomb, value))
+    >>> holds(pair, coulomb), holds(coulomb, pair), holds(pair, pair)
+    (True, False, False)
+    """
+    if richer is None or simpler is None:
+        return False
+    big, small = list(getattr(richer, "members", (richer,))), list(getattr(simpler, "members", (simpler,)))
+    if len(small) > len(big):
+        return False
+    for matched in permutations(big, len(small)):
+        same = [_key(r) == _key(s) for r, s in zip(matched, small)]
+        if all(a or extends(r, s) for a, r, s in zip(same, matched, small)):
+            return len(big) > len(small) or not all(same)
+    return False
+
+
+def _key(candidate) -> tuple:
+    return (candidate.kind, str(candidate.place), getattr(candidate, "regime", None), getattr(candidate, "target", None))

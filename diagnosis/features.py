@@ -136,9 +136,9 @@ class KindEvidence:
     with_values : float
         What this kind's features leave of the residual with the junction's own I and C values
         refitted beside them (:func:`~diagnosis.kinds.nominal_value.value_columns`), in noise
-        variances per validation value (:func:`left_with`; about 1: only the noise); NaN where
-        the junction has none.  The kind that leaves least is the one to refit beside them
-        (:func:`diagnosis.pairs.value_pairs`).
+        variances per validation value (:func:`left_with`; 1 would be the noise alone, the
+        linearisation leaves a few); NaN where the junction has none.  The kind that leaves least
+        is the one to refit beside them (:func:`diagnosis.pairs.value_pairs`).
     """
 
     kind: str
@@ -213,12 +213,13 @@ class FeatureEvidence:
         return min(scored, key=lambda k: k.with_values_score) if scored else None
 
     def to_json(self) -> dict:
-        """JSON form: place, unit, selected kinds and per kind its share and coefficients."""
+        """JSON form: place, unit, selected kinds and per kind its share, what it leaves with the
+        junction's values beside it (None where there are none) and its coefficients."""
         return {"place": str(self.place), "unit": self.unit, "selected": list(self.selected),
                 "selected_share": _finite(self.selected_share),
                 "kinds": [{"kind": k.kind, "variant": k.variant or "", "detail": k.detail,
                            "share": _finite(k.share), "excess_share": _finite(k.excess_share),
-                           "significant": bool(k.significant),
+                           "significant": bool(k.significant), "with_values": _finite(k.with_values),
                            "coefficients": {n: _finite(v) for n, v in k.coefficients.items()}}
                           for k in self.kinds]}
 

@@ -186,6 +186,11 @@ def test_diagnose_reports_the_feature_regression(tmp_path):
     (features,) = report.to_json()["features"]
     assert features["place"] == "junction v_mass" and features["selected"] == ["coulomb_friction"]
     assert features["kinds"][0]["coefficients"]["sign(v)"] == pytest.approx(0.3, rel=0.05)
+    # with the mass's and the spring's columns beside, the sign laws leave a few noise variances, the
+    # rest hundreds or more
+    left = {k["kind"]: k["with_values"] for k in features["kinds"]}
+    assert max(left[k] for k in ("coulomb_friction", "stribeck_friction", "coulomb_viscous_friction")) < 10
+    assert min(v for k, v in left.items() if "friction" not in k) > 100
     assert "Feature regression at junction v_mass" in report.text
 
 

@@ -159,4 +159,4 @@ def _place_of(fit) -> str:
     if fit.candidate is None:
         return ""
     places = getattr(fit.candidate, "places", None) or (fit.candidate.place,)
-    return ", ".join(str(p) for p in places)
+    return ", ".join(dict.fromkeys(str(p) for p in places))     # a value pair's members share a place

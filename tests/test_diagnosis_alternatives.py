@@ -161,6 +161,11 @@ def test_a_dearer_reading_that_predicts_as_well_is_listed_but_not_the_winner_wit
     assert dahl.holdout_nrmse["x"] ** 2 * 1.1 > winner.holdout_nrmse["x"] ** 2 * 1.02 ** 2     # priced: no tie
     found = indistinguishable(winner, [winner, dahl, idle], {"x": 0.5}, noise=floor, measured=held)
     assert [a.kind for a in found] == ["hysteresis"] and found[0].n_params == 2
+    assert found[0].place == "junction j"
+    # beside a value refitted at its place (a pair), its place is named once
+    dahl.candidate.places = (dahl.candidate.place, dahl.candidate.place)
+    found = indistinguishable(winner, [winner, dahl], {"x": 0.5}, noise=floor, measured=held)
+    assert found[0].place == "junction j"
 
 
 def test_the_report_names_the_reading_it_cannot_tell_apart(tmp_path):

@@ -293,4 +293,5 @@ def holds(richer, simpler) -> bool:
 
 
 def _key(candidate) -> tuple:
-    return (candidate.kind, str(candidate.place), getattr(candidate, "regime", None), getattr(candidate, "target", None))
+    return (candidate.kind, str(getattr(candidate, "place", None)), getattr(candidate, "regime", None),
+            getattr(candidate, "target", None))

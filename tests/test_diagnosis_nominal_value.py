@@ -173,8 +173,8 @@ def test_a_richer_law_beside_a_value_that_fits_the_training_part_no_better_is_no
     shaft's inertia 2.6 % light (seed 7474 on the fast plants, case 010).  A Stribeck friction
     beside the output inertia (a Stribeck term of 1 % of the level) was 2 % better held out than
     Coulomb friction beside it, z = 3.2, and answered, its training error above the Coulomb pair's.
-    A pair is now held by the pair with a richer member as a law by its extension (kinds.base.holds),
-    and an extra term that does not lower the training error is idle (fit._no_idle_terms)."""
+    A pair whose member extends the other pair's member now holds that pair (kinds.base.holds), and
+    an extra term that does not lower the training error is idle (fit._no_idle_terms)."""
     from diagnosis.benchmark.run import run_case
     r = run_case(draw_cases(40, 7474, FAST)[10], FAST, tmp_path, detune=0.05)
     assert (r["label"], r["detuned"]["parameter"]) == ("010-geared-inertias-coulomb_friction@junction:w1", "J1")

@@ -248,14 +248,14 @@ def _signals(graph, junction: str, regime_variables) -> dict:
     return out
 
 
-def _kind_variants(kind, one, values, t, domain) -> list:
-    """``(variant, detail, names, columns (n, m))`` of `kind` at a junction (`one`: a 1-junction)
-    from the nominal `values` (label -> ndarray, :func:`_signals`): the kind's
+def _kind_variants(kind, signals: FeatureSignals) -> list:
+    """``(variant, detail, names, columns (n, m))`` of `kind` at a junction from its `signals`
+    (:func:`_signals`, read along the run): the kind's
     :meth:`~diagnosis.kinds.base.Kind.features`, where it applies."""
     definition = REGISTRY[kind]
-    if ("1" if one else "0") not in definition.feature_doors:
+    if ("1" if signals.one else "0") not in definition.feature_doors:
         return []
-    return list(definition.features(FeatureSignals(np.asarray(t, float), values, one, domain)))
+    return list(definition.features(signals))
 
 
 def regress_kinds(responses: dict, r, w, *, price: float = FEATURE_PRICE, validation: float = VALIDATION,
@@ -286,10 +286,7 @@ def regress_kinds(responses: dict, r, w, *, price: float = FEATURE_PRICE, valida
         selection's groups and their joint validated share.
     """
     rows, ny = r.shape
-    split = int(round((1.0 - validation) * rows))
-    sw = np.sqrt(np.asarray(w, float))
-    b = r * sw[None, :]
-    b_fit, b_val = b[:split].reshape(-1), b[split:].reshape(-1)
+    sw, b, b_fit, b_val, split = _weighted_split(r, w, validation)
     sse0 = float(b_val @ b_val)
     if not sse0 > 0:
         return {}, [], 0.0
@@ -341,6 +338,15 @@ def regress_kinds(responses: dict, r, w, *, price: float = FEATURE_PRICE, valida
     return out, selected, best_share
 
 
+def _weighted_split(r, w, validation: float):
+    """``(sw, b, b_fit, b_val, split)``: the square-root weights of `w`, the weighted residual `r`
+    (rows, ny), and its first `split` rows and the rest (the last `validation` share), flattened."""
+    split = int(round((1.0 - validation) * r.shape[0]))
+    sw = np.sqrt(np.asarray(w, float))
+    b = r * sw[None, :]
+    return sw, b, b[:split].reshape(-1), b[split:].reshape(-1), split
+
+
 def _validated_sse(S, sw, b_fit, b_val, split: int) -> tuple[float, int]:
     """``(validation SSE, rank)`` of the least-squares fit of the weighted residual (`b_fit`, the
     first `split` rows; `b_val`, the rest) on the responses `S` (rows, ny, m), weights `sw`."""
@@ -372,10 +378,7 @@ def left_with(responses: dict, beside, r, w, *, validation: float = VALIDATION) 
     {'a': 1.0}
     """
     rows = r.shape[0]
-    split = int(round((1.0 - validation) * rows))
-    sw = np.sqrt(np.asarray(w, float))
-    b = r * sw[None, :]
-    b_fit, b_val = b[:split].reshape(-1), b[split:].reshape(-1)
+    sw, _, b_fit, b_val, split = _weighted_split(r, w, validation)
     out = {}
     for key, (_, S) in responses.items():
         ok = np.isfinite(S).all() and S.shape[0] == rows and b_val.size
@@ -469,17 +472,18 @@ def _evidence_at(graph, p, experiment, x0, regime_variables, d_hat):
     sigma = [max(noise_sigma(measured[o], residual[o]), 1e-3 * float(np.std(measured[o])), 1e-300)
              for o in outputs]
     w = 1.0 / np.square(sigma)
-    one = graph.elements[p.name].kind == "1"
+    # one set of signals for every kind (its cached sign and RMS flow computed once)
+    signals = FeatureSignals(np.asarray(t, float), values, graph.elements[p.name].kind == "1",
+                             junction_domain(graph, p.name))
     groups, grids = {}, {}
     for kind in [name for name, definition in REGISTRY.items() if definition.feature_doors]:
-        for group in _kind_variants(kind, one, values, t, junction_domain(graph, p.name)):
+        for group in _kind_variants(kind, signals):
             groups[(kind, group.variant, group.detail)] = (group.names, group.columns)
             grids[(kind, group.variant, group.detail)] = tuple(group.grid)
     if not groups:
         return None
     keys = list(groups)
-    own = value_columns(graph, p.name, FeatureSignals(np.asarray(t, float), values, one,
-                                                     junction_domain(graph, p.name)))
+    own = value_columns(graph, p.name, signals)
     beside = [] if own is None else [own.columns]
     F_all = np.concatenate([d_hat[:, None]] + [groups[k][1] for k in keys] + beside, axis=1)
     S_all = lin.response(np.zeros(F_all.shape[1], dtype=int), F_all, rows)

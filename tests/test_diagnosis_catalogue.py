@@ -415,9 +415,9 @@ def test_a_new_kind_is_one_class_in_the_registry(monkeypatch):
     # its features take part in the regression like the built-in kinds'
     from diagnosis.features import _kind_variants
     t = np.linspace(0.0, 1.0, 11)
-    (group,) = _kind_variants("quadratic_drag", True, {"flow": t - 0.5}, t, "translation")
+    (group,) = _kind_variants("quadratic_drag", FeatureSignals(t, {"flow": t - 0.5}, True, "translation"))
     assert group.columns[:, 0] == pytest.approx((t - 0.5) * np.abs(t - 0.5))
-    assert _kind_variants("quadratic_drag", False, {"flow": t}, t, "translation") == []
+    assert _kind_variants("quadratic_drag", FeatureSignals(t, {"flow": t}, False, "translation")) == []
     assert isinstance(FeatureSignals(t, {"flow": t}, True, "translation").sign, np.ndarray)
 
 

@@ -255,9 +255,16 @@ def _started_mid_run(candidate, train, x0):
     return replace(candidate, initial={k: u0 for k in candidate.initial})
 
 
+#: a training cost (half the sum of the outputs' squared NRMSE) that is no evidence at all: an NRMSE
+#: of 1e-6, a millionth of an output's spread, far below any sensor's noise.  On a record without
+#: noise a limit fitted AT a level it clips by 4e-13 raised a cost of 1e-20 by more than 1 %
+_NO_EVIDENCE = 0.5e-12
+
+
 def _release_unsupported_limits(objective, specs, theta, lower, upper):
     """A saturation limit that the training part gives no evidence for, i.e. whose move
-    to its outer bound raises the training cost by less than 1 %, is released: it becomes
+    to its outer bound raises the training cost by less than 1 % (or by less than
+    :data:`_NO_EVIDENCE` per output), is released: it becomes
     :data:`~diagnosis.catalogue_common.RELEASED` (no limit on that side).  A limit left where
     the training data happen to end, or at the fit's bound just beyond them, would clip the
     held-out part, which may go further.  Returns ``(theta, released)``, `released` the names
@@ -274,7 +281,7 @@ def _release_unsupported_limits(objective, specs, theta, lower, upper):
         trial[i] = lower[i] if side == "min" else upper[i]
         r = objective(trial)
         cost = 0.5 * float(r @ r)
-        if cost <= 1.01 * base:
+        if cost <= 1.01 * base + _NO_EVIDENCE * len(objective.outputs):
             theta, base = trial, min(base, cost)
             released[spec.name] = -RELEASED if side == "min" else RELEASED
     return theta, released

@@ -252,6 +252,22 @@ def test_a_two_level_input_clipped_a_little_on_one_level_is_a_saturation(msd, rn
     assert max(fit.holdout_nrmse.values()) < 1e-3
 
 
+def test_a_two_level_input_mostly_low_clipped_a_little_at_its_high_level_is_a_saturation(msd, rng):
+    """A PRBS at its low level 70 % of the time (its median AT that level) through a drive that
+    delivers 2 % of the span less than the high level (a pump, seed 4242, case 020): the starts
+    just inside each level must not be judged against the median, where they all fell away, and
+    a start a tenth of the span in clips five times more than the truth and loses to the guess."""
+    levels = np.repeat(rng.choice([-0.93, 0.92], p=[0.7, 0.3], size=T.size // 25 + 1), 25)[:T.size]
+    limit = 0.92 - 0.02 * 1.85
+    y = OutputSimulator(msd, Experiment(T, {"F": np.minimum(levels, limit)}, {"x": T, "v": T}, UNITS))()
+    train, hold = Experiment(T, {"F": levels}, y, UNITS).split(0.3)
+    assert np.median(train.inputs["F"]) == -0.93
+    fit = fit_candidate(msd, _candidate(msd, Place("input", "F"), "saturation", train), train, hold)
+    assert fit.success, fit.message
+    assert fit.values["u_max_F"] == pytest.approx(limit, abs=1e-3) and fit.values["u_min_F"] == -RELEASED
+    assert max(fit.holdout_nrmse.values()) < 1e-3
+
+
 def test_an_input_of_held_levels_clipped_a_little_on_each_side_is_a_saturation(msd, rng):
     """Random held levels, clipped a quarter of the way from each extreme level to the next one (a
     motor torque limit, seed 4747, case 005, on the msd): the quantile starts sit AT the levels and

@@ -207,11 +207,18 @@ def _input_range(site) -> Proposal:
     # that level a little and sees which way to go
     limits = [(float(np.quantile(values, q)) + 1e-3 * width, float(np.quantile(values, 1 - q)) - 1e-3 * width)
               for q in ONE_SIDED]
-    limits = [(a, b) for a, b in limits if a < mid < b]
+    # each side is judged on its own: a lower limit must leave the recorded top, an upper one the
+    # bottom.  Judged against the median, a two-level input with more samples at its low level
+    # (the median AT that level) lost every one of them, and its fit started only a tenth of the
+    # span inside, where clipping a level by far more than the truth does loses to clipping nothing
+    # (seed 4242, case 020: a pump's high level clipped by 1.7 %)
+    lowers = list(dict.fromkeys(a for a, _ in limits if a < hi))
+    uppers = list(dict.fromkeys(b for _, b in limits if b > lo))
     # one-sided starts first: on a tie (no sample beyond a limit) the limit stays inactive
-    starts = [{u_min: lo - 1e-3 * width, u_max: b} for _, b in limits]
-    starts += [{u_min: a, u_max: hi + 1e-3 * width} for a, _ in limits]
-    starts += [{u_min: a, u_max: b} for (a, b), q in zip(limits, ONE_SIDED) if q in BOTH_SIDES]
+    starts = [{u_min: lo - 1e-3 * width, u_max: b} for b in uppers]
+    starts += [{u_min: a, u_max: hi + 1e-3 * width} for a in lowers]
+    starts += [s for s in ({u_min: a, u_max: b} for (a, b), q in zip(limits, ONE_SIDED) if q in BOTH_SIDES and a < b)
+               if s not in starts]
     # an input of a few held levels (a PRBS, steps) has its quantiles AT its levels, where a limit
     # clips nothing and the fit sees no gradient: start each side inside the recorded span too, a
     # tenth of it in as well (a start that clips a level by far more than the truth does costs more

@@ -115,7 +115,8 @@ def test_diagnose_repairs_a_glitchy_sensor_and_says_where(tmp_path):
     assert answers == [("coulomb_friction", "junction v_mass")]
     assert report["fit"]["improved"]["x"] < 0.05 * report["fit"]["nominal"]["x"]
     assert "3 isolated spike(s) at t = 7, 24, 27 s" in report["notes"][0]
-    kept = diagnose("mass-spring-damper", str(path), spikes="keep", **args).to_json()
+    # one round: what is kept is the first answer's error (a second round among the glitches took 24 s)
+    kept = diagnose("mass-spring-damper", str(path), spikes="keep", max_effects=1, **args).to_json()
     assert kept["fit"]["improved"]["x"] > 0.4 * kept["fit"]["nominal"]["x"] and "notes" not in kept
     with pytest.raises(DiagnosisError, match="spikes must be 'repair' or 'keep'"):
         diagnose("mass-spring-damper", str(path), spikes="drop", **args)

@@ -30,12 +30,13 @@ from .report import summarise, write_report
 from .run import run_case
 
 
-def _work(args):
-    spec, workdir, max_effects, second, detune, detune_kinds, sampling = args
+def _work(job):
+    """One case in a worker process: ``(spec, workdir, second, options)``, `options` the keyword
+    arguments of :func:`~diagnosis.benchmark.run.run_case` that every case shares."""
+    spec, workdir, second, options = job
     import os
     os.environ.setdefault("OMP_NUM_THREADS", "1")
-    return run_case(spec, PLANTS, workdir, max_effects=max_effects, second=second, detune=detune,
-                    detune_kinds=detune_kinds, sampling=sampling)
+    return run_case(spec, PLANTS, workdir, second=second, **options)
 
 
 def main(argv=None) -> int:
@@ -90,8 +91,8 @@ def main(argv=None) -> int:
     print(f"benchmark: {len(specs)} cases ({len(results)} done before), seed {a.seed}, {a.jobs} job(s)",
           file=sys.stderr, flush=True)
     start = time.perf_counter()
-    jobs = [(s, out / "recordings", a.max_effects, seconds[s.index], a.detune, a.detune_elements, a.sampling)
-            for s in todo]
+    options = dict(max_effects=a.max_effects, detune=a.detune, detune_kinds=a.detune_elements, sampling=a.sampling)
+    jobs = [(s, out / "recordings", seconds[s.index], options) for s in todo]
     done = 0
 
     def record(r):

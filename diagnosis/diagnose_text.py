@@ -108,6 +108,20 @@ def _judged_open_loop(fit) -> str:
             f"(NRMSE {reading}), where the nominal drifts.")
 
 
+def _unseen_by_fits(windows, t, holdout_start: float) -> str:
+    """Why nothing was fitted when the residual exceeds the noise only in the held-out part, which
+    location and the fits never see (a sensor's range reached only there), and the holdout that
+    puts the first such window in the training part; else ""."""
+    if not windows or any(a < holdout_start for a, _ in windows):
+        return ""
+    a, b = windows[0]
+    fraction = np.floor(100 * (t[-1] - b) / (t[-1] - t[0])) / 100
+    hint = (f"; a holdout of {fraction:.2f} or less (--holdout) puts its first window, {a:.4g}-{b:.4g} s, "
+            f"in the training part" if fraction >= 0.01 else "")
+    return (f"the residual exceeds the noise only in the held-out part (from {holdout_start:.4g} s), which "
+            f"location and the fits do not see{hint}")
+
+
 def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, rv, scores, fits,
              chosen, improved_graph, locate_regime, timings, rounds=(), judge=None,
              judged=(None, None), notes=()) -> DiagnosisReport:
@@ -134,7 +148,8 @@ def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, r
     else:
         refit = {k: float(v) for k, v in chosen.values.items()} if chosen is not None else {}
         why = (_why_none(nominal, fits, rounds) if fits
-               else "no place on the graph explains a significant share of the residual")
+               else _unseen_by_fits(windows, exp.t, float(held.t[0])) or
+               "no place on the graph explains a significant share of the residual")
         if refit:
             why = "no missing physics; the uncertain nominal parameters were refitted"
         physics = [{"kind": "none", "attached_to": "", "parameters": refit, "explanation": why}]

@@ -14,9 +14,9 @@ import pytest
 import plants.library as library
 from bondgraph.numerics import simulate
 from diagnosis.benchmark import plants_textbook as tb
-from diagnosis.benchmark.draw import RATIOS, CaseSpec, draw_cases, realise
+from diagnosis.benchmark.draw import KINDS_BEFORE_32, RATIOS, CaseSpec, draw_cases, realise
 from diagnosis.benchmark.effects import KIND_PLACES, make_effect, places_for
-from diagnosis.benchmark.plants import PLANTS
+from diagnosis.benchmark.plants import FAST, PLANTS
 from diagnosis.benchmark.report import markdown, summarise
 from diagnosis.benchmark.run import run_case
 from diagnosis.benchmark.simulate import simulate_truth
@@ -69,6 +69,28 @@ def test_a_sharp_friction_is_resolved_in_the_truth_as_in_the_library_graph():
     ref = simulate(cand.build(graph, {cand.params[0].name: 0.6675, cand.params[1].name: 0.0077}), (0.0, float(t[-1])),
                    inputs={k: (t, v) for k, v in u.items()}, output_interval=float(t[1] - t[0]), x0=plant.nominal_x0,
                    method="Radau", rtol=1e-10, atol=1e-12)
+    for o in plant.outputs:
+        y, r = truth[o.name], np.asarray(ref[o.name])
+        assert np.max(np.abs(y - r)) <= 1e-4 * np.std(r), o.name
+
+
+@pytest.mark.parametrize("side", [1.0, -1.0])
+def test_a_damping_harder_one_way_in_the_truth_equals_the_catalogues_law(side):
+    """The truth's asymmetric viscous friction (m on the drawn side of the flow, rho m on the other)
+    equals the library graph with the catalogue's law at b_fwd, b_back = m, rho m (or swapped):
+    the truth's flow at a junction has the graph's sign."""
+    from diagnosis.catalogue import candidates
+    from diagnosis.place import Place
+    plant = tb.mass_spring_damper()
+    t, u = _levels(plant, 3.0)
+    effect = make_effect("asymmetric_viscous_friction", plant, "junction", "v_mass", 0.6, {},
+                         {"sign": side, "rho": 0.2, "eps": 1e-3})
+    truth = simulate_truth(plant, t, u, effect)
+    graph = library.build(plant.model)
+    (cand,) = [c for c in candidates(graph, Place("junction", "v_mass")) if c.kind == "asymmetric_viscous_friction"]
+    values = dict(zip([p.name for p in cand.params], (0.6, 0.12) if side > 0 else (0.12, 0.6)))
+    ref = simulate(cand.build(graph, values), (0.0, float(t[-1])), inputs={k: (t, v) for k, v in u.items()},
+                   output_interval=float(t[1] - t[0]), x0=plant.nominal_x0, method="LSODA")
     for o in plant.outputs:
         y, r = truth[o.name], np.asarray(ref[o.name])
         assert np.max(np.abs(y - r)) <= 1e-4 * np.std(r), o.name
@@ -148,6 +170,17 @@ def test_draw_is_reproducible_and_balanced():
     drifting = [s for s in specs if PLANTS[s.plant]().drifts and s.kind != "none"]
     if any(f().drifts for f in PLANTS.values()):
         assert len(drifting) >= 10
+
+
+def test_the_drawn_kinds_can_be_chosen_and_the_earlier_vocabulary_replayed():
+    """Every kind is drawn by default; ``kinds`` restricts the draw, and the kinds drawn until
+    session 31 give a seed's cases as they were drawn then (the new kind changed the shuffles)."""
+    assert "asymmetric_viscous_friction" in {s.kind for s in draw_cases(80, 11, PLANTS)}
+    pair = ("viscous_friction", "asymmetric_viscous_friction")
+    assert {s.kind for s in draw_cases(24, 11, FAST, pair)} == {"none", *pair}
+    assert draw_cases(80, 3434, PLANTS, KINDS_BEFORE_32)[4].label == "004-hydraulic-viscous_friction@junction:q_pipe"
+    with pytest.raises(BenchmarkError, match="unknown effect kind.*'?friction_typo"):
+        draw_cases(4, 11, FAST, ("friction_typo",))
 
 
 def test_realised_effect_has_the_drawn_size():
@@ -488,9 +521,9 @@ def test_a_second_effect_the_first_hides_is_measured_invisible():
     shaft never reaches the range: the truth with both is the friction's alone, to rounding (the
     second's effect-to-noise 0), while the friction's stands out of the noise."""
     from diagnosis.benchmark.compound import realise_compound, second_effect
-    spec = draw_cases(80, 3434, PLANTS)[6]
+    spec = draw_cases(80, 3434, PLANTS, KINDS_BEFORE_32)[6]
     plant = PLANTS[spec.plant]()
-    second = second_effect(spec, plant)
+    second = second_effect(spec, plant, KINDS_BEFORE_32)
     assert (spec.kind, second.kind, second.door) == ("coulomb_friction", "saturation", "output")
     rec = realise_compound(spec, second, plant)
     first, also = rec.visible

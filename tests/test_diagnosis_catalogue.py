@@ -83,12 +83,13 @@ def pneumatic_tank():
 
 
 def test_kinds_are_the_issue_vocabulary_in_order():
-    # issue 6, section 2c, verbatim order; then issue 11's constant load and friction laws, and a
-    # storage element's nominal value refitted alone
+    # issue 6, section 2c, verbatim order; then issue 11's constant load and friction laws (a
+    # damping that depends on the direction last), and a storage element's nominal value refitted alone
     assert KINDS == ("coulomb_friction", "viscous_friction", "stribeck_friction", "pressure_dependent_friction",
                      "leak", "heat_transfer", "valve_lag", "transport_delay", "hysteresis", "backlash",
                      "nonlinear_stiffness", "saturation", "sensor_offset", "sensor_gain", "constant_load",
-                     "coulomb_viscous_friction", "modulated_friction", "nominal_value")
+                     "coulomb_viscous_friction", "modulated_friction", "asymmetric_viscous_friction",
+                     "nominal_value")
 
 
 def test_places_offer_the_kinds_that_make_sense():
@@ -96,7 +97,8 @@ def test_places_offer_the_kinds_that_make_sense():
     at = lambda g, p: [c.kind for c in candidates(g, p)]  # noqa: E731
     assert at(msd, Place("junction", "v_mass")) == ["coulomb_friction", "viscous_friction", "stribeck_friction",
                                                     "hysteresis", "backlash", "nonlinear_stiffness",
-                                                    "constant_load", "coulomb_viscous_friction", "nominal_value",
+                                                    "constant_load", "coulomb_viscous_friction",
+                                                    "asymmetric_viscous_friction", "nominal_value",
                                                     "nominal_value", "nominal_value"]      # m, k and b
     assert at(msd, Place("input", "F")) == ["valve_lag", "transport_delay", "saturation"]
     assert at(msd, Place("output", "x")) == ["saturation", "sensor_offset", "sensor_gain"]
@@ -116,6 +118,7 @@ def test_places_offer_the_kinds_that_make_sense():
     ("nonlinear_stiffness", "-k3_k*q_k**3"),
     ("backlash", "k*q_k - k*(q_k - Max(-b_play_k, Min(b_play_k, q_k)))"),
     ("constant_load", "-F0_v_mass"),
+    ("asymmetric_viscous_friction", "-b_fwd_v_mass*Max(p_m/m, 0) - b_back_v_mass*Min(p_m/m, 0)"),
 ])
 def test_junction_kinds_add_exactly_their_effort(kind, expected):
     msd = library.build("mass-spring-damper")

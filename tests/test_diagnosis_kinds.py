@@ -172,6 +172,45 @@ def test_coulomb_friction_alone_is_not_answered_with_a_viscous_term(rng):
     assert choose(_holdout(msd, exp, hold), list(fits.values()), noise=noise_floor(hold)).kind == "coulomb_friction"
 
 
+# -- viscous friction harder one way -----------------------------------------------------------
+
+def _one_way_record(rng, b_fwd, b_back, noise=0.01):
+    """Truth (tests/msd_truth.py, numpy RK4): the msd with an extra damping of b_fwd v while the
+    mass moves forward and b_back v while it moves back (a shock absorber's compression and
+    rebound); its position measured with noise a hundredth of its spread."""
+    from msd_truth import msd_positions
+    x = msd_positions(T, F, lambda x, v: (b_fwd if v > 0 else b_back) * v)
+    x = x + noise * np.std(x) * rng.standard_normal(x.size)
+    return Experiment(T, {"F": F}, {"x": x}, UNITS)
+
+
+def test_a_damping_harder_one_way_is_fitted_side_by_side_and_chosen(rng):
+    """Truth: 0.8 N s/m more damping only while the mass moves back.  Viscous friction takes the
+    mean of the two sides; the direction-dependent law recovers each and is chosen."""
+    msd = library.build("mass-spring-damper")
+    exp = _one_way_record(rng, 0.0, 0.8)
+    train, hold = exp.split(0.3)
+    fits = _fits(msd, Place("junction", "v_mass"), train, hold,
+                 ("viscous_friction", "coulomb_viscous_friction", "asymmetric_viscous_friction"))
+    one_way = fits["asymmetric_viscous_friction"]
+    assert one_way.values["b_back_v_mass"] == pytest.approx(0.8, rel=0.05)
+    assert one_way.values["b_fwd_v_mass"] == pytest.approx(0.0, abs=0.04)
+    assert one_way.holdout_nrmse["x"] < 0.3 * fits["viscous_friction"].holdout_nrmse["x"]
+    assert choose(_holdout(msd, exp, hold), list(fits.values()), noise=noise_floor(hold)) is one_way
+
+
+def test_a_damping_alike_both_ways_is_answered_viscous(rng):
+    """Truth: 0.5 N s/m more damping both ways: the two-sided law fits as well, with two
+    parameters, and loses to viscous friction."""
+    msd = library.build("mass-spring-damper")
+    exp = _one_way_record(rng, 0.5, 0.5)
+    train, hold = exp.split(0.3)
+    fits = _fits(msd, Place("junction", "v_mass"), train, hold, ("viscous_friction", "asymmetric_viscous_friction"))
+    chosen = choose(_holdout(msd, exp, hold), list(fits.values()), noise=noise_floor(hold))
+    assert chosen is fits["viscous_friction"]
+    assert chosen.values["b_visc_v_mass"] == pytest.approx(0.5, rel=0.05)
+
+
 # -- a cubic spring refits its own linear stiffness --------------------------------------------
 
 def _cubic_truth(k_lin=3.0, k3=40.0):

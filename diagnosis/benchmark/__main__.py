@@ -1,5 +1,5 @@
 """``python -m diagnosis.benchmark [--cases N] [--seed S] [--report DIR] [--jobs J] [--plants A,B] [--compound]
-[--detune F] [--sampling F]``.
+[--detune F] [--sampling F] [--kinds A,B]``.
 
 Draws N cases (default 80), diagnoses each recording as a user would, and
 writes into DIR (default ``benchmark-report``): one JSON file per case
@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from .compound import compound_label, second_effect
-from .draw import draw_cases
+from .draw import KINDS, KINDS_BEFORE_32, draw_cases
 from .plants import FAST, PLANTS
 from .report import summarise, write_report
 from .run import run_case
@@ -48,6 +48,9 @@ def main(argv=None) -> int:
     ap.add_argument("--plants", default="",
                     help="comma-separated plant names, or 'fast' (diagnosis.benchmark.plants.FAST; default: all)")
     ap.add_argument("--only", default="", help="comma-separated case indices to run")
+    ap.add_argument("--kinds", default="",
+                    help="comma-separated effect kinds to draw, or 'before-32' (the kinds drawn until session 31: "
+                         "a seed's cases as then drawn; default: every kind)")
     ap.add_argument("--max-effects", type=int, default=2, help="passed to diagnose (default 2)")
     ap.add_argument("--compound", action="store_true",
                     help="a second concealed effect in every effect case (diagnosis.benchmark.compound)")
@@ -73,14 +76,18 @@ def main(argv=None) -> int:
         if unknown:
             ap.error(f"unknown plant(s) {', '.join(unknown)}; known: {', '.join(PLANTS)}")
         plants = {p: PLANTS[p] for p in a.plants.split(",")}
-    specs = draw_cases(a.cases, a.seed, plants)
+    kinds = KINDS_BEFORE_32 if a.kinds == "before-32" else tuple(a.kinds.split(",")) if a.kinds else KINDS
+    unknown = [k for k in kinds if k not in KINDS]
+    if unknown:
+        ap.error(f"unknown kind(s) {', '.join(unknown)}; known: {', '.join(KINDS)}")
+    specs = draw_cases(a.cases, a.seed, plants, kinds)
     if a.only:
         keep = {int(i) for i in a.only.split(",")}
         specs = [s for s in specs if s.index in keep]
     out = Path(a.report)
     (out / "cases").mkdir(parents=True, exist_ok=True)
     (out / "recordings").mkdir(exist_ok=True)
-    seconds = {s.index: second_effect(s, plants[s.plant]()) if a.compound else None for s in specs}
+    seconds = {s.index: second_effect(s, plants[s.plant](), kinds) if a.compound else None for s in specs}
     results, todo = [], []
     for s in specs:
         f = out / "cases" / f"{compound_label(s, seconds[s.index])}.json"

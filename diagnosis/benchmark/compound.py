@@ -125,14 +125,14 @@ def _compatible(plant, first: CaseSpec, kind, door, name) -> bool:
     return len(algebraic) <= 1
 
 
-def second_effect(first: CaseSpec, plant) -> CaseSpec | None:
+def second_effect(first: CaseSpec, plant, kinds=KINDS) -> CaseSpec | None:
     """The second effect of the compound case `first` on `plant` (a built truth plant), or None for
-    a null case or where no kind fits: kind, place, size and effect-to-noise drawn from the
+    a null case or where none of `kinds` fits: kind, place, size and effect-to-noise drawn from the
     stream ``[first.seed, 13]``; its seed and excitation are the first's (the same commands)."""
     if first.kind == "none":
         return None
     rng = np.random.default_rng([first.seed, 13])
-    options = [(k, d, n) for k in KINDS for d, n in places_for(plant, k) if _compatible(plant, first, k, d, n)]
+    options = [(k, d, n) for k in kinds for d, n in places_for(plant, k) if _compatible(plant, first, k, d, n)]
     if not options:
         return None
     kinds = sorted({k for k, _, _ in options})

@@ -32,6 +32,9 @@ __all__ = ["CaseSpec", "Realised", "draw_cases", "realise", "excitation", "EXCIT
 
 EXCITATIONS = ("levels", "prbs", "levels+sine")
 KINDS = tuple(KIND_PLACES)
+#: the kinds drawn until session 31, before ``asymmetric_viscous_friction`` joined: a seed's cases
+#: as they were drawn then (``--kinds before-32``; the tests that replay a past case pin it)
+KINDS_BEFORE_32 = tuple(k for k in KINDS if k != "asymmetric_viscous_friction")
 #: Cases drawn on a plant whose nominal integrates its inputs, every this many.
 DRIFT_EVERY = 7
 #: Null cases, every this many (offset 3).
@@ -65,9 +68,14 @@ class CaseSpec:
         return f"{self.index:03d}-{self.plant}-{self.kind}{where}"
 
 
-def draw_cases(n: int, seed: int, plants: dict) -> list[CaseSpec]:
-    """`n` cases over `plants` (name -> factory): kinds balanced, >= 15 % nulls, drifting plants
-    every :data:`DRIFT_EVERY` th case."""
+def draw_cases(n: int, seed: int, plants: dict, kinds=KINDS) -> list[CaseSpec]:
+    """`n` cases over `plants` (name -> factory) and the effect `kinds` (default: every kind of
+    :data:`KIND_PLACES`): kinds balanced, >= 15 % nulls, drifting plants every :data:`DRIFT_EVERY`
+    th case."""
+    unknown = [k for k in kinds if k not in KIND_PLACES]
+    if unknown or not kinds:
+        raise BenchmarkError(f"unknown effect kind(s) {', '.join(unknown) or '(none given)'}; "
+                             f"known: {', '.join(KIND_PLACES)}")
     rng = np.random.default_rng(seed)
     built = {name: f() for name, f in plants.items()}
     drifting = [p for p, pl in built.items() if pl.drifts]
@@ -82,12 +90,12 @@ def draw_cases(n: int, seed: int, plants: dict) -> list[CaseSpec]:
                                   noise_share=float(math.exp(rng.uniform(math.log(0.003), math.log(0.03))))))
             continue
         pool = drifting if (i % DRIFT_EVERY == 0 and drifting) else sorted(built)
-        options = [(p, k) for p in pool for k in KINDS if places_for(built[p], k)]
-        kinds = {k for _, k in options}
-        if not any(k in kinds for k in queue):      # kinds in shuffled rounds: balanced counts
-            queue += [str(k) for k in rng.permutation(sorted({k for p in built for k in KINDS
+        options = [(p, k) for p in pool for k in kinds if places_for(built[p], k)]
+        offered = {k for _, k in options}
+        if not any(k in offered for k in queue):      # kinds in shuffled rounds: balanced counts
+            queue += [str(k) for k in rng.permutation(sorted({k for p in built for k in kinds
                                                                if places_for(built[p], k)}))]
-        kind = next(k for k in queue if k in kinds)
+        kind = next(k for k in queue if k in offered)
         queue.remove(kind)
         able = sorted({p for p, k in options if k == kind})
         used = {p: sum(s.plant == p for s in specs) for p in able}   # the least used plant first
@@ -221,6 +229,8 @@ def _shape(spec, plant, rec, rng, scales):
     sh["sign"] = float(rng.choice([-1.0, 1.0]))
     if k == "stribeck_friction":
         sh["fs_over_fc"], sh["vs"] = float(rng.uniform(1.5, 3.0)), float(rng.uniform(0.1, 0.5)) * v_rms
+    if k == "asymmetric_viscous_friction":
+        sh["rho"] = float(rng.uniform(0.0, 0.3))
     if k == "hysteresis":
         sh["delta"] = float(rng.uniform(0.01, 0.1)) * v_rms * hold
     if k == "pressure_dependent_friction":
@@ -274,6 +284,8 @@ def _initial_magnitude(spec, plant, rec, scales, sh, probe_gain):
     base = r / g      # a constant effort/flow of this size changes the output by about r
     if k == "viscous_friction":
         return base / (scales["rms"][j] or 1.0)
+    if k == "asymmetric_viscous_friction":      # acts on about half the motion, rho on the rest
+        return 2.0 * base / ((scales["rms"][j] or 1.0) * (1.0 + sh["rho"]))
     if k == "coulomb_viscous_friction":
         return base / (1.0 + sh["beta"])
     if k == "modulated_friction":

@@ -12,7 +12,9 @@ the inputs before the plant (clipping, delay, lag) or the outputs after it
 The kinds and where they may sit (:data:`KIND_PLACES`):
 
 ============================  ================================================
-junction (1: common flow)     viscous_friction, constant_load (any domain);
+junction (1: common flow)     viscous_friction, asymmetric_viscous_friction
+                              (harder one way: a damper's rebound, a check
+                              valve), constant_load (any domain);
                               coulomb_friction (mechanical, or an electrical
                               brush drop); stribeck_friction, hysteresis
                               (Dahl), coulomb_viscous_friction (both at once)
@@ -60,6 +62,7 @@ KIND_PLACES = {
     "saturation": ("input", "output", "storage_range"), "transport_delay": ("input",),
     "valve_lag": ("input",), "sensor_offset": ("output",), "sensor_gain": ("output",),
     "coulomb_viscous_friction": ("junction1_mech",), "modulated_friction": ("junction1m",),
+    "asymmetric_viscous_friction": ("junction1",),
 }
 
 
@@ -222,6 +225,8 @@ class TruthEffect(NoEffect):
             return {j: -m * math.tanh(x / eps)}, np.zeros(0)
         if k == "viscous_friction":
             return {j: -m * x}, np.zeros(0)
+        if k == "asymmetric_viscous_friction":   # m on the drawn side of the flow, rho m on the other
+            return {j: -(m if x * sh["sign"] > 0 else sh["rho"] * m) * x}, np.zeros(0)
         if k == "coulomb_viscous_friction":   # level m, and b = beta m / v_rms: both of a size
             return {j: -m * (math.tanh(x / eps) + sh["beta"] * x / sh["v_rms"])}, np.zeros(0)
         if k == "modulated_friction":         # level m (c0 + s), s the input's lagged share of its span

@@ -1,0 +1,56 @@
+"""``asymmetric_viscous_friction`` at a 1-junction: an R whose viscous coefficient depends on the
+direction of the flow, :math:`e = b_+ \\max(f, 0) + b_- \\min(f, 0)`.
+
+A car's shock absorber damps its rebound two to three times harder than its compression; a
+check valve or a diode passes one way freely and the other hardly; a cylinder's two chambers
+drain through different ports.  Viscous friction fitted to such a law takes the mean of the two
+coefficients and leaves a residual of one sign in each direction.  Equal coefficients are viscous
+friction (:attr:`nests`), which the choice prices lower.  The law is continuous with a kink at rest,
+so it needs no smoothing parameter; each coefficient is at least 0 (it dissipates both ways).
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from .base import Kind, Proposal, register
+from .feature_signals import FeatureGroup
+from .friction_common import friction_r, namer, viscous
+
+
+@register
+class AsymmetricViscousFriction(Kind):
+    name = "asymmetric_viscous_friction"
+    doors = ("1",)
+    feature_doors, feature_names, feature_price = "1", ("max(v, 0)", "min(v, 0)"), 2
+    feature_params = 2
+    nests = {"viscous_friction": {0: 0, 1: 0}}
+
+    def features(self, s):
+        columns = np.stack([np.maximum(s.v, 0.0), np.minimum(s.v, 0.0)], axis=1)
+        return [FeatureGroup(None, "", list(self.feature_names), columns)]
+
+    def propose(self, site):
+        coefficient, name = viscous(site), namer(site)
+        forward = replace(coefficient, name=name("b_fwd"),
+                          description=f"viscous friction coefficient at {site.name} while its flow is positive")
+        backward = replace(coefficient, name=name("b_back"),
+                           description=f"viscous friction coefficient at {site.name} while its flow is negative")
+        # each side alone, at the guess and a tenth and five times it: a missing asymmetry often
+        # damps one direction only, where a start on both sides clips the other at its bound 0
+        starts = tuple({forward.name: f * g, backward.name: b * g}
+                       for g in (0.1 * coefficient.guess, coefficient.guess, 5 * coefficient.guess)
+                       for f, b in ((1.0, 0.0), (0.0, 1.0)) if g <= coefficient.upper)
+        return [Proposal((forward, backward), starts=starts)]
+
+    def build(self, graph, cand, values):
+        forward, backward = (p.name for p in cand.params)
+        return friction_r(graph, cand, f"{forward}*Max(f, 0) + {backward}*Min(f, 0)")
+
+    def explain(self, cand, values, show):
+        j = cand.place.name
+        forward, backward = (p.name for p in cand.params)
+        return (f"the motion at {j} is braked in proportion to its speed, by {show(forward)} while its flow is "
+                f"positive and {show(backward)} while it is negative: viscous friction that depends on the "
+                f"direction (a damper's compression and rebound, a check valve) at {j}")

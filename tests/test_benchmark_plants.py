@@ -262,3 +262,18 @@ def test_pam_friction_sees_an_effort_added_at_the_seesaw():
     for o in ("psi", "tau"):
         assert np.max(np.abs(truth[o] - res[o])) < 1e-9 * np.std(truth[o])
         assert np.max(np.abs(truth[o] - nominal[o])) > 1e-2 * np.std(truth[o])   # the load shows
+
+
+@pytest.mark.parametrize("name", ["tanks", "hydraulic"])
+def test_a_one_way_junctions_flow_keeps_its_sign_and_draws_no_direction_dependent_law(name):
+    """A junction marked ``one_way`` (a tank's outflow to the lower one, the pump's pipe) keeps one
+    sign of flow in a recording the plant makes, so a law that depends on the direction is one law
+    there: the benchmark draws it only where the flow reverses."""
+    from diagnosis.benchmark.draw import CaseSpec, realise
+    from diagnosis.benchmark.effects import places_for
+    plant = PLANTS[name]()
+    (one_way,) = [j.name for j in plant.junctions if j.one_way]
+    flow = realise(CaseSpec(0, 3, name, "none", excitation="prbs"), plant).nominal["_signals"][one_way]
+    assert np.all(flow >= 0) and np.mean(flow > 0) > 0.99           # from rest at t = 0
+    assert ("junction", one_way) not in places_for(plant, "asymmetric_viscous_friction")
+    assert ("junction", one_way) in places_for(plant, "viscous_friction")

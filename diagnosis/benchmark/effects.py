@@ -14,7 +14,8 @@ The kinds and where they may sit (:data:`KIND_PLACES`):
 ============================  ================================================
 junction (1: common flow)     viscous_friction, asymmetric_viscous_friction
                               (harder one way: a damper's rebound, a check
-                              valve), constant_load (any domain);
+                              valve; where the flow reverses), constant_load
+                              (any domain);
                               coulomb_friction (mechanical, or an electrical
                               brush drop); stribeck_friction, hysteresis
                               (Dahl), coulomb_viscous_friction (both at once)
@@ -62,7 +63,7 @@ KIND_PLACES = {
     "saturation": ("input", "output", "storage_range"), "transport_delay": ("input",),
     "valve_lag": ("input",), "sensor_offset": ("output",), "sensor_gain": ("output",),
     "coulomb_viscous_friction": ("junction1_mech",), "modulated_friction": ("junction1m",),
-    "asymmetric_viscous_friction": ("junction1",),
+    "asymmetric_viscous_friction": ("junction1_reversing",),
 }
 
 
@@ -82,6 +83,8 @@ def places_for(plant: TruthPlant, kind: str) -> list[tuple[str, str]]:
             out += [("junction", j.name) for j in laws if j.kind == "1" and j.domain in MECHANICAL]
         elif door == "junction1":
             out += [("junction", j.name) for j in plant.junctions if j.kind == "1"]
+        elif door == "junction1_reversing":     # a direction-dependent law needs both directions
+            out += [("junction", j.name) for j in plant.junctions if j.kind == "1" and not j.one_way]
         elif door == "junction1_mech":
             out += [("junction", j.name) for j in plant.junctions if j.kind == "1" and j.domain in MECHANICAL]
         elif door == "junction1_dry":

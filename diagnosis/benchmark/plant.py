@@ -97,6 +97,9 @@ class JunctionSpec:
     (an orifice), so an effort added there changes the flow it depends on: the plant's
     ``signals(x, u, extra)`` gives the flow under an added effort, and the truth solves the two
     together (:func:`diagnosis.benchmark.simulate.effect_extra`).
+    ``one_way`` (a 1-junction): its flow keeps one sign in every recording the plant makes (a
+    tank's outflow to a lower one, a pump's pipe), where a law that depends on the direction of
+    the flow is one law of that flow, which no recording can tell from it.
     """
 
     name: str
@@ -108,6 +111,7 @@ class JunctionSpec:
     modulators: tuple[str, ...] = ()
     law: bool = False
     algebraic: bool = False
+    one_way: bool = False
 
     @property
     def place(self) -> str:

@@ -50,7 +50,7 @@ def hydraulic() -> TruthPlant:
         outputs=(OutputSpec("p1", "Pa"), OutputSpec("p2", "Pa"), OutputSpec("q", "m^3/s")),
         states=("V1", "V2", "q"), x0=np.zeros(3), rhs=rhs, signals=signals,
         measure=lambda x, u: {"p1": float(x[0]) / C, "p2": float(x[1]) / C, "q": float(x[2])},
-        junctions=(JunctionSpec("p1", "0", hyd), JunctionSpec("q_pipe", "1", hyd), JunctionSpec("p2", "0", hyd)),
+        junctions=(JunctionSpec("p1", "0", hyd), JunctionSpec("q_pipe", "1", hyd, one_way=True), JunctionSpec("p2", "0", hyd)),
         storages=(StorageSpec("C1", "p1", 1.0 / C, sensed=("p1",)), StorageSpec("C2", "p2", 1.0 / C, sensed=("p2",))),
         rate=1000.0, duration=5.0, substeps=4,
         description="hydraulic line: pump, volume, pipe (57 Hz oil column), volume, orifice")

@@ -133,7 +133,7 @@ def coupled_tanks() -> TruthPlant:
         signals=signals,
         measure=measure,
         junctions=(JunctionSpec("P1", "0", "hydraulic"), JunctionSpec("P2", "0", "hydraulic"),
-                   JunctionSpec("Q12", "1", "hydraulic", algebraic=True)),
+                   JunctionSpec("Q12", "1", "hydraulic", algebraic=True, one_way=True)),
         storages=(StorageSpec("tank1", "P1", None, content_range=(0.0, 0.03)),
                   StorageSpec("tank2", "P2", None, content_range=(0.0, 0.03))),
         rate=10.0, duration=600.0, substeps=4,

@@ -494,8 +494,10 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
             x0 = found.chosen.extra.get("x0") or x0
             improved_graph, improved, y_imp, improved_judged = found.graph, found.improved, found.y, found.judged
         # a wrong first answer stalls the rounds: nothing more is found on its model while the
-        # residual stays far above the noise; round 1's fits in pairs may answer it instead
-        stalled = (len(rounds) == 2 and rounds[1].chosen is None and pairs.effect_count(chosen.candidate) == 1
+        # residual stays far above the noise; round 1's fits in pairs may answer it instead.  A
+        # round 2 whose graph location failed found nothing because it did not look
+        stalled = (len(rounds) == 2 and rounds[1].chosen is None and rounds[1].located
+                   and pairs.effect_count(chosen.candidate) == 1
                    and int(max_effects) >= 2 and not fitted_pairs and pairs.wanted(improved, floor))
         paired = with_pairs() if stalled else None
         if paired is not None and isinstance(paired[0].candidate, pairs.CandidatePair):
@@ -683,7 +685,7 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     try:
         scores = locate_on_graph(graph, train, x0=x0)
     except (np.linalg.LinAlgError, FloatingPointError) as exc:   # numerics: no further effect
-        return Round(None, [], dict(reference), dict(reference), scores=[],
+        return Round(None, [], dict(reference), dict(reference), scores=[], located=False,
                      note=f"graph location failed: {type(exc).__name__}: {exc}")
     places, springs = further_places(graph, scores, top, train)
     earlier = [c for r in rounds if r.chosen is not None and r.chosen.candidate is not None

@@ -84,6 +84,9 @@ class Round(_ReadByKey):
         Graph location of further rounds (what is left of the residual).
     note : str, optional
         Why a further round stopped early (a numerical failure of its graph location).
+    located : bool
+        Whether a further round's graph location ran (False where it failed numerically: the
+        round did not look, so "nothing more" is not a finding).
     graph, y, judged : optional
         The improved graph of a further round that kept an effect, its simulated outputs and its
         held-out evaluation (:class:`~diagnosis.segments.Judged`).
@@ -115,6 +118,7 @@ class Round(_ReadByKey):
     seconds: float = 0.0
     scores: list | None = None
     note: str | None = None
+    located: bool = True
     graph: object = None
     y: object = None
     judged: object = None

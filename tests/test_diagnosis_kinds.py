@@ -199,6 +199,21 @@ def test_a_damping_harder_one_way_is_fitted_side_by_side_and_chosen(rng):
     assert choose(_holdout(msd, exp, hold), list(fits.values()), noise=noise_floor(hold)) is one_way
 
 
+def test_a_damping_that_depends_on_the_direction_is_offered_only_where_the_flow_reverses():
+    """A force ramp drives the mass one way only (the nominal's velocity keeps its sign): there a
+    direction-dependent law is viscous friction with a free coefficient for the side never seen."""
+    from diagnosis.kinds.asymmetric_viscous_friction import goes_both_ways
+    msd = library.build("mass-spring-damper")
+    offered = {}
+    for name, force in (("ramp", 0.1 * T), ("sine", np.sin(T))):
+        exp = Experiment(T, {"F": force}, {"x": np.zeros(T.size)}, {"F": "N", "x": "m"}, name)
+        offered[name] = [c.kind for c in candidates(msd, Place("junction", "v_mass"), experiment=exp)]
+    assert "asymmetric_viscous_friction" not in offered["ramp"] and "viscous_friction" in offered["ramp"]
+    assert "asymmetric_viscous_friction" in offered["sine"]
+    assert goes_both_ways(np.sin(T)) and not goes_both_ways(np.abs(np.sin(T)) + 0.01)
+    assert not goes_both_ways(np.concatenate([np.full(95, 1.0), np.full(5, -1.0)]))     # 5 % back: too few
+
+
 def test_a_damping_alike_both_ways_is_answered_viscous(rng):
     """Truth: 0.5 N s/m more damping both ways: the two-sided law fits as well, with two
     parameters, and loses to viscous friction."""

@@ -7,6 +7,11 @@ drain through different ports.  Viscous friction fitted to such a law takes the 
 coefficients and leaves a residual of one sign in each direction.  Equal coefficients are viscous
 friction (:attr:`nests`), which the choice prices lower.  The law is continuous with a kink at rest,
 so it needs no smoothing parameter; each coefficient is at least 0 (it dissipates both ways).
+
+It is offered only where the junction's flow goes both ways for at least :data:`BOTH_WAYS` of the
+record (the nominal simulation's flow, and the located estimate's for the features): on a flow
+that keeps one sign it is viscous friction with a coefficient for the other side that the data
+cannot fix, a candidate that predicts as viscous friction does and says more than the record shows.
 """
 from __future__ import annotations
 
@@ -19,6 +24,16 @@ from .feature_signals import FeatureGroup
 from .friction_common import friction_r, namer, viscous
 
 
+#: the least share of the record the flow must spend on each side of 0
+BOTH_WAYS = 0.1
+
+
+def goes_both_ways(flow) -> bool:
+    """Whether `flow` spends at least :data:`BOTH_WAYS` of its samples on each side of 0."""
+    flow = np.asarray(flow, dtype=float)
+    return flow.size > 0 and min(np.mean(flow > 0), np.mean(flow < 0)) >= BOTH_WAYS
+
+
 @register
 class AsymmetricViscousFriction(Kind):
     name = "asymmetric_viscous_friction"
@@ -28,10 +43,15 @@ class AsymmetricViscousFriction(Kind):
     nests = {"viscous_friction": {0: 0, 1: 0}}
 
     def features(self, s):
+        if not goes_both_ways(s.v):
+            return []
         columns = np.stack([np.maximum(s.v, 0.0), np.minimum(s.v, 0.0)], axis=1)
         return [FeatureGroup(None, "", list(self.feature_names), columns)]
 
     def propose(self, site):
+        flow = next((v for k, v in site.values.items() if k.startswith("f_")), None)
+        if flow is not None and not goes_both_ways(flow):
+            return []
         coefficient, name = viscous(site), namer(site)
         forward = replace(coefficient, name=name("b_fwd"),
                           description=f"viscous friction coefficient at {site.name} while its flow is positive")

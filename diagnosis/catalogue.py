@@ -17,7 +17,7 @@ parameters at a place, builds and explains.  This module turns their proposals i
 candidates.  Which kinds at which place (:func:`candidates`):
 
 * 1-junction: ``coulomb_friction``, ``viscous_friction``, ``coulomb_viscous_friction``,
-  ``asymmetric_viscous_friction``,
+  ``asymmetric_viscous_friction``, ``quadratic_drag``,
   ``stribeck_friction``, ``pressure_dependent_friction`` (one per pressure variable
   of the model), ``modulated_friction`` (one per input and per listed effort of
   another domain, :func:`~diagnosis.kinds.modulated_friction.modulating_signals`),

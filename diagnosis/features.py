@@ -35,6 +35,7 @@ junction and :math:`e` the common effort of a 0-junction:
 
 * ``coulomb_friction`` :math:`s`; ``viscous_friction`` :math:`v`;
   ``coulomb_viscous_friction`` :math:`s, v`; ``asymmetric_viscous_friction`` :math:`\\max(v, 0), \\min(v, 0)`;
+  ``quadratic_drag`` :math:`v |v|`;
 * ``stribeck_friction`` :math:`s, e^{-(v/v_s)^2} s` for :math:`v_s` = 0.1, 0.3, 1 times
   the RMS flow;
 * ``pressure_dependent_friction`` :math:`s, (P - \\bar P) s` per pressure variable;

@@ -96,6 +96,24 @@ def test_a_damping_harder_one_way_in_the_truth_equals_the_catalogues_law(side):
         assert np.max(np.abs(y - r)) <= 1e-4 * np.std(r), o.name
 
 
+def test_a_quadratic_drag_in_the_truth_equals_the_catalogues_law():
+    """The truth's drag m v |v| equals the library graph with the catalogue's quadratic drag at c_d = m."""
+    from diagnosis.catalogue import candidates
+    from diagnosis.place import Place
+    plant = tb.mass_spring_damper()
+    t, u = _levels(plant, 3.0)
+    truth = simulate_truth(plant, t, u, make_effect("quadratic_drag", plant, "junction", "v_mass", 0.7, {},
+                                                    {"sign": 1.0, "eps": 1e-3}))
+    graph = library.build(plant.model)
+    (cand,) = [c for c in candidates(graph, Place("junction", "v_mass")) if c.kind == "quadratic_drag"]
+    ref = simulate(cand.build(graph, {cand.params[0].name: 0.7}), (0.0, float(t[-1])),
+                   inputs={k: (t, v) for k, v in u.items()}, output_interval=float(t[1] - t[0]),
+                   x0=plant.nominal_x0, method="LSODA")
+    for o in plant.outputs:
+        y, r = truth[o.name], np.asarray(ref[o.name])
+        assert np.max(np.abs(y - r)) <= 1e-4 * np.std(r), o.name
+
+
 def test_constant_load_on_msd_gives_the_static_deflection():
     # F = 0, a constant 0.3 N at the mass: x settles at 0.3 / k = 0.075 m (k = 4 N/m)
     plant = tb.mass_spring_damper()
@@ -175,7 +193,7 @@ def test_draw_is_reproducible_and_balanced():
 def test_the_drawn_kinds_can_be_chosen_and_the_earlier_vocabulary_replayed():
     """Every kind is drawn by default; ``kinds`` restricts the draw, and the kinds drawn until
     session 31 give a seed's cases as they were drawn then (the new kind changed the shuffles)."""
-    assert "asymmetric_viscous_friction" in {s.kind for s in draw_cases(80, 11, PLANTS)}
+    assert {"asymmetric_viscous_friction", "quadratic_drag"} <= {s.kind for s in draw_cases(80, 11, PLANTS)}
     pair = ("viscous_friction", "asymmetric_viscous_friction")
     assert {s.kind for s in draw_cases(24, 11, FAST, pair)} == {"none", *pair}
     assert draw_cases(80, 3434, PLANTS, KINDS_BEFORE_32)[4].label == "004-hydraulic-viscous_friction@junction:q_pipe"

@@ -89,7 +89,7 @@ def test_kinds_are_the_issue_vocabulary_in_order():
                      "leak", "heat_transfer", "valve_lag", "transport_delay", "hysteresis", "backlash",
                      "nonlinear_stiffness", "saturation", "sensor_offset", "sensor_gain", "constant_load",
                      "coulomb_viscous_friction", "modulated_friction", "asymmetric_viscous_friction",
-                     "nominal_value")
+                     "quadratic_drag", "nominal_value")
 
 
 def test_places_offer_the_kinds_that_make_sense():
@@ -98,7 +98,7 @@ def test_places_offer_the_kinds_that_make_sense():
     assert at(msd, Place("junction", "v_mass")) == ["coulomb_friction", "viscous_friction", "stribeck_friction",
                                                     "hysteresis", "backlash", "nonlinear_stiffness",
                                                     "constant_load", "coulomb_viscous_friction",
-                                                    "asymmetric_viscous_friction", "nominal_value",
+                                                    "asymmetric_viscous_friction", "quadratic_drag", "nominal_value",
                                                     "nominal_value", "nominal_value"]      # m, k and b
     assert at(msd, Place("input", "F")) == ["valve_lag", "transport_delay", "saturation"]
     assert at(msd, Place("output", "x")) == ["saturation", "sensor_offset", "sensor_gain"]
@@ -119,6 +119,7 @@ def test_places_offer_the_kinds_that_make_sense():
     ("backlash", "k*q_k - k*(q_k - Max(-b_play_k, Min(b_play_k, q_k)))"),
     ("constant_load", "-F0_v_mass"),
     ("asymmetric_viscous_friction", "-b_fwd_v_mass*Max(p_m/m, 0) - b_back_v_mass*Min(p_m/m, 0)"),
+    ("quadratic_drag", "-c_d_v_mass*(p_m/m)*Abs(p_m/m)"),
 ])
 def test_junction_kinds_add_exactly_their_effort(kind, expected):
     msd = library.build("mass-spring-damper")

@@ -226,6 +226,33 @@ def test_a_damping_alike_both_ways_is_answered_viscous(rng):
     assert chosen.values["b_visc_v_mass"] == pytest.approx(0.5, rel=0.05)
 
 
+# -- quadratic drag ----------------------------------------------------------------------------
+
+def _drag_record(rng, extra, noise=0.01):
+    """Truth (tests/msd_truth.py, numpy RK4): the msd with the force `extra(v)` taken from the mass;
+    its position measured with noise a hundredth of its spread."""
+    from msd_truth import msd_positions
+    x = msd_positions(T, F, lambda x, v: extra(v))
+    x = x + noise * np.std(x) * rng.standard_normal(x.size)
+    return Experiment(T, {"F": F}, {"x": x}, UNITS)
+
+
+@pytest.mark.parametrize("truth, kind", [(lambda v: 0.4 * v * abs(v), "quadratic_drag"),
+                                         (lambda v: 0.5 * v, "viscous_friction")], ids=["drag", "viscous"])
+def test_a_drag_growing_with_the_speed_squared_is_told_from_viscous_friction(rng, truth, kind):
+    """Truth: 0.4 N (s/m)^2 v |v| of drag (a fan, a body in water), or 0.5 N s/m of viscous friction:
+    each kind recovers its coefficient and is chosen over the other."""
+    msd = library.build("mass-spring-damper")
+    exp = _drag_record(rng, truth)
+    train, hold = exp.split(0.3)
+    fits = _fits(msd, Place("junction", "v_mass"), train, hold,
+                 ("viscous_friction", "coulomb_viscous_friction", "quadratic_drag"))
+    chosen = choose(_holdout(msd, exp, hold), list(fits.values()), noise=noise_floor(hold))
+    assert chosen is fits[kind]
+    name, value = ("c_d_v_mass", 0.4) if kind == "quadratic_drag" else ("b_visc_v_mass", 0.5)
+    assert chosen.values[name] == pytest.approx(value, rel=0.05)
+
+
 # -- a cubic spring refits its own linear stiffness --------------------------------------------
 
 def _cubic_truth(k_lin=3.0, k3=40.0):

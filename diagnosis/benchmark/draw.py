@@ -32,9 +32,10 @@ __all__ = ["CaseSpec", "Realised", "draw_cases", "realise", "excitation", "EXCIT
 
 EXCITATIONS = ("levels", "prbs", "levels+sine")
 KINDS = tuple(KIND_PLACES)
-#: the kinds drawn until session 31, before ``asymmetric_viscous_friction`` joined: a seed's cases
-#: as they were drawn then (``--kinds before-32``; the tests that replay a past case pin it)
-KINDS_BEFORE_32 = tuple(k for k in KINDS if k != "asymmetric_viscous_friction")
+#: the kinds drawn until session 31, before ``asymmetric_viscous_friction`` and ``quadratic_drag``
+#: joined: a seed's cases as they were drawn then (``--kinds before-32``; the tests that replay a
+#: past case pin it)
+KINDS_BEFORE_32 = tuple(k for k in KINDS if k not in ("asymmetric_viscous_friction", "quadratic_drag"))
 #: Cases drawn on a plant whose nominal integrates its inputs, every this many.
 DRIFT_EVERY = 7
 #: Null cases, every this many (offset 3).
@@ -284,6 +285,8 @@ def _initial_magnitude(spec, plant, rec, scales, sh, probe_gain):
     base = r / g      # a constant effort/flow of this size changes the output by about r
     if k == "viscous_friction":
         return base / (scales["rms"][j] or 1.0)
+    if k == "quadratic_drag":
+        return base / (scales["rms"][j] or 1.0) ** 2
     if k == "asymmetric_viscous_friction":      # acts on about half the motion, rho on the rest
         return 2.0 * base / ((scales["rms"][j] or 1.0) * (1.0 + sh["rho"]))
     if k == "coulomb_viscous_friction":

@@ -15,7 +15,8 @@ The kinds and where they may sit (:data:`KIND_PLACES`):
 junction (1: common flow)     viscous_friction, asymmetric_viscous_friction
                               (harder one way: a damper's rebound, a check
                               valve; where the flow reverses), constant_load
-                              (any domain);
+                              (any domain); quadratic_drag (mechanical or
+                              hydraulic, not at an orifice's own flow);
                               coulomb_friction (mechanical, or an electrical
                               brush drop); stribeck_friction, hysteresis
                               (Dahl), coulomb_viscous_friction (both at once)
@@ -63,7 +64,7 @@ KIND_PLACES = {
     "saturation": ("input", "output", "storage_range"), "transport_delay": ("input",),
     "valve_lag": ("input",), "sensor_offset": ("output",), "sensor_gain": ("output",),
     "coulomb_viscous_friction": ("junction1_mech",), "modulated_friction": ("junction1m",),
-    "asymmetric_viscous_friction": ("junction1_reversing",),
+    "asymmetric_viscous_friction": ("junction1_reversing",), "quadratic_drag": ("junction1_drag",),
 }
 
 
@@ -85,6 +86,9 @@ def places_for(plant: TruthPlant, kind: str) -> list[tuple[str, str]]:
             out += [("junction", j.name) for j in plant.junctions if j.kind == "1"]
         elif door == "junction1_reversing":     # a direction-dependent law needs both directions
             out += [("junction", j.name) for j in plant.junctions if j.kind == "1" and not j.one_way]
+        elif door == "junction1_drag":          # a body in a fluid, a fan, turbulent pipe flow
+            out += [("junction", j.name) for j in plant.junctions if j.kind == "1" and not j.algebraic
+                    and j.domain in MECHANICAL + ("hydraulic",)]
         elif door == "junction1_mech":
             out += [("junction", j.name) for j in plant.junctions if j.kind == "1" and j.domain in MECHANICAL]
         elif door == "junction1_dry":
@@ -228,6 +232,8 @@ class TruthEffect(NoEffect):
             return {j: -m * math.tanh(x / eps)}, np.zeros(0)
         if k == "viscous_friction":
             return {j: -m * x}, np.zeros(0)
+        if k == "quadratic_drag":
+            return {j: -m * x * abs(x)}, np.zeros(0)
         if k == "asymmetric_viscous_friction":   # m on the drawn side of the flow, rho m on the other
             return {j: -(m if x * sh["sign"] > 0 else sh["rho"] * m) * x}, np.zeros(0)
         if k == "coulomb_viscous_friction":   # level m, and b = beta m / v_rms: both of a size

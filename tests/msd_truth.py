@@ -9,9 +9,10 @@ import numpy as np
 
 
 def rk4_states(rate, t, force, *, substeps, x0=(0.0, 0.0)):
-    """States of x' = rate(x, F) (two states) at the sample times, from `x0` (default rest), F held
-    over each interval; classic RK4 written out here, not bondgraph's integrator."""
-    state, out = np.array(x0, dtype=float), np.zeros((t.size, 2))
+    """States of x' = rate(x, F) (as many as `x0` has) at the sample times, from `x0` (default two at
+    rest), F held over each interval; classic RK4 written out here, not bondgraph's integrator."""
+    state = np.array(x0, dtype=float)
+    out = np.zeros((t.size, state.size))
     out[0] = state
     for i in range(t.size - 1):
         h = (t[i + 1] - t[i]) / substeps

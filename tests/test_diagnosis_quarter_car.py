@@ -1,14 +1,16 @@
 """A plant no part of the project was built around: a quarter-car suspension, written as a user
-would (``tests/data/models/quarter_car.py``, a ``.py`` model file), its truth a hand-written RK4
-of the same four states with a shock absorber that damps its rebound 2.5 times harder than its
-compression (1000 N s/m in compression, the nominal's; 2500 N s/m in rebound).  Viscous friction
-would take the mean of the two sides; the direction-dependent law recovers each."""
+would (``tests/data/models/quarter_car.py``, a ``.py`` model file), its truth the tests' own RK4
+(``tests/msd_truth.py``) on the same four states with a shock absorber that damps its rebound 2.5
+times harder than its compression (1000 N s/m in compression, the nominal's; 2500 N s/m in
+rebound).  Viscous friction would take the mean of the two sides; the direction-dependent law
+recovers each."""
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from diagnosis.diagnose import diagnose
+from msd_truth import rk4_states
 
 MODEL = Path(__file__).parent / "data" / "models" / "quarter_car.py"
 MS, MU, KS, BS, KT = 250.0, 35.0, 16000.0, 1000.0, 160000.0     # kg, kg, N/m, N s/m, N/m
@@ -30,16 +32,7 @@ def _truth(t, vr):
         rel = vu - vb                               # > 0: the strut compresses
         force = KS * qs + (BS if rel > 0 else BS + REBOUND) * rel
         return np.array([u - vu, (KT * qt - force) / MU, rel, force / MS])
-    x, out = np.zeros(4), np.zeros((t.size, 4))
-    for i in range(t.size - 1):
-        h = (t[i + 1] - t[i]) / SUB
-        for _ in range(SUB):
-            k1 = f(x, vr[i])
-            k2 = f(x + h / 2 * k1, vr[i])
-            k3 = f(x + h / 2 * k2, vr[i])
-            k4 = f(x + h * k3, vr[i])
-            x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        out[i + 1] = x
+    out = rk4_states(f, t, vr, substeps=SUB, x0=np.zeros(4))
     return {"defl": out[:, 2], "tyre_defl": out[:, 0], "v_b": out[:, 3]}
 
 

@@ -98,8 +98,9 @@ def alternatives(chosen, fits, reference: dict, floor: dict, n: int = ALTERNATIV
 
     out, seen, picked, deferred = [], set(), 0, []
     for fit in [chosen] + ranked:
-        if fit is not chosen and extended(fit) is not None:
-            deferred.append(fit)
+        simpler = extended(fit) if fit is not chosen else None
+        if simpler is not None:
+            deferred.append((fit, simpler))
             continue
         if picked < n and allowed(fit):
             picked += 1
@@ -112,8 +113,8 @@ def alternatives(chosen, fits, reference: dict, floor: dict, n: int = ALTERNATIV
     # follows that one, beyond the `n` (fitted again beside the other effects, its extra term may
     # then act: a Coulomb + viscous law that had lost its Coulomb part to a backlash)
     picked_keys = {_key(f) for f in out}
-    for fit in deferred:
-        if _key(extended(fit)) in picked_keys and allowed(fit):
+    for fit, simpler in deferred:
+        if _key(simpler) in picked_keys and allowed(fit):
             out.append(fit)
             seen.add(_key(fit))
     return out

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import BenchmarkError
 from .compound import compound_label, second_effect
 from .draw import KINDS, KINDS_BEFORE_32, draw_cases
 from .plants import FAST, PLANTS
@@ -77,10 +78,10 @@ def main(argv=None) -> int:
             ap.error(f"unknown plant(s) {', '.join(unknown)}; known: {', '.join(PLANTS)}")
         plants = {p: PLANTS[p] for p in a.plants.split(",")}
     kinds = KINDS_BEFORE_32 if a.kinds == "before-32" else tuple(a.kinds.split(",")) if a.kinds else KINDS
-    unknown = [k for k in kinds if k not in KINDS]
-    if unknown:
-        ap.error(f"unknown kind(s) {', '.join(unknown)}; known: {', '.join(KINDS)}")
-    specs = draw_cases(a.cases, a.seed, plants, kinds)
+    try:
+        specs = draw_cases(a.cases, a.seed, plants, kinds)
+    except BenchmarkError as exc:          # an unknown kind: draw_cases names it
+        ap.error(str(exc))
     if a.only:
         keep = {int(i) for i in a.only.split(",")}
         specs = [s for s in specs if s.index in keep]

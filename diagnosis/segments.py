@@ -61,8 +61,8 @@ import sympy as sp
 from .errors import BondcosimError
 
 __all__ = ["SegmentPlan", "Judged", "Judge", "plan_segments", "choose_judge", "drifting_mode",
-           "input_driven_states", "SEGMENTS", "MIN_SEGMENT_SAMPLES", "ESTIMATION_SHARE", "MIN_ESTIMATION_SAMPLES",
-           "MAX_ESTIMATION_SAMPLES", "DRIFT_RATIO", "SLOW_MODE", "FLOOR_MARGIN"]
+           "input_driven_states", "restart_states", "SEGMENTS", "MIN_SEGMENT_SAMPLES", "ESTIMATION_SHARE",
+           "MIN_ESTIMATION_SAMPLES", "MAX_ESTIMATION_SAMPLES", "DRIFT_RATIO", "SLOW_MODE", "FLOOR_MARGIN"]
 
 #: segments the held-out part is cut into (fewer when it is short)
 SEGMENTS = 5
@@ -224,27 +224,13 @@ class Judge:
         velocity estimated from a few noisy positions carries its error into every later position."""
         held, plan = self.held, self.plan
         outputs = list(sim.output_names)
-        default = sim.initial_state(None)
-        spread = (np.nanstd(prior, axis=0) if prior is not None and np.isfinite(prior).all()
-                  else np.zeros_like(default))
         sq = {o: 0.0 for o in outputs}
         spread_var = {o: 0.0 for o in outputs}
         count = 0
         seg = {o: np.full(held.t.size, np.nan) for o in outputs}
-        from .initial_state import fit_state
-        # the candidate's own states (none for the nominal) that follow the inputs alone
-        own = ({i for i, name in enumerate(sim.model.state_names) if name not in self.nominal_states}
-               if self.nominal_states is not None else set())
-        carried = [i for i in input_driven_states(sim.equations) if i in own] if own else []
-        for a, b in plan.bounds():
+        starts = restart_states(sim, held, plan, self.noise, params, prior, self.nominal_states, covariance=True)
+        for (a, b), (x, cov) in zip(plan.bounds(), starts):
             e = a + plan.estimation
-            known = prior is not None and np.isfinite(prior[a]).all()
-            start = prior[a] if known else default
-            scale = np.maximum(np.maximum(np.abs(start), spread), 1e-9)
-            scale = np.where(scale > 1e-9, scale, 1.0)
-            win = held.samples(a, e)
-            x, cov = fit_state(sim.on(win), {o: np.asarray(win.outputs[o], float) for o in outputs}, self.noise,
-                               start, scale, params=params, covariance=True, kept=carried if known else ())
             seg_sim = sim.on(held.samples(a, b))
             try:
                 if x is None:
@@ -273,6 +259,38 @@ class Judge:
         if self.kind == "segments":
             out["segments"] = self.plan.to_json()
         return out
+
+
+def restart_states(sim, part, plan, noise: dict, params=None, prior=None, nominal_states=None, *,
+                   covariance=False) -> list:
+    """The state each segment of `plan` on `part` restarts from, fitted to its first
+    ``plan.estimation`` samples: a list of ``(state, covariance)`` (covariance None unless asked
+    for; state None where no state runs).
+
+    Each is :func:`diagnosis.initial_state.fit_state`'s noise-weighted least squares, pulled
+    weakly towards `prior` there (states on `part`'s grid, e.g. the model's open-loop run; the
+    model's default where that is None or not finite).  Where `nominal_states` names the plant's
+    states, a state of the candidate's own that follows the inputs alone (an actuator's lag,
+    :func:`input_driven_states`) is not fitted but taken from `prior`, which has it exactly."""
+    from .initial_state import fit_state
+    outputs = list(sim.output_names)
+    default = sim.initial_state(None)
+    spread = (np.nanstd(prior, axis=0) if prior is not None and np.isfinite(prior).all()
+              else np.zeros_like(default))
+    own = ({i for i, name in enumerate(sim.model.state_names) if name not in nominal_states}
+           if nominal_states is not None else set())
+    carried = [i for i in input_driven_states(sim.equations) if i in own] if own else []
+    found = []
+    for a, _ in plan.bounds():
+        known = prior is not None and np.isfinite(prior[a]).all()
+        start = prior[a] if known else default
+        scale = np.maximum(np.maximum(np.abs(start), spread), 1e-9)
+        scale = np.where(scale > 1e-9, scale, 1.0)
+        win = part.samples(a, a + plan.estimation)
+        x = fit_state(sim.on(win), {o: np.asarray(win.outputs[o], float) for o in outputs}, noise,
+                      start, scale, params=params, covariance=covariance, kept=carried if known else ())
+        found.append(x if covariance else (x, None))
+    return found
 
 
 @functools.lru_cache(maxsize=64)

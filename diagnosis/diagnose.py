@@ -51,6 +51,7 @@ from .initial_state import start_inconsistent
 from .place_choice import (MIN_PLACE_SHARE, actuator_places, companions, further_places, located_places, on_storage,
                            sensor_places, spring_places, without_companions)
 from .rounds import JointRefit, Round
+from .shooting import fitted_from
 
 __all__ = ["diagnose", "MIN_PLACE_SHARE", "MAX_FIT_SAMPLES"]
 
@@ -193,6 +194,26 @@ def _diverged_residuals(sim, experiment):
                  m.input_names, 1)
     return Residuals(experiment.t, measured, nan, dict(nan), {o: noise_sigma(y) for o, y in measured.items()},
                      {o: float("inf") for o in measured}, run)
+
+
+def _restarted_places(graph, train, noise, judge, found, top, say, progress) -> list:
+    """Under the segment judge, the places graph location finds on windows of the training part
+    as long as the judge's segments, each restarted from a state fitted to the data
+    (:func:`diagnosis.graph_location_segments.locate_on_segments`), that are not in `found`.
+
+    Along the one nominal run, a drifting nominal's linearisation means little once the run has
+    left the data: a pendulum driven over the top by a torque, its pivot friction missing, turns
+    a revolution behind within seconds, and a sensor gain explained 98 % of that drift while the
+    pivot's 1-junction explained none."""
+    from .graph_location_segments import locate_on_segments
+    say("graph location", f"restarted windows of {judge.plan.seconds:.3g} s (the segment judge's)")
+    try:
+        scores = locate_on_segments(graph, train, noise, length=judge.plan.length, progress=progress)
+    except (np.linalg.LinAlgError, FloatingPointError):
+        return []
+    known = {(p.kind, p.name) for p in found}
+    return [s.place for s in located_places(without_companions(graph, scores), top)
+            if (s.place.kind, s.place.name) not in known]
 
 
 def _every_place(graph, experiment):
@@ -366,6 +387,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         floor = dict(judge.floor)
     if judge.kind == "segments":
         say("held-out judge", f"segment simulation error: {judge.reason}")
+    restarted = []                    # places only restarted windows located (_restarted_places)
     if diverged:
         from .graph_location_segments import locate_on_segments
         say("nominal diverges", diverged)
@@ -391,6 +413,9 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
             raise DiagnosisError(f"graph location of {graph.name!r} failed on {rec.source}: "
                                  f"{type(exc).__name__}: {exc}") from exc
         place_list = [s.place for s in located_places(without_companions(graph, scores), int(top))]
+        if judge.kind == "segments":      # a drifting nominal: also where restarted windows locate
+            restarted = _restarted_places(graph, train, res.noise, judge, place_list, int(top), say, progress)
+            place_list += restarted
         place_list += actuator_places(graph, place_list, train)
 
     # a diverging nominal's candidates take their scales from where it still runs
@@ -399,9 +424,10 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     cands = [c for p in place_list + springs for c in candidates(graph, p, regime_variables=rv, experiment=cand_part,
                                                                 x0=x0) if p not in springs or on_storage(graph, c)]
     place_list += springs
-    # the feature regression runs along the nominal run: none where it diverges
-    evidence, cands, pruned = _features(graph, [] if diverged else scores, place_list, train, x0, rv, cands,
-                                        say, "feature regression")
+    # the feature regression runs along the nominal run: none where it diverges, nor at a place only
+    # restarted windows located (the drifted run is no plant's motion there): those keep every candidate
+    evidence, cands, pruned = _features(graph, [] if diverged else scores, [p for p in place_list if p not in restarted],
+                                        train, x0, rv, cands, say, "feature regression")
     fit_part, fit_x0 = _fit_window(train, res.run, x0)
     fit_part = _before_divergence(fit_part, diverged)
 
@@ -476,7 +502,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     def round_one(chosen, alternatives):
         return Round(chosen, fits, dict(nominal), dict(improved), seconds=_time.perf_counter() - say.start,
                      diverged=diverged, window=[float(fit_part.t[0]), float(fit_part.t[-1])], floor=floor,
-                     start=start, features=list(evidence.values()), pruned=pruned, indistinguishable=alternatives)
+                     start=fitted_from(judge, fit_part, start), features=list(evidence.values()), pruned=pruned,
+                     indistinguishable=alternatives)
 
     say("improved model")
     improved_graph, improved, y_imp, improved_judged, x0, start = improved_model(chosen)

@@ -28,6 +28,7 @@ import numpy as np
 from .catalogue_common import RELEASED, ParamSpec, priced
 from .errors import BondcosimError, DiagnosisError
 from .holdout_resolution import Z_RESOLVED, held_out_prediction, largest_difference, resolution
+from .shooting import PASSES, SETTLED, Shooting
 
 __all__ = ["CandidateFit", "fit_candidate", "choose", "noise_floor", "needs_explaining", "usable_fits",
            "single_fits_by_holdout",
@@ -59,6 +60,8 @@ _FD_STEP = 1e-3  # forward-difference step on the scaled parameters
 #: relative 1e-5 is far below what the noise lets a fit resolve; scipy's 1e-8 took up to twice
 #: the iterations for no change of the held-out error
 _XTOL, _FTOL = 1e-5, 1e-6
+#: under the segment judge, fit by the segments' error (multiple shooting, :mod:`diagnosis.shooting`)
+SHOOT = True
 #: evaluations a fit gets before `abandon_above` is checked
 _ABANDON_AFTER = 3
 #: and it is given up only when it has also stalled: its best training cost has not fallen by
@@ -179,6 +182,7 @@ class _Objective:
         self._last = (None, None)
         self.evaluations, self.best_cost, self.abandon_above = 0, np.inf, None
         self.best_costs = []       # best training cost after each evaluation
+        self.shooting = None       # under the segment judge: the training part's segments (diagnosis.shooting)
 
     def params(self, theta) -> dict:
         return {s.name: float(v) for s, v in zip(self.specs, np.asarray(theta) * self.scale)}
@@ -216,6 +220,8 @@ class _Objective:
         """The walled residual of one simulation at `theta` from `x0` (default: the objective's start
         state; not counted as a run here)."""
         try:
+            if self.shooting is not None:
+                return self._walled(self._vector(self.shooting(self.params(theta))))
             return self._walled(self._vector(self.sim(self.params(theta), self.x0 if x0 is None else x0)))
         except BondcosimError:
             return self._walled(None)
@@ -225,6 +231,8 @@ class _Objective:
         them does not run the batch fails as a whole, and each is simulated on its own (outside the
         optimiser's count of evaluations)."""
         self.n_runs += len(trials)
+        if self.shooting is not None:
+            return [self._residual(th) for th in trials]
         try:
             runs = self.sim.run_batch([self.params(th) for th in trials], self.x0)
             return [self._walled(self._vector(run.outputs)) for run in runs]
@@ -399,6 +407,20 @@ def _shrink_magnitudes(objective, theta0) -> None:
         objective._last = (None, None)      # its cache is keyed on theta, whose unit changed
 
 
+def _train_cost(objective, values, train_nrmse) -> float:
+    """The training cost of a fit at `values`: half the sum of the outputs' squared NRMSE of the
+    open-loop run, or under multiple shooting (:mod:`diagnosis.shooting`) the same sum of the
+    segments', their restart states fitted again at `values` (the cost the search minimised)."""
+    if objective.shooting is None:
+        return 0.5 * float(sum(v ** 2 for v in train_nrmse.values()))
+    try:
+        objective.shooting.restart(values, objective.x0)
+        r = objective._walled(objective._vector(objective.shooting(values)))
+    except BondcosimError:
+        return float("inf")
+    return 0.5 * float(r @ r)
+
+
 def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, max_nfev: int = 40,
                   abandon_above: float | None = None, through=None, judge=None,
                   mid_run: bool | None = None, within=None, start=None, bounds=None) -> CandidateFit:
@@ -490,6 +512,11 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     except BondcosimError as exc:
         return CandidateFit(candidate, message=f"{label} could not be built or compiled: {exc}", **failed)
     theta0 = np.array([s.guess for s in specs]) / objective.scale
+    shooting = Shooting.for_judge(judge, objective.sim, train) if specs and SHOOT else None
+    if shooting is not None:    # fitted as judged: restarted segments (their states from the guess first)
+        objective.shooting = shooting
+        shooting.restart(objective.params(theta0), x0)
+        start = None            # a start state of the whole run is no longer fitted
     if specs:
         theta0 = _best_start(objective, candidate, theta0, start)
         lower, upper = _scaled_bounds(objective)
@@ -515,6 +542,17 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
                                 graph=model, n_simulations=objective.n_runs,
                                 extra={"train_cost": stop.args[0], "abandoned": True}, **failed)
         objective.abandon_above = None     # what follows (released limits) is not the search
+        for _ in range(1, PASSES if shooting is not None else 1):
+            # the restart states fitted again at the parameters found, and the search resumed there,
+            # until the parameters stay where they are
+            shooting.restart(objective.params(result.x), objective.x0)
+            objective._last = (None, None)
+            previous = result.x
+            result = least_squares(objective, previous, jac=lambda th: objective.jacobian(th, lower, upper),
+                                   bounds=(lower, upper), method="trf", x_scale=1.0, max_nfev=max_nfev,
+                                   xtol=_XTOL, ftol=_FTOL)
+            if np.max(np.abs(result.x - previous) / (np.abs(previous) + 1.0)) < SETTLED:
+                break
         # at the evaluation limit the fit keeps the best point it reached, and the held-out part
         # judges it like any other: a pam's Stribeck friction, its four parameters near the truth's
         # after 40 evaluations, predicted the held-out torque best of all the fits and was dropped as
@@ -566,7 +604,7 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     return CandidateFit(candidate, values, train_nrmse, holdout_nrmse, priced(specs), converged,
                         message if converged else f"{label} did not converge: {message}", model,
                         objective.n_runs + 1,
-                        {"train_cost": 0.5 * float(sum(v ** 2 for v in train_nrmse.values())),
+                        {"train_cost": _train_cost(objective, values, train_nrmse),
                          "open_loop": open_loop, "x0": own_start,
                          "holdout_y": held_out_prediction(scored) if scored is not None else None,
                          "open_loop_y": held_out_prediction(open_loop_y) if open_loop_y is not None else None},

@@ -57,7 +57,7 @@ def _finite_window(sim, train, a, b, noise):
     return None
 
 
-def locate_on_segments(model, train, noise: dict, *, progress=False) -> list:
+def locate_on_segments(model, train, noise: dict, *, length: int | None = None, progress=False) -> list:
     """Places ranked by their pooled share over restarted windows of the training part (see the
     module docstring).
 
@@ -69,6 +69,11 @@ def locate_on_segments(model, train, noise: dict, *, progress=False) -> list:
         The training part.
     noise : dict str -> float
         Noise standard deviation of each output (model units).
+    length : int, optional
+        Samples per window (default: the training part in :data:`WINDOWS`).  A nominal that
+        drifts under the segment judge is located on windows as long as its segments: within
+        them the nominal restarted from the data stays near it, so a linearisation along its run
+        means something.
     progress : bool
 
     Returns
@@ -81,7 +86,7 @@ def locate_on_segments(model, train, noise: dict, *, progress=False) -> list:
 
     sim = OutputSimulator(model, train)
     n = train.t.size
-    length = max(_MIN_SAMPLES, n // WINDOWS)
+    length = max(_MIN_SAMPLES, n // WINDOWS if length is None else int(length))
     pooled, energy_sum = {}, 0.0
     for a in range(0, n - _MIN_SAMPLES + 1, length):
         found = _finite_window(sim, train, a, min(n, a + length), noise)

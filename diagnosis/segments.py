@@ -61,7 +61,7 @@ import sympy as sp
 from .errors import BondcosimError
 
 __all__ = ["SegmentPlan", "Judged", "Judge", "plan_segments", "choose_judge", "drifting_mode",
-           "input_driven_states", "restart_states", "SEGMENTS", "MIN_SEGMENT_SAMPLES", "ESTIMATION_SHARE",
+           "input_driven_states", "carried_states", "restart_states", "SEGMENTS", "MIN_SEGMENT_SAMPLES", "ESTIMATION_SHARE",
            "MIN_ESTIMATION_SAMPLES", "MAX_ESTIMATION_SAMPLES", "DRIFT_RATIO", "SLOW_MODE", "FLOOR_MARGIN"]
 
 #: segments the held-out part is cut into (fewer when it is short)
@@ -261,6 +261,16 @@ class Judge:
         return out
 
 
+def carried_states(sim, nominal_states=None) -> list:
+    """Indices of the states of `sim`'s model a restart takes from the model's own run instead of
+    fitting them: its own states (not among `nominal_states`, the plant's) that follow the inputs
+    alone (:func:`input_driven_states`); none when `nominal_states` is None."""
+    if nominal_states is None:
+        return []
+    own = {i for i, name in enumerate(sim.model.state_names) if name not in nominal_states}
+    return [i for i in input_driven_states(sim.equations) if i in own] if own else []
+
+
 def restart_states(sim, part, plan, noise: dict, params=None, prior=None, nominal_states=None, *,
                    covariance=False) -> list:
     """The state each segment of `plan` on `part` restarts from, fitted to its first
@@ -277,9 +287,7 @@ def restart_states(sim, part, plan, noise: dict, params=None, prior=None, nomina
     default = sim.initial_state(None)
     spread = (np.nanstd(prior, axis=0) if prior is not None and np.isfinite(prior).all()
               else np.zeros_like(default))
-    own = ({i for i, name in enumerate(sim.model.state_names) if name not in nominal_states}
-           if nominal_states is not None else set())
-    carried = [i for i in input_driven_states(sim.equations) if i in own] if own else []
+    carried = carried_states(sim, nominal_states)
     found = []
     for a, _ in plan.bounds():
         known = prior is not None and np.isfinite(prior[a]).all()

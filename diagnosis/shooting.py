@@ -4,27 +4,33 @@ Under the segment judge (:mod:`diagnosis.segments`: the nominal model drifts or 
 candidate is judged by how well it predicts short segments of the held-out part, each restarted
 from a state fitted to its first samples.  Fitted open-loop over the whole training part
 instead, from the recording's first state, its training error is whatever the accumulated
-drift of the whole run makes it: where the plant is sensitive to its state (a pendulum driven
-over the top: a change of a thousandth in a friction level puts it a turn behind within
-seconds) even the true law fits no better than the nominal, and the search has no slope to
-follow.  So here the training part is cut the way the judge cuts the held-out part
+drift of the whole run makes it: where the plant is sensitive to its state, even the right
+law fitted so may not get there (a pendulum driven over the top by a torque, its pivot
+friction missing: the nominal turns a revolution behind within seconds, and every friction
+law fitted open-loop over 21 s explained nothing, answer ``none``).  So here the training part is cut the way the judge cuts the held-out part
 (:class:`Shooting`): segments of the judge's length, each restarted from a state fitted to its
 first samples (:func:`diagnosis.segments.restart_states`), scored on the rest.
 
-The restart states are held fixed while the parameters move (the objective is then one
-simulation of each segment per evaluation, smooth in the parameters) and are fitted again
-at the parameters found; the search then runs once more from there (:data:`PASSES`): a
-variable-projection scheme whose states follow the model being fitted.
+The restart states are fitted at the parameters a search starts from (with each segment's
+sensitivity to its state), and while the parameters move they follow to first order: each
+evaluation is one simulation of each segment, corrected by the state change its estimation
+samples ask for (:meth:`Shooting.__call__`, a linearised variable projection).  Held fixed
+instead, they kept what the guess's model made of the estimation samples (a pendulum's speed
+estimated without its drag), and the fit stopped a fifth short of the drag, or was given up.
+The states are fitted again at the parameters found and the search resumes there, until the
+parameters stay where they are (:data:`PASSES`, :data:`SETTLED`).
 """
 from __future__ import annotations
 
 import numpy as np
 
 from .errors import BondcosimError
-from .segments import SegmentPlan, restart_states
+from .segments import SegmentPlan, carried_states, restart_states
 
 __all__ = ["Shooting", "training_plan", "fitted_from", "PASSES", "SETTLED"]
 
+#: forward-difference step of a restart state, relative to its size (or its spread over the run)
+_STATE_STEP = 1e-6
 #: at most this many searches of the parameters, the restart states fitted again before each
 PASSES = 8
 #: ... until a search moves no scaled parameter by more than this (relative) share
@@ -89,7 +95,8 @@ class Shooting:
 
     def restart(self, params, x0) -> None:
         """Fit every segment's restart state at `params`, pulled towards the model's open-loop
-        run from `x0` where it runs (else towards its default state)."""
+        run from `x0` where it runs (else towards its default state), and each segment's
+        sensitivity to its restart state there (:meth:`__call__`)."""
         try:
             prior = self.sim.run(params, x0).states
         except BondcosimError:
@@ -97,17 +104,56 @@ class Shooting:
         starts = restart_states(self.sim, self.part, self.plan, self.noise, params, prior, self.nominal_states)
         default = self.sim.initial_state(None)
         self.states = [default if x is None else x for x, _ in starts]
+        spread = np.nanstd(prior, axis=0) if prior is not None and np.isfinite(prior).all() else np.zeros_like(default)
+        free = [i for i in range(default.size) if i not in carried_states(self.sim, self.nominal_states)]
+        self._sensitivity = [self._state_sensitivity(sim, params, x, spread, free)
+                             for sim, x in zip(self._sims, self.states)]
+
+    def _state_sensitivity(self, sim, params, x, spread, free):
+        """Noise-weighted outputs of one segment per unit change of each free state (forward
+        differences; columns of zeros for the states a restart carries), or None where it does
+        not run."""
+        try:
+            base = self._stacked(sim(params, x))
+            cols = np.zeros((base.size, x.size))
+            for i in free:
+                h = _STATE_STEP * max(abs(float(x[i])), float(spread[i]), 1e-12)
+                moved = np.array(x, dtype=float)
+                moved[i] += h
+                cols[:, i] = (self._stacked(sim(params, moved)) - base) / h
+        except BondcosimError:
+            return None
+        return cols if np.isfinite(cols).all() else None
+
+    def _stacked(self, y) -> np.ndarray:
+        """The outputs of one segment, each over its noise, one column after the other."""
+        return np.concatenate([np.asarray(y[o], float) / max(self.noise.get(o, 0.0), 1e-300) for o in self.outputs])
 
     def __call__(self, params) -> dict:
-        """Outputs on the training part's grid: each segment simulated at `params` from its restart
-        state on its scored samples, the measured values on its estimation samples (no residual
-        there).  Raises BondcosimError where a segment does not run."""
+        """Outputs on the training part's grid at `params`: on each segment's scored samples, its
+        simulation from its restart state moved by the change :math:`\\delta` that the
+        noise-weighted least squares of its estimation samples asks for at `params`, to first
+        order, :math:`y(x_k + \\delta) \\approx y(x_k) + S_k \\delta` (:math:`S_k` the segment's
+        sensitivity to its state, from :meth:`restart`); the measured values on its estimation
+        samples (no residual there).  So the restart states follow the parameters while they
+        move, as a restart at every evaluation would, to first order, at the cost of one
+        simulation: held fixed, they would keep what the guess's model made of the estimation
+        samples (a pendulum's speed estimated without its drag) and hold the fit near the guess.
+        Raises BondcosimError where a segment does not run."""
         if self.states is None:
             raise BondcosimError("the segments' restart states are not fitted yet (Shooting.restart)")
         out = {o: y.copy() for o, y in self.measured.items()}
         e = self.plan.estimation
-        for (a, b), sim, x in zip(self.plan.bounds(), self._sims, self.states):
+        for (a, b), sim, x, S in zip(self.plan.bounds(), self._sims, self.states, self._sensitivity):
             y = sim(params, x)
+            if S is not None:
+                n = b - a
+                est = np.concatenate([np.arange(k * n, k * n + e) for k in range(len(self.outputs))])
+                r = self._stacked({o: self.measured[o][a:b] - y[o] for o in self.outputs})[est]
+                delta = np.linalg.lstsq(S[est], r, rcond=1e-10)[0]
+                moved = S @ delta
+                y = {o: y[o] + moved[k * n:(k + 1) * n] * max(self.noise.get(o, 0.0), 1e-300)
+                     for k, o in enumerate(self.outputs)}
             for o in self.outputs:
                 out[o][a + e:b] = y[o][e:]
         return out

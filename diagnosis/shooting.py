@@ -7,9 +7,10 @@ instead, from the recording's first state, its training error is whatever the ac
 drift of the whole run makes it: where the plant is sensitive to its state, even the right
 law fitted so may not get there (a pendulum driven over the top by a torque, its pivot
 friction missing: the nominal turns a revolution behind within seconds, and every friction
-law fitted open-loop over 21 s explained nothing, answer ``none``).  So here the training part is cut the way the judge cuts the held-out part
-(:class:`Shooting`): segments of the judge's length, each restarted from a state fitted to its
-first samples (:func:`diagnosis.segments.restart_states`), scored on the rest.
+law fitted open-loop over 21 s explained nothing, answer ``none``).  So here the training part
+is cut the way the judge cuts the held-out part (:class:`Shooting`): segments of the judge's
+length, each restarted from a state fitted to its first samples
+(:func:`diagnosis.restarts.restart_states`), scored on the rest.
 
 The restart states are fitted at the parameters a search starts from (with each segment's
 sensitivity to its state), and while the parameters move they follow to first order: each
@@ -25,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import BondcosimError
-from .segments import SegmentPlan, carried_states, restart_states
+from .restarts import SegmentPlan, carried_states, restart_states
 
 __all__ = ["Shooting", "training_plan", "fitted_from", "PASSES", "SETTLED"]
 
@@ -76,7 +77,7 @@ class Shooting:
     noise : dict str -> float
         Noise standard deviation per output (model units).
     nominal_states : tuple of str, optional
-        The plant's states (:func:`~diagnosis.segments.restart_states`).
+        The plant's states (:func:`~diagnosis.restarts.restart_states`).
     """
 
     def __init__(self, sim, part, plan: SegmentPlan, noise: dict, nominal_states=None):

@@ -196,10 +196,11 @@ def _diverged_residuals(sim, experiment):
                      {o: float("inf") for o in measured}, run)
 
 
-def _restarted_places(graph, train, noise, judge, found, top, say, progress) -> list:
-    """Under the segment judge, the places graph location finds on windows of the training part
-    as long as the judge's segments, each restarted from a state fitted to the data
-    (:func:`diagnosis.graph_location_segments.locate_on_segments`), that are not in `found`.
+def _restarted_places(graph, train, noise, judge, found, top, say, progress) -> tuple[list, list]:
+    """Under the segment judge, ``(places, scores)``: the places graph location finds on windows
+    of the training part as long as the judge's segments, each restarted from a state fitted to
+    the data (:func:`diagnosis.graph_location_segments.locate_on_segments`), that are not in
+    `found`, and all its scores.
 
     Along the one nominal run, a drifting nominal's linearisation means little once the run has
     left the data: a pendulum driven over the top by a torque, its pivot friction missing, turns
@@ -210,10 +211,10 @@ def _restarted_places(graph, train, noise, judge, found, top, say, progress) -> 
     try:
         scores = locate_on_segments(graph, train, noise, length=judge.plan.length, progress=progress)
     except (np.linalg.LinAlgError, FloatingPointError):
-        return []
+        return [], []
     known = {(p.kind, p.name) for p in found}
     return [s.place for s in located_places(without_companions(graph, scores), top)
-            if (s.place.kind, s.place.name) not in known]
+            if (s.place.kind, s.place.name) not in known], scores
 
 
 def _every_place(graph, experiment):
@@ -387,7 +388,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         floor = dict(judge.floor)
     if judge.kind == "segments":
         say("held-out judge", f"segment simulation error: {judge.reason}")
-    restarted = []                    # places only restarted windows located (_restarted_places)
+    restarted, restarted_scores = [], []      # places only restarted windows located (_restarted_places)
     if diverged:
         from .graph_location_segments import locate_on_segments
         say("nominal diverges", diverged)
@@ -414,7 +415,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                                  f"{type(exc).__name__}: {exc}") from exc
         place_list = [s.place for s in located_places(without_companions(graph, scores), int(top))]
         if judge.kind == "segments":      # a drifting nominal: also where restarted windows locate
-            restarted = _restarted_places(graph, train, res.noise, judge, place_list, int(top), say, progress)
+            restarted, restarted_scores = _restarted_places(graph, train, res.noise, judge, place_list, int(top),
+                                                            say, progress)
             place_list += restarted
         place_list += actuator_places(graph, place_list, train)
 
@@ -426,8 +428,9 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     place_list += springs
     # the feature regression runs along the nominal run: none where it diverges, nor at a place only
     # restarted windows located (the drifted run is no plant's motion there): those keep every candidate
-    evidence, cands, pruned = _features(graph, [] if diverged else scores, [p for p in place_list if p not in restarted],
-                                        train, x0, rv, cands, say, "feature regression")
+    regressed = [p for p in place_list if p not in restarted]
+    evidence, cands, pruned = _features(graph, [] if diverged else scores, regressed, train, x0, rv, cands, say,
+                                        "feature regression")
     fit_part, fit_x0 = _fit_window(train, res.run, x0)
     fit_part = _before_divergence(fit_part, diverged)
 
@@ -502,8 +505,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     def round_one(chosen, alternatives):
         return Round(chosen, fits, dict(nominal), dict(improved), seconds=_time.perf_counter() - say.start,
                      diverged=diverged, window=[float(fit_part.t[0]), float(fit_part.t[-1])], floor=floor,
-                     start=fitted_from(judge, fit_part, start), features=list(evidence.values()), pruned=pruned,
-                     indistinguishable=alternatives)
+                     start=fitted_from(judge, fit_part, start), restarted=restarted_scores,
+                     features=list(evidence.values()), pruned=pruned, indistinguishable=alternatives)
 
     say("improved model")
     improved_graph, improved, y_imp, improved_judged, x0, start = improved_model(chosen)

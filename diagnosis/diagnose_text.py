@@ -154,6 +154,8 @@ def assemble(*, graph, rec, exp, held, res, nominal, improved, y_imp, windows, r
             why = "no missing physics; the uncertain nominal parameters were refitted"
         physics = [{"kind": "none", "attached_to": "", "parameters": refit, "explanation": why}]
         location = {"junction": "", "bond": "", "windows": windows, "regime": ""}
+    if rounds and rounds[0].restarted:
+        location["restarted"] = [{"place": str(s.place), "explained": float(s.explained)} for s in rounds[0].restarted]
     fit = {"holdout": [float(held.t[0]), float(held.t[-1])], "nominal": nominal, "improved": improved,
            "substeps": int(exp.substeps)}
     if rounds and rounds[0].window is not None:
@@ -244,6 +246,11 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
     if scores:
         best = ", ".join(f"{s.place} {100 * s.explained:.0f} %" for s in scores[:3])
         lines.append(f"Share of the residual a correction explains, by place: {best}.")
+    if rounds and rounds[0].restarted and judge is not None:
+        best = ", ".join(f"{s.place} {100 * s.explained:.0f} %" for s in rounds[0].restarted[:3])
+        lines.append(f"On windows of the training part restarted every {judge.plan.seconds:.3g} s from states "
+                     f"fitted to the data (the nominal drifts; diagnosis.graph_location_segments): {best}; "
+                     "candidates are fitted at these places too.")
     for ev in (rounds[0].features or []) if rounds else []:
         lines.append(f"Feature regression at {ev.place} (validated share of the residual beyond the noise "
                      f"each kind's features explain): {ev.summary()}.")

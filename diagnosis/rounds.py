@@ -96,6 +96,9 @@ class Round(_ReadByKey):
         First round only: why the nominal simulation diverged ("" if it did not), the training
         window the fits used (first and last time, s), the noise floor per output, and the state
         the fits started from, in words.
+    restarted : list of PlaceScore, optional
+        First round only, under the segment judge: graph location on windows of the training part
+        as long as the judge's segments, each restarted from a state fitted to the data.
     features : list of FeatureEvidence, optional
         The feature regression at each located junction (:mod:`diagnosis.features`).
     pruned : list of str, optional
@@ -127,6 +130,7 @@ class Round(_ReadByKey):
     window: list | None = None
     floor: dict | None = None
     start: str | None = None
+    restarted: list | None = None
     features: list | None = None
     pruned: list | None = None
     indistinguishable: list | None = None

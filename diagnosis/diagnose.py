@@ -414,7 +414,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
             raise DiagnosisError(f"graph location of {graph.name!r} failed on {rec.source}: "
                                  f"{type(exc).__name__}: {exc}") from exc
         place_list = [s.place for s in located_places(without_companions(graph, scores), int(top))]
-        if judge.kind == "segments":      # a drifting nominal: also where restarted windows locate
+        if judge.unstable:                # a nominal whose error grows exponentially: also restarted windows
             restarted, restarted_scores = _restarted_places(graph, train, res.noise, judge, place_list, int(top),
                                                             say, progress)
             place_list += restarted

@@ -145,6 +145,9 @@ class Judge:
     nominal_states : tuple of str or None
         The nominal model's states: a candidate's other states are its own (an actuator's lag).
         None: every state is the plant's (none is carried through a restart).
+    mode : complex or None
+        The nominal's drifting mode (:func:`drifting_mode`, 1/s) where the judge chose segments
+        for it; None otherwise.
     """
 
     kind: str
@@ -154,6 +157,16 @@ class Judge:
     plan: SegmentPlan
     floor: dict | None = None
     nominal_states: tuple | None = None
+    mode: complex | None = None
+
+    @property
+    def unstable(self) -> bool:
+        """Whether the nominal's drifting mode grows by e or more within the held-out part (an
+        unstable mode, as a pendulum's over the top: an error grows exponentially), not an
+        integrator's or a slow mode's (a force-driven carriage: an error accumulates, its effect
+        on the whole run smooth in the parameters)."""
+        span = float(self.held.t[-1] - self.held.t[0]) if self.held.t.size > 1 else 0.0
+        return self.mode is not None and self.mode.real * span > 1.0
 
     def evaluate(self, sim, params=None, x0=None, *, floor=False) -> Judged:
         """Judge the model of `sim` (an OutputSimulator on the whole grid, whose last
@@ -341,6 +354,7 @@ def choose_judge(sim, exp, held, res, diverged: str, floor: dict, x0=None):
               for o in judged.open_loop}
     drift = [o for o in needs_explaining(judged.open_loop, floor) if beyond[o] > DRIFT_RATIO * judged.nrmse[o]]
     if drift:
+        segments.mode = mode
         segments.reason = (f"the nominal model has a mode that integrates what it leaves out (eigenvalue "
                            f"{_eig(mode)}) and its open-loop held-out error is mostly drift: "
                            + ", ".join(f"{o} open-loop {judged.open_loop[o]:.3g} ({beyond[o]:.3g} beyond an "

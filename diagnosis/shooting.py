@@ -40,9 +40,10 @@ SETTLED = 1e-3
 
 def training_plan(judge, part) -> SegmentPlan | None:
     """The segments the training part `part` is fitted on under `judge`: as long as the held-out
-    segments, with as many estimation samples; None under the open-loop judge, or where `part`
-    holds fewer than two of them."""
-    if judge is None or judge.kind != "segments":
+    segments, with as many estimation samples; None (open-loop fits) unless the judge chose
+    segments for a nominal's unstable mode (:attr:`Judge.unstable
+    <diagnosis.segments.Judge.unstable>`), or where `part` holds fewer than two of them."""
+    if judge is None or judge.kind != "segments" or not judge.unstable:
         return None
     length, est = judge.plan.length, judge.plan.estimation
     k = part.t.size // max(length, 1)

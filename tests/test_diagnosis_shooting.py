@@ -3,7 +3,8 @@ of the project was built around: a pendulum driven over the top by a piecewise-c
 (``tests/data/models/pendulum.py``), its truth the tests' own RK4 (``tests/msd_truth.py``) with a
 concealed pivot friction.  The nominal turns a revolution behind the plant within seconds: fitted
 open-loop over the training part, from the recording's first state, no friction law has a slope
-to follow; fitted on restarted segments, the law's level comes out at the truth's."""
+to follow; fitted on restarted segments, the law's level comes out at the truth's.  (A nominal
+that merely integrates, as a force-driven carriage, keeps its open-loop fits.)"""
 from pathlib import Path
 
 import numpy as np
@@ -40,11 +41,12 @@ def _diagnosis(path):
     return diagnose(str(MODEL), str(path), inputs=["tau=tau:N m"], outputs=["theta=theta:rad"], max_effects=1)
 
 
-def test_the_training_part_is_cut_as_the_judge_cuts_the_held_out_part():
+def test_the_training_part_is_cut_as_the_judge_cuts_the_held_out_part_where_the_nominal_is_unstable():
     t = np.arange(0.0, 10.0, 0.01)
     part = Experiment(t, {"u": np.zeros(t.size)}, {"y": np.zeros(t.size)}, {}, "test")
     held = Experiment(t[:300] + 10.0, {"u": np.zeros(300)}, {"y": np.zeros(300)}, {}, "test")
-    judge = Judge("segments", "", held, {"y": 0.01}, plan_segments(held))
+    judge = Judge("segments", "", held, {"y": 0.01}, plan_segments(held), mode=0.5 + 0j)   # e^1.5 over 2.99 s
+    assert judge.unstable
     plan = training_plan(judge, part)
     assert (plan.length, plan.estimation) == (judge.plan.length, judge.plan.estimation) == (60, 30)
     assert plan.starts == tuple(range(0, 1000 - 59, 60)) and plan.seconds == pytest.approx(0.6)
@@ -53,6 +55,8 @@ def test_the_training_part_is_cut_as_the_judge_cuts_the_held_out_part():
     assert training_plan(open_loop, part) is None
     assert fitted_from(open_loop, part, "the model's initial state") == "the model's initial state"
     assert training_plan(judge, part.samples(0, 100)) is None          # fewer than two segments
+    integrator = Judge("segments", "", held, {"y": 0.01}, plan_segments(held), mode=0j)      # a free mass
+    assert not integrator.unstable and training_plan(integrator, part) is None
 
 
 def test_coulomb_friction_on_a_pendulum_driven_over_the_top_is_found_at_its_level(tmp_path):

@@ -525,6 +525,19 @@ def test_an_effect_that_cannot_be_sized_is_a_generator_error(monkeypatch, tmp_pa
     assert "could not be sized" in out["generator_error"]
 
 
+def test_a_report_of_generator_errors_only_is_written(tmp_path):
+    """A run whose every case is a generator error (``--only`` one such case) still writes its
+    table and plot: no case scored, no confusion matrix (its plot took an empty matrix and raised)."""
+    from diagnosis.benchmark.report import write_report
+
+    results = [{"label": "006-pneumatic-cylinder-coulomb_friction@junction:piston", "plant": "pneumatic-cylinder",
+                "kind": "coulomb_friction", "generator_error": "BenchmarkError: the effect could not be sized"}]
+    summary = summarise(results)
+    assert summary["headline"]["scored"] == 0 and summary["headline"]["generator_errors"] == 1
+    write_report(results, summary, tmp_path, seed=7531)
+    assert (tmp_path / "results.png").stat().st_size > 0 and "generator" in (tmp_path / "results.md").read_text()
+
+
 def test_the_pam_truths_signals_survive_a_run_gone_to_infinity():
     """A calibration probe may drive the joint out of range: its signals are NaN, not a raise."""
     from diagnosis.benchmark.plants_pam import pam

@@ -190,9 +190,11 @@ def plot(results, summary, path) -> None:
 
     conf = summary["confusion"]
     kinds = list(conf)
-    m = np.array([[conf[k][a] for a in kinds] for k in kinds], float)
+    m = np.array([[conf[k][a] for a in kinds] for k in kinds], float).reshape(len(kinds), len(kinds))
     fig, ax = plt.subplots(1, 3, figsize=(17, 6), gridspec_kw={"width_ratios": [2.2, 1, 1]})
-    ax[0].imshow(m, cmap="Blues")
+    if not kinds:           # no case scored (every one a generator error): the panels stay empty
+        ax[0].text(0.5, 0.5, "no case scored", ha="center", va="center", transform=ax[0].transAxes)
+    ax[0].imshow(m if kinds else np.zeros((1, 1)), cmap="Blues")
     ax[0].set_xticks(range(len(kinds)), kinds, rotation=70, fontsize=7)
     ax[0].set_yticks(range(len(kinds)), kinds, fontsize=7)
     for i in range(len(kinds)):

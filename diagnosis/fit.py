@@ -410,11 +410,10 @@ def _shrink_magnitudes(objective, theta0) -> None:
 def _train_cost(objective, values, train_nrmse) -> float:
     """The training cost of a fit at `values`: half the sum of the outputs' squared NRMSE of the
     open-loop run, or under multiple shooting (:mod:`diagnosis.shooting`) the same sum of the
-    segments', their restart states fitted again at `values` (the cost the search minimised)."""
+    segments' (the cost the search minimised, its restart states followed to `values`)."""
     if objective.shooting is None:
         return 0.5 * float(sum(v ** 2 for v in train_nrmse.values()))
     try:
-        objective.shooting.restart(values, objective.x0)
         r = objective._walled(objective._vector(objective.shooting(values)))
     except BondcosimError:
         return float("inf")

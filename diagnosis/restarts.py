@@ -61,7 +61,7 @@ def carried_states(sim, nominal_states=None) -> list:
 
 
 def restart_states(sim, part, plan, noise: dict, params=None, prior=None, nominal_states=None, *,
-                   covariance=False) -> list:
+                   covariance=False, starts=None) -> list:
     """The state each segment of `plan` on `part` restarts from, fitted to its first
     ``plan.estimation`` samples: a list of ``(state, covariance)`` (covariance None unless asked
     for; state None where no state runs).
@@ -70,7 +70,9 @@ def restart_states(sim, part, plan, noise: dict, params=None, prior=None, nomina
     weakly towards `prior` there (states on `part`'s grid, e.g. the model's open-loop run; the
     model's default where that is None or not finite).  Where `nominal_states` names the plant's
     states, a state of the candidate's own that follows the inputs alone (an actuator's lag,
-    :func:`input_driven_states`) is not fitted but taken from `prior`, which has it exactly."""
+    :func:`input_driven_states`) is not fitted but taken from `prior`, which has it exactly.
+    `starts` (one state per segment, or None) replaces `prior` as each fit's start and pull, those
+    carried states aside: the states a previous restart fitted, nearer than a drifted run's."""
     from .initial_state import fit_state
     outputs = list(sim.output_names)
     default = sim.initial_state(None)
@@ -78,9 +80,11 @@ def restart_states(sim, part, plan, noise: dict, params=None, prior=None, nomina
               else np.zeros_like(default))
     carried = carried_states(sim, nominal_states)
     found = []
-    for a, _ in plan.bounds():
+    for k, (a, _) in enumerate(plan.bounds()):
         known = prior is not None and np.isfinite(prior[a]).all()
         start = prior[a] if known else default
+        if starts is not None and starts[k] is not None and np.isfinite(starts[k]).all():
+            start = np.where(np.isin(np.arange(start.size), carried) & known, start, starts[k])
         scale = np.maximum(np.maximum(np.abs(start), spread), 1e-9)
         scale = np.where(scale > 1e-9, scale, 1.0)
         win = part.samples(a, a + plan.estimation)

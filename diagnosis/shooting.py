@@ -96,14 +96,16 @@ class Shooting:
         return None if plan is None else cls(sim, part, plan, judge.noise, judge.nominal_states)
 
     def restart(self, params, x0) -> None:
-        """Fit every segment's restart state at `params`, pulled towards the model's open-loop
-        run from `x0` where it runs (else towards its default state), and each segment's
-        sensitivity to its restart state there (:meth:`__call__`)."""
+        """Fit every segment's restart state at `params`, started from and pulled towards the
+        states the last restart fitted, or at the first the model's open-loop run from `x0` where
+        it runs (else its default state), and each segment's sensitivity to its restart state
+        there (:meth:`__call__`)."""
         try:
             prior = self.sim.run(params, x0).states
         except BondcosimError:
             prior = None
-        starts = restart_states(self.sim, self.part, self.plan, self.noise, params, prior, self.nominal_states)
+        starts = restart_states(self.sim, self.part, self.plan, self.noise, params, prior, self.nominal_states,
+                                starts=self.states)
         default = self.sim.initial_state(None)
         self.states = [default if x is None else x for x, _ in starts]
         spread = np.nanstd(prior, axis=0) if prior is not None and np.isfinite(prior).all() else np.zeros_like(default)

@@ -355,8 +355,9 @@ def choose_judge(sim, exp, held, res, diverged: str, floor: dict, x0=None):
     drift = [o for o in needs_explaining(judged.open_loop, floor) if beyond[o] > DRIFT_RATIO * judged.nrmse[o]]
     if drift:
         segments.mode = mode
-        segments.reason = (f"the nominal model has a mode that integrates what it leaves out (eigenvalue "
-                           f"{_eig(mode)}) and its open-loop held-out error is mostly drift: "
+        what = (f"an unstable mode (eigenvalue {_eig(mode)}: an error grows e-fold every {1 / mode.real:.3g} s)"
+                if segments.unstable else f"a mode that integrates what it leaves out (eigenvalue {_eig(mode)})")
+        segments.reason = (f"the nominal model has {what} and its open-loop held-out error is mostly drift: "
                            + ", ".join(f"{o} open-loop {judged.open_loop[o]:.3g} ({beyond[o]:.3g} beyond an "
                                        f"output offset and gain) against {judged.nrmse[o]:.3g} restarted "
                                        f"every {plan.seconds:.3g} s" for o in drift))

@@ -62,7 +62,7 @@ def test_the_training_part_is_cut_as_the_judge_cuts_the_held_out_part_where_the_
 def test_coulomb_friction_on_a_pendulum_driven_over_the_top_is_found_at_its_level(tmp_path):
     report = _diagnosis(_record(tmp_path, lambda w: 0.06 * np.tanh(w / 0.01)))
     data = report.to_json()
-    assert data["fit"]["judge"] == "segments"
+    assert data["fit"]["judge"] == "segments" and "unstable mode" in data["fit"]["judge_reason"]
     assert "diagnosis.shooting" in data["fit"]["start"]
     (effect,) = data["missing_physics"]
     assert (effect["kind"], effect["attached_to"]) == ("coulomb_friction", "junction w")

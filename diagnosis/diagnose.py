@@ -13,12 +13,14 @@
 3. significant time windows (:func:`diagnosis.locate.significant_windows`),
    regime variables, graph location on the training part
    (:func:`diagnosis.graph_location.locate_on_graph`; for a diverging nominal on restarted
-   windows, :func:`diagnosis.graph_location_segments.locate_on_segments`);
+   windows, :func:`diagnosis.graph_location_segments.locate_on_segments`, and for an unstable one
+   on windows as long as the judge's segments too);
 4. candidates of the catalogue at the ``top`` places
    (:func:`diagnosis.catalogue.candidates`), each fitted on the training part
    (its first :data:`MAX_FIT_SAMPLES` samples for long recordings, started from
    the same initial state as every whole-recording simulation, never from a
-   nominal state that may have drifted) (:func:`diagnosis.fit.fit_candidate`), and a refit of the ``uncertain``
+   nominal state that may have drifted; an unstable nominal's on restarted segments,
+   :mod:`diagnosis.shooting`) (:func:`diagnosis.fit.fit_candidate`), and a refit of the ``uncertain``
    nominal parameters alone when any are given; the choice by held-out error
    and parsimony (:func:`diagnosis.fit.choose`), ``none`` when nothing
    explains a significant share; the fits of other kinds the held-out part cannot tell apart from
@@ -197,12 +199,13 @@ def _diverged_residuals(sim, experiment):
 
 
 def _restarted_places(graph, train, noise, judge, found, top, say, progress) -> tuple[list, list]:
-    """Under the segment judge, ``(places, scores)``: the places graph location finds on windows
-    of the training part as long as the judge's segments, each restarted from a state fitted to
-    the data (:func:`diagnosis.graph_location_segments.locate_on_segments`), that are not in
-    `found`, and all its scores.
+    """Where the segment judge took an unstable nominal, ``(places, scores)``: the places graph
+    location finds on windows of the training part as long as the judge's segments, each
+    restarted from a state fitted to the data
+    (:func:`diagnosis.graph_location_segments.locate_on_segments`), that are not in `found`, and
+    all its scores.
 
-    Along the one nominal run, a drifting nominal's linearisation means little once the run has
+    Along the one nominal run, an unstable nominal's linearisation means little once the run has
     left the data: a pendulum driven over the top by a torque, its pivot friction missing, turns
     a revolution behind within seconds, and a sensor gain explained 98 % of that drift while the
     pivot's 1-junction explained none."""

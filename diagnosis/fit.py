@@ -60,8 +60,6 @@ _FD_STEP = 1e-3  # forward-difference step on the scaled parameters
 #: relative 1e-5 is far below what the noise lets a fit resolve; scipy's 1e-8 took up to twice
 #: the iterations for no change of the held-out error
 _XTOL, _FTOL = 1e-5, 1e-6
-#: under the segment judge, fit by the segments' error (multiple shooting, :mod:`diagnosis.shooting`)
-SHOOT = True
 #: evaluations a fit gets before `abandon_above` is checked
 _ABANDON_AFTER = 3
 #: and it is given up only when it has also stalled: its best training cost has not fallen by
@@ -511,8 +509,8 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
     except BondcosimError as exc:
         return CandidateFit(candidate, message=f"{label} could not be built or compiled: {exc}", **failed)
     theta0 = np.array([s.guess for s in specs]) / objective.scale
-    shooting = Shooting.for_judge(judge, objective.sim, train) if specs and SHOOT else None
-    if shooting is not None:    # fitted as judged: restarted segments (their states from the guess first)
+    shooting = Shooting.for_judge(judge, objective.sim, train) if specs else None
+    if shooting is not None:    # an unstable nominal's: fitted as judged, on restarted segments
         objective.shooting = shooting
         shooting.restart(objective.params(theta0), x0)
         start = None            # a start state of the whole run is no longer fitted

@@ -70,8 +70,8 @@ def locate_on_segments(model, train, noise: dict, *, length: int | None = None, 
     noise : dict str -> float
         Noise standard deviation of each output (model units).
     length : int, optional
-        Samples per window (default: the training part in :data:`WINDOWS`).  A nominal that
-        drifts under the segment judge is located on windows as long as its segments: within
+        Samples per window (default: the training part in :data:`WINDOWS`).  A nominal whose
+        unstable mode made the segment judge is located on windows as long as its segments: within
         them the nominal restarted from the data stays near it, so a linearisation along its run
         means something.
     progress : bool

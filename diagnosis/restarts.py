@@ -18,12 +18,13 @@ __all__ = ["SegmentPlan", "carried_states", "restart_states", "input_driven_stat
 
 @dataclass(frozen=True)
 class SegmentPlan:
-    """Where the held-out part is cut.
+    """Where a part of the recording (the held-out part, or the training part of a shooting fit)
+    is cut.
 
     Attributes
     ----------
     starts : tuple of int
-        First sample of each segment, index into the held-out part.
+        First sample of each segment, index into the part.
     length : int
         Samples per segment (the last one takes the remainder).
     estimation : int
@@ -31,7 +32,7 @@ class SegmentPlan:
     seconds : float
         Duration of a segment, s.
     n : int
-        Samples of the held-out part.
+        Samples of the part.
     """
 
     starts: tuple
@@ -41,7 +42,7 @@ class SegmentPlan:
     n: int
 
     def bounds(self):
-        """``(first, stop)`` sample indices of each segment in the held-out part."""
+        """``(first, stop)`` sample indices of each segment in the part."""
         stops = list(self.starts[1:]) + [self.n]
         return list(zip(self.starts, stops))
 

@@ -2,12 +2,15 @@
 
 Under the segment judge (:mod:`diagnosis.segments`: the nominal model drifts or diverges) a
 candidate is judged by how well it predicts short segments of the held-out part, each restarted
-from a state fitted to its first samples.  Fitted open-loop over the whole training part
+from a state fitted to its first samples.  Where the judge took the nominal for an unstable mode
+(:attr:`Judge.unstable <diagnosis.segments.Judge.unstable>`: an error grows e-fold within the
+held-out part), the candidates are fitted by that error too.  Fitted open-loop over the whole training part
 instead, from the recording's first state, its training error is whatever the accumulated
 drift of the whole run makes it: where the plant is sensitive to its state, even the right
 law fitted so may not get there (a pendulum driven over the top by a torque, its pivot
 friction missing: the nominal turns a revolution behind within seconds, and every friction
-law fitted open-loop over 21 s explained nothing, answer ``none``).  So here the training part
+law fitted open-loop over 21 s explained nothing, answer ``none``); an integrator's error (a
+force-driven carriage) only accumulates, and its open-loop fits stay.  So here the training part
 is cut the way the judge cuts the held-out part (:class:`Shooting`): segments of the judge's
 length, each restarted from a state fitted to its first samples
 (:func:`diagnosis.restarts.restart_states`), scored on the rest.

@@ -62,7 +62,7 @@ def carried_states(sim, nominal_states=None) -> list:
 
 
 def restart_states(sim, part, plan, noise: dict, params=None, prior=None, nominal_states=None, *,
-                   covariance=False, starts=None) -> list:
+                   covariance=False, starts=None, chained=False) -> list:
     """The state each segment of `plan` on `part` restarts from, fitted to its first
     ``plan.estimation`` samples: a list of ``(state, covariance)`` (covariance None unless asked
     for; state None where no state runs).
@@ -73,26 +73,66 @@ def restart_states(sim, part, plan, noise: dict, params=None, prior=None, nomina
     states, a state of the candidate's own that follows the inputs alone (an actuator's lag,
     :func:`input_driven_states`) is not fitted but taken from `prior`, which has it exactly.
     `starts` (one state per segment, or None) replaces `prior` as each fit's start and pull, those
-    carried states aside: the states a previous restart fitted, nearer than a drifted run's."""
+    carried states aside: the states a previous restart fitted, nearer than a drifted run's.
+
+    `chained` (for a nominal's unstable mode): each segment's fit is also started from where the
+    previous segment's simulation ends, and the fit that leaves its estimation samples the
+    smaller error is kept.  The open-loop run such a model drifts from says nothing of the state
+    by then, and a fit started there can settle in the wrong well of a double-well oscillator: the
+    right Coulomb friction then predicted one segment of nine at the other well, and the held-out
+    error was twice the nominal's."""
     from .initial_state import fit_state
     outputs = list(sim.output_names)
     default = sim.initial_state(None)
     spread = (np.nanstd(prior, axis=0) if prior is not None and np.isfinite(prior).all()
               else np.zeros_like(default))
     carried = carried_states(sim, nominal_states)
-    found = []
-    for k, (a, _) in enumerate(plan.bounds()):
+    found, follows = [], None
+    for k, (a, b) in enumerate(plan.bounds()):
         known = prior is not None and np.isfinite(prior[a]).all()
         start = prior[a] if known else default
         if starts is not None and starts[k] is not None and np.isfinite(starts[k]).all():
             start = np.where(np.isin(np.arange(start.size), carried) & known, start, starts[k])
-        scale = np.maximum(np.maximum(np.abs(start), spread), 1e-9)
-        scale = np.where(scale > 1e-9, scale, 1.0)
         win = part.samples(a, a + plan.estimation)
-        x = fit_state(sim.on(win), {o: np.asarray(win.outputs[o], float) for o in outputs}, noise,
-                      start, scale, params=params, covariance=covariance, kept=carried if known else ())
+        w_sim, y = sim.on(win), {o: np.asarray(win.outputs[o], float) for o in outputs}
+        tries = [start] + ([np.where(np.isin(np.arange(start.size), carried) & known, start, follows)]
+                           if chained and follows is not None else [])
+        fits = []
+        for x0 in tries:
+            scale = np.maximum(np.maximum(np.abs(x0), spread), 1e-9)
+            scale = np.where(scale > 1e-9, scale, 1.0)
+            fits.append(fit_state(w_sim, y, noise, x0, scale, params=params, covariance=covariance,
+                                  kept=carried if known else ()))
+        x = min(fits, key=lambda f: _window_cost(w_sim, y, noise, f[0] if covariance else f, params))
         found.append(x if covariance else (x, None))
+        follows = _end_state(sim, part, a, b, x[0] if covariance else x, params) if chained else None
     return found
+
+
+def _window_cost(w_sim, y, noise, x, params) -> float:
+    """The noise-weighted squared error of the outputs `y` simulated from `x` (inf where none)."""
+    from .errors import BondcosimError
+    if x is None:
+        return float("inf")
+    try:
+        out = w_sim(params, x)
+    except BondcosimError:
+        return float("inf")
+    cost = sum(float(np.sum(((y[o] - out[o]) / max(noise.get(o, 0.0), 1e-300)) ** 2)) for o in y)
+    return cost if np.isfinite(cost) else float("inf")
+
+
+def _end_state(sim, part, a, b, x, params):
+    """The state at sample `b` of `part` (the next segment's first) simulated from `x` at sample
+    `a`, or None where it does not run or `b` is past the part."""
+    from .errors import BondcosimError
+    if x is None or b >= part.t.size:
+        return None
+    try:
+        states = sim.on(part.samples(a, b + 1)).run(params, x).states
+    except BondcosimError:
+        return None
+    return states[-1] if np.isfinite(states[-1]).all() else None
 
 
 @functools.lru_cache(maxsize=64)

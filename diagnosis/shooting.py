@@ -108,7 +108,7 @@ class Shooting:
         except BondcosimError:
             prior = None
         starts = restart_states(self.sim, self.part, self.plan, self.noise, params, prior, self.nominal_states,
-                                starts=self.states)
+                                starts=self.states, chained=True)
         default = self.sim.initial_state(None)
         self.states = [default if x is None else x for x, _ in starts]
         spread = np.nanstd(prior, axis=0) if prior is not None and np.isfinite(prior).all() else np.zeros_like(default)

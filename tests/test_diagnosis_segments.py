@@ -63,6 +63,16 @@ def test_segments_cut_the_held_out_part_in_five_halves_estimated_halves_scored()
     assert short.starts == (0, 50) and short.estimation == 25        # at least 40 samples a segment
 
 
+def test_an_unstable_modes_segments_score_two_e_foldings():
+    """Growth 2.5 1/s: an e-folding every 0.4 s, so 0.8 s scored after 0.8 s estimated (160 samples
+    at 100 Hz; the default five of 12 s would be 240), as many as fit; a slow growth keeps the five."""
+    held = Experiment(np.arange(1200) / 100.0, {}, {"x": np.zeros(1200)})
+    plan = plan_segments(held, growth=2.5)
+    assert (plan.length, plan.estimation) == (160, 80) and plan.starts == tuple(range(0, 961, 160))
+    assert plan_segments(held, growth=0.1) == plan_segments(held)
+    assert plan_segments(held, growth=100.0).length == 40           # at least 40 samples a segment
+
+
 def test_the_right_model_restarted_from_the_data_leaves_about_the_noise(tmp_path):
     from diagnosis.recording import Recording, bind
     exp = bind(Recording.from_csv(_carriage_recording(tmp_path / "null.csv", 0.0)), build("carriage"),

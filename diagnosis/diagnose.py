@@ -391,7 +391,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         floor = dict(judge.floor)
     if judge.kind == "segments":
         say("held-out judge", f"segment simulation error: {judge.reason}")
-    restarted, restarted_scores = [], []      # places only restarted windows located (_restarted_places)
+    restarted_scores = []             # graph location on restarted windows (_restarted_places)
     if diverged:
         from .graph_location_segments import locate_on_segments
         say("nominal diverges", diverged)
@@ -429,11 +429,10 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     cands = [c for p in place_list + springs for c in candidates(graph, p, regime_variables=rv, experiment=cand_part,
                                                                 x0=x0) if p not in springs or on_storage(graph, c)]
     place_list += springs
-    # the feature regression runs along the nominal run: none where it diverges, nor at a place only
-    # restarted windows located (the drifted run is no plant's motion there): those keep every candidate
-    regressed = [p for p in place_list if p not in restarted]
-    evidence, cands, pruned = _features(graph, [] if diverged else scores, regressed, train, x0, rv, cands, say,
-                                        "feature regression")
+    # the feature regression runs along the nominal run: none where it diverges, nor where its mode is
+    # unstable (the run has left the plant's motion within seconds): every candidate is fitted
+    evidence, cands, pruned = _features(graph, [] if diverged or judge.unstable else scores, place_list, train, x0,
+                                        rv, cands, say, "feature regression")
     fit_part, fit_x0 = _fit_window(train, res.run, x0)
     fit_part = _before_divergence(fit_part, diverged)
 

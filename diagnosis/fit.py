@@ -28,7 +28,7 @@ import numpy as np
 from .catalogue_common import RELEASED, ParamSpec, priced
 from .errors import BondcosimError, DiagnosisError
 from .holdout_resolution import Z_RESOLVED, held_out_prediction, largest_difference, resolution
-from .shooting import PASSES, SETTLED, Shooting
+from .shooting import FIRST_PASS, PASSES, SETTLED, Shooting
 
 __all__ = ["CandidateFit", "fit_candidate", "choose", "noise_floor", "needs_explaining", "usable_fits",
            "single_fits_by_holdout",
@@ -184,6 +184,11 @@ class _Objective:
 
     def params(self, theta) -> dict:
         return {s.name: float(v) for s, v in zip(self.specs, np.asarray(theta) * self.scale)}
+
+    def restarted(self) -> None:
+        """The objective changed (new restart states): its cache and its record of progress go."""
+        self._last = (None, None)
+        self.evaluations, self.best_cost, self.best_costs = 0, np.inf, []
 
     def _vector(self, outputs) -> np.ndarray:
         return np.concatenate([(outputs[o] - self.measured[o]) * self.weight[o] for o in self.outputs])
@@ -405,6 +410,36 @@ def _shrink_magnitudes(objective, theta0) -> None:
         objective._last = (None, None)      # its cache is keyed on theta, whose unit changed
 
 
+def _search(objective, theta0, lower, upper, max_nfev, abandon_above, shooting):
+    """The least-squares search from `theta0` (scaled), given up (:class:`_Abandoned`) once its
+    training cost stays above `abandon_above`.  Under multiple shooting the search runs in passes
+    (:mod:`diagnosis.shooting`), the restart states fitted again before each, until the parameters
+    stay where they are; the first pass, from the guess's states, is short and never given up
+    (those states keep the guess's model: a drag started at twice the truth's on a chaotic
+    oscillator stalled there and was given up, and fitted on it came out at the truth's, the best
+    fit by far), and each later pass is judged for giving up on its own evaluations."""
+    from scipy.optimize import least_squares
+
+    def run(theta, budget):
+        return least_squares(objective, theta, jac=lambda th: objective.jacobian(th, lower, upper),
+                             bounds=(lower, upper), method="trf", x_scale=1.0, max_nfev=budget, xtol=_XTOL,
+                             ftol=_FTOL)
+
+    if shooting is None:
+        objective.abandon_above = abandon_above
+        return run(theta0, max_nfev)
+    result = run(theta0, FIRST_PASS)
+    objective.abandon_above = abandon_above
+    for _ in range(1, PASSES):
+        shooting.restart(objective.params(result.x), objective.x0)
+        objective.restarted()
+        previous = result.x
+        result = run(previous, max_nfev)
+        if np.max(np.abs(result.x - previous) / (np.abs(previous) + 1.0)) < SETTLED:
+            break
+    return result
+
+
 def _train_cost(objective, values, train_nrmse) -> float:
     """The training cost of a fit at `values`: half the sum of the outputs' squared NRMSE of the
     open-loop run, or under multiple shooting (:mod:`diagnosis.shooting`) the same sum of the
@@ -484,8 +519,6 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
         ``success=False`` with the reason in ``message`` when the candidate cannot be built or
         simulated, or the optimiser stops without converging within the budget.
     """
-    from scipy.optimize import least_squares
-
     from .residuals import OutputSimulator, nrmse
 
     if holdout is not None and holdout.t[0] <= train.t[-1]:
@@ -528,28 +561,14 @@ def fit_candidate(graph, candidate, train, holdout, *, uncertain=(), x0=None, ma
         if np.all(r0 == _WALL):
             return CandidateFit(candidate, message=f"{label}: the model does not run at the initial guess "
                                 f"{objective.params(theta0)}", graph=model, n_simulations=objective.n_runs, **failed)
-        objective.abandon_above = abandon_above
         try:
-            result = least_squares(objective, theta0, jac=lambda th: objective.jacobian(th, lower, upper),
-                                   bounds=(lower, upper), method="trf", x_scale=1.0, max_nfev=max_nfev,
-                                   xtol=_XTOL, ftol=_FTOL)
+            result = _search(objective, theta0, lower, upper, max_nfev, abandon_above, shooting)
         except _Abandoned as stop:
             return CandidateFit(candidate, message=f"{label}: abandoned after {objective.evaluations} "
                                 f"evaluations, training cost {stop.args[0]:.4g} > {abandon_above:.4g}",
                                 graph=model, n_simulations=objective.n_runs,
                                 extra={"train_cost": stop.args[0], "abandoned": True}, **failed)
         objective.abandon_above = None     # what follows (released limits) is not the search
-        for _ in range(1, PASSES if shooting is not None else 1):
-            # the restart states fitted again at the parameters found, and the search resumed there,
-            # until the parameters stay where they are
-            shooting.restart(objective.params(result.x), objective.x0)
-            objective._last = (None, None)
-            previous = result.x
-            result = least_squares(objective, previous, jac=lambda th: objective.jacobian(th, lower, upper),
-                                   bounds=(lower, upper), method="trf", x_scale=1.0, max_nfev=max_nfev,
-                                   xtol=_XTOL, ftol=_FTOL)
-            if np.max(np.abs(result.x - previous) / (np.abs(previous) + 1.0)) < SETTLED:
-                break
         # at the evaluation limit the fit keeps the best point it reached, and the held-out part
         # judges it like any other: a pam's Stribeck friction, its four parameters near the truth's
         # after 40 evaluations, predicted the held-out torque best of all the fits and was dropped as

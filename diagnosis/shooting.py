@@ -31,12 +31,14 @@ import numpy as np
 from .errors import BondcosimError
 from .restarts import SegmentPlan, carried_states, restart_states
 
-__all__ = ["Shooting", "training_plan", "fitted_from", "PASSES", "SETTLED"]
+__all__ = ["Shooting", "training_plan", "fitted_from", "PASSES", "FIRST_PASS", "SETTLED"]
 
 #: forward-difference step of a restart state, relative to its size (or its spread over the run)
 _STATE_STEP = 1e-6
 #: at most this many searches of the parameters, the restart states fitted again before each
 PASSES = 8
+#: evaluations of the first search, from the guess's restart states (:func:`diagnosis.fit._search`)
+FIRST_PASS = 5
 #: ... until a search moves no scaled parameter by more than this (relative) share
 SETTLED = 1e-3
 

@@ -103,7 +103,8 @@ def restart_states(sim, part, plan, noise: dict, params=None, prior=None, nomina
             scale = np.where(scale > 1e-9, scale, 1.0)
             fits.append(fit_state(w_sim, y, noise, x0, scale, params=params, covariance=covariance,
                                   kept=carried if known else ()))
-        x = min(fits, key=lambda f: _window_cost(w_sim, y, noise, f[0] if covariance else f, params))
+        x = fits[0] if len(fits) == 1 else min(
+            fits, key=lambda f: _window_cost(w_sim, y, noise, f[0] if covariance else f, params))
         found.append(x if covariance else (x, None))
         follows = _end_state(sim, part, a, b, x[0] if covariance else x, params) if chained else None
     return found

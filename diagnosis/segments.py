@@ -278,6 +278,34 @@ def _carried_variance(seg_sim, params, x, cov, out, first) -> dict:
     return total
 
 
+def _replayed_floor(judge, sim, prior, seed: int = 0) -> dict:
+    """The segment error's floor for a nominal with an unstable mode, replayed: the held-out part
+    made again by the nominal itself (each segment simulated whole from its restart state, plus
+    Gaussian noise of each output's level), judged as the recording is, times
+    :data:`FLOOR_MARGIN`.  The linearised floor (:meth:`Judge.segment_error`) understates what a
+    restart's noise grows to across two e-foldings of a chaotic oscillator: the right model of a
+    double-well Duffing oscillator left 0.016 on its recording against a linearised floor of
+    0.0075, and a constant load of 0.0005 N, no physics at all, passed as an effect."""
+    from dataclasses import replace
+    held, plan = judge.held, judge.plan
+    rng = np.random.default_rng(seed)
+    made = {o: np.asarray(v, float).copy() for o, v in held.outputs.items()}
+    starts = restart_states(sim, held, plan, judge.noise, None, prior, judge.nominal_states, chained=True)
+    for (a, b), (x, _) in zip(plan.bounds(), starts):
+        try:
+            if x is None:
+                continue
+            y = sim.on(held.samples(a, b))(None, x)
+        except BondcosimError:
+            continue
+        for o in made:
+            if np.isfinite(y[o]).all():
+                made[o][a:b] = y[o] + rng.normal(0.0, judge.noise.get(o, 0.0), b - a)
+    again = replace(judge, held=replace(held, outputs=made), floor=None)
+    nrmse = again.segment_error(sim, None, prior)[0]
+    return {o: FLOOR_MARGIN * v for o, v in nrmse.items()}
+
+
 def _beyond_sensor(y, y_hat, n_held) -> float:
     """Held-out NRMSE of the open-loop residual ``y - y_hat`` (whole record, the last `n_held`
     samples held out) left by an output offset and gain ``a + b y_hat`` fitted on the training
@@ -375,6 +403,9 @@ def choose_judge(sim, exp, held, res, diverged: str, floor: dict, x0=None):
                                        f"output offset and gain) against {judged.nrmse[o]:.3g} restarted "
                                        f"every {plan.seconds:.3g} s" for o in drift))
         segments.floor = judged.floor
+        if segments.unstable:
+            segments.floor = {o: max(v, replayed[o]) for o, v in judged.floor.items()
+                              for replayed in [_replayed_floor(segments, sim, res.run.states[-n_held:])]}
         return segments, judged
     judge = Judge("open-loop", f"the nominal model has a mode that integrates what it leaves out (eigenvalue "
                   f"{_eig(mode)}), but restarting it from the data does not remove most of its "

@@ -60,8 +60,8 @@ from .errors import BondcosimError
 from .restarts import SegmentPlan, input_driven_states, restart_states
 
 __all__ = ["SegmentPlan", "Judged", "Judge", "plan_segments", "choose_judge", "drifting_mode",
-           "input_driven_states", "SEGMENTS", "UNSTABLE_HORIZON", "MIN_SEGMENT_SAMPLES", "ESTIMATION_SHARE", "MIN_ESTIMATION_SAMPLES",
-           "MAX_ESTIMATION_SAMPLES", "DRIFT_RATIO", "SLOW_MODE", "FLOOR_MARGIN"]
+           "input_driven_states", "SEGMENTS", "UNSTABLE_HORIZON", "MIN_SEGMENT_SAMPLES", "ESTIMATION_SHARE",
+           "MIN_ESTIMATION_SAMPLES", "MAX_ESTIMATION_SAMPLES", "DRIFT_RATIO", "SLOW_MODE", "FLOOR_MARGIN"]
 
 #: segments the held-out part is cut into (fewer when it is short)
 SEGMENTS = 5

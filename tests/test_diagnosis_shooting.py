@@ -8,6 +8,8 @@ that merely integrates, as a force-driven carriage, keeps its open-loop fits.)  
 oscillator: ``tests/test_diagnosis_duffing.py``."""
 from pathlib import Path
 
+import os
+
 import numpy as np
 import pytest
 
@@ -18,6 +20,9 @@ from diagnosis.shooting import fitted_from, training_plan
 from msd_truth import rk4_states
 
 MODEL = Path(__file__).parent / "data" / "models" / "pendulum.py"
+#: a diagnosis of a minute or more: run with BONDCOSIM_DIAGNOSIS_CASES=all, as the long end-to-end cases
+LONG = pytest.mark.skipif(os.environ.get("BONDCOSIM_DIAGNOSIS_CASES", "") != "all",
+                          reason="long diagnosis: BONDCOSIM_DIAGNOSIS_CASES=all runs it")
 J, B, MGL = 0.05, 0.02, 0.49                     # kg m^2, N m s/rad, N m
 FS, SPAN, SUB, AMP, NOISE = 100.0, 24.0, 10, 0.6, 0.002     # Hz, s, RK4 steps per sample, N m, rad
 
@@ -71,6 +76,7 @@ def test_coulomb_friction_on_a_pendulum_driven_over_the_top_is_found_at_its_leve
     assert data["fit"]["improved"]["theta"] < 0.1 * data["fit"]["nominal"]["theta"]
 
 
+@LONG
 def test_quadratic_drag_on_a_pendulum_driven_over_the_top_is_found_at_its_level(tmp_path):
     report = _diagnosis(_record(tmp_path, lambda w: 0.02 * w * abs(w)))
     data = report.to_json()

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
-__all__ = ["SegmentPlan", "carried_states", "restart_states", "input_driven_states"]
+__all__ = ["SegmentPlan", "carried_states", "restart_states", "input_driven_states", "state_spread"]
 
 
 @dataclass(frozen=True)
@@ -84,19 +84,18 @@ def restart_states(sim, part, plan, noise: dict, params=None, prior=None, nomina
     from .initial_state import fit_state
     outputs = list(sim.output_names)
     default = sim.initial_state(None)
-    spread = (np.nanstd(prior, axis=0) if prior is not None and np.isfinite(prior).all()
-              else np.zeros_like(default))
+    spread = state_spread(prior, default.size)
     carried = carried_states(sim, nominal_states)
+    is_carried = np.isin(np.arange(default.size), carried)
     found, follows = [], None
     for k, (a, b) in enumerate(plan.bounds()):
         known = prior is not None and np.isfinite(prior[a]).all()
         start = prior[a] if known else default
         if starts is not None and starts[k] is not None and np.isfinite(starts[k]).all():
-            start = np.where(np.isin(np.arange(start.size), carried) & known, start, starts[k])
+            start = np.where(is_carried & known, start, starts[k])
         win = part.samples(a, a + plan.estimation)
         w_sim, y = sim.on(win), {o: np.asarray(win.outputs[o], float) for o in outputs}
-        tries = [start] + ([np.where(np.isin(np.arange(start.size), carried) & known, start, follows)]
-                           if chained and follows is not None else [])
+        tries = [start] + ([np.where(is_carried & known, start, follows)] if chained and follows is not None else [])
         fits = []
         for x0 in tries:
             scale = np.maximum(np.maximum(np.abs(x0), spread), 1e-9)
@@ -108,6 +107,14 @@ def restart_states(sim, part, plan, noise: dict, params=None, prior=None, nomina
         found.append(x if covariance else (x, None))
         follows = _end_state(sim, part, a, b, x[0] if covariance else x, params) if chained else None
     return found
+
+
+def state_spread(prior, size: int) -> np.ndarray:
+    """Each state's standard deviation over the run `prior` (zeros where there is none, or it
+    leaves the finite numbers): a scale beside the state's own size."""
+    if prior is None or not np.isfinite(prior).all():
+        return np.zeros(size)
+    return np.nanstd(prior, axis=0)
 
 
 def _window_cost(w_sim, y, noise, x, params) -> float:

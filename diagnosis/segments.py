@@ -59,7 +59,7 @@ import numpy as np
 from .errors import BondcosimError
 from .restarts import SegmentPlan, input_driven_states, restart_states
 
-__all__ = ["SegmentPlan", "Judged", "Judge", "plan_segments", "choose_judge", "drifting_mode",
+__all__ = ["SegmentPlan", "Judged", "Judge", "plan_segments", "choose_judge", "drifting_mode", "grows_within",
            "input_driven_states", "SEGMENTS", "UNSTABLE_HORIZON", "MIN_SEGMENT_SAMPLES", "ESTIMATION_SHARE",
            "MIN_ESTIMATION_SAMPLES", "MAX_ESTIMATION_SAMPLES", "DRIFT_RATIO", "SLOW_MODE", "FLOOR_MARGIN"]
 
@@ -178,7 +178,7 @@ class Judge:
         integrator's or a slow mode's (a force-driven carriage: an error accumulates, its effect
         on the whole run smooth in the parameters)."""
         span = float(self.held.t[-1] - self.held.t[0]) if self.held.t.size > 1 else 0.0
-        return self.mode is not None and self.mode.real * span > 1.0
+        return grows_within(self.mode, span)
 
     def evaluate(self, sim, params=None, x0=None, *, floor=False) -> Judged:
         """Judge the model of `sim` (an OutputSimulator on the whole grid, whose last
@@ -276,6 +276,11 @@ def _carried_variance(seg_sim, params, x, cov, out, first) -> dict:
         var = np.einsum("ki,ij,kj->k", S, cov, S)
         total[o] = float(np.sum(np.where(np.isfinite(var), var, 0.0)))
     return total
+
+
+def grows_within(mode, span: float) -> bool:
+    """Whether the eigenvalue `mode` (1/s, or None) grows by e or more within `span` seconds."""
+    return mode is not None and mode.real * span > 1.0
 
 
 def _replayed_floor(judge, sim, prior, seed: int = 0) -> dict:
@@ -378,7 +383,7 @@ def choose_judge(sim, exp, held, res, diverged: str, floor: dict, x0=None):
     from .fit import needs_explaining
     span = float(held.t[-1] - held.t[0]) or 1.0
     mode = None if diverged else drifting_mode(sim, res.run, span)
-    plan = plan_segments(held, mode.real if mode is not None and mode.real * span > 1.0 else None)
+    plan = plan_segments(held, mode.real if grows_within(mode, span) else None)
     segments = Judge("segments", "", held, dict(res.noise), plan, nominal_states=tuple(sim.model.state_names))
     if diverged:
         segments.reason = f"the nominal model diverges on the recording ({diverged})"

@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import BondcosimError
-from .restarts import SegmentPlan, carried_states, restart_states
+from .restarts import SegmentPlan, carried_states, restart_states, state_spread
 
 __all__ = ["Shooting", "training_plan", "fitted_from", "PASSES", "FIRST_PASS", "SETTLED"]
 
@@ -113,7 +113,7 @@ class Shooting:
                                 starts=self.states, chained=True)
         default = self.sim.initial_state(None)
         self.states = [default if x is None else x for x, _ in starts]
-        spread = np.nanstd(prior, axis=0) if prior is not None and np.isfinite(prior).all() else np.zeros_like(default)
+        spread = state_spread(prior, default.size)
         free = [i for i in range(default.size) if i not in carried_states(self.sim, self.nominal_states)]
         self._sensitivity = [self._state_sensitivity(sim, params, x, spread, free)
                              for sim, x in zip(self._sims, self.states)]

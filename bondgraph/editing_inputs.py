@@ -117,12 +117,15 @@ def _adopt_states(users: list[dict], u: str) -> str:
             return entry["name"]
         if entry["kind"] in ("MSe", "MSf"):
             name, role = entry["name"], "e" if entry["kind"] == "MSe" else "f"
-            expression, desc, named = entry["expression"], entry.get("description", ""), entry.get("locals")
+            expression, desc = entry["expression"], entry.get("description", "")
+            named, params = entry.get("locals"), entry.get("params")
             entry.clear()
             entry.update({"kind": "Eq", "name": name, "ports": {"out": "out"},
                           "outputs": {f"{role}_out": expression}, "description": desc})
             if named:
                 entry["locals"] = named
+            if params:      # the source's own parameters (a heater's alpha in alpha*Q) go with it
+                entry["params"] = params
             return name
     raise GraphError(f"input {u!r} feeds no source, modulated source or equation element that could "
                      "carry the extra state(s)")

@@ -226,3 +226,23 @@ def test_with_outputs_replaces_the_outputs(graph):
     assert [sp.simplify(h - want) for h, want in zip(probes.equations().h, [q / c, p / m])] == [0, 0]
     assert list(g.outputs) == ["x"]
     unchanged(graph)
+
+
+def test_route_input_with_states_keeps_a_modulated_sources_own_parameters():
+    """A heater's power ``alpha*Q`` (an MSf whose parameter ``alpha`` is its own) seen through a
+    lag: the equation element that takes over the source and the lag's state keeps ``alpha``
+    (it was dropped, and the lagged graph could not be derived)."""
+    from bondgraph import MSf
+    g = BondGraph("heater")
+    g.add_input("Q", unit="1")
+    for e in (MSf("heater", "alpha*Q", params={"alpha": 0.01}, domain="thermal"), Zero("block"),
+              C("Cth", 2.0, domain="thermal"), R("Rl", 50.0, domain="thermal")):
+        g.add(e)
+    for tail, head in (("heater", "block"), ("block", "Cth"), ("block", "Rl")):
+        g.connect(tail, head)
+    lag = g.route_input("Q", "x_lag", states={"x_lag": "(Q - x_lag)/tau"}, initial={"x_lag": 0.0},
+                        units={"x_lag": "1"})
+    lag.add_parameter(Param("tau", 20.0, "s"))
+    assert lag.elements["heater"].kind == "Eq" and lag.parameters()["alpha"].value == 0.01
+    Q, x, alpha, tau, Cth, Rl, q = (sym(n) for n in ("Q", "x_lag", "alpha", "tau", "Cth", "Rl", "q_Cth"))
+    assert_equations(lag, ["x_lag", "q_Cth"], [(Q - x) / tau, alpha * x - q / (Cth * Rl)])

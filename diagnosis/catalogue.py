@@ -43,7 +43,7 @@ import numpy as np
 
 from bondgraph import Param
 
-from .catalogue_common import ParamSpec, priced
+from .catalogue_common import ParamSpec, junction_domain, priced
 from .catalogue_scales import Scales, experiment_times, junction_scales
 from .errors import DiagnosisError, UnknownNameError
 from .kinds import KINDS, REGISTRY, Site, kind_named
@@ -242,9 +242,10 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None, x
         return [replace(c, place=place) for c in candidates(split, at, regime_variables=regime_variables,
                                                             experiment=experiment, x0=x0)]
     site = site_of(graph, place, regime_variables=regime_variables, experiment=experiment, x0=x0)
+    domain = junction_domain(graph, place.name) if site.door in ("1", "0") else "generic"
     out = [Candidate(kind.name, place, list(prop.params), regime=prop.regime, constants=tuple(prop.constants),
                      target=prop.target, initial=dict(prop.initial), starts=tuple(prop.starts))
-           for kind in REGISTRY.values() if site.door in kind.doors for prop in kind.propose(site)]
+           for kind in REGISTRY.values() if kind.admits(site.door, domain) for prop in kind.propose(site)]
     order = list(REGISTRY)
     named = set(regime_variables or ()) if site.door == "1" else None
     # at a 1-junction, within a kind, laws of a located regime variable first (a pressure, a signal)

@@ -254,7 +254,8 @@ def _kind_variants(kind, signals: FeatureSignals) -> list:
     (:func:`_signals`, read along the run): the kind's
     :meth:`~diagnosis.kinds.base.Kind.features`, where it applies."""
     definition = REGISTRY[kind]
-    if ("1" if signals.one else "0") not in definition.feature_doors:
+    door = "1" if signals.one else "0"
+    if door not in definition.feature_doors or not definition.admits(door, signals.domain):
         return []
     return list(definition.features(signals))
 

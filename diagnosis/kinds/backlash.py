@@ -20,6 +20,7 @@ FEATURE_GRID = (0.1, 0.3, 1.0)
 class Backlash(Kind):
     name = "backlash"
     doors = ("1",)
+    domains = ("translation", "rotation")
     feature_doors, feature_names, feature_price = "1", ("clip(q, -b, b)",), 1
 
     def features(self, s):

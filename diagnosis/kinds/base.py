@@ -108,6 +108,9 @@ class Kind:
     name: ClassVar[str] = ""
     #: where it may attach: some of :data:`DOORS`
     doors: ClassVar[tuple] = ()
+    #: the energy domains whose junctions its physics lives at (None: any), e.g. a dry friction's
+    #: mechanical ones; a junction of the ``"generic"`` domain admits every kind (:meth:`admits`)
+    domains: ClassVar[tuple | None] = None
     #: the junction kinds (``"1"``, ``"0"``) at which :meth:`features` applies ("" none)
     feature_doors: ClassVar[str] = ""
     #: the feature columns in words (the documentation's table)
@@ -130,6 +133,16 @@ class Kind:
     #: cubic term, dead band or end stop); a kind that only refits the target's own value does not,
     #: and so combines with one that does (:func:`diagnosis.pairs.targets`)
     rewrites_target: ClassVar[bool] = True
+
+    def admits(self, door: str, domain: str) -> bool:
+        """Whether this kind may attach at a place of `door` whose junction is of `domain`: the door
+        is one of :attr:`doors` and, at a junction, the domain one of :attr:`domains` (or
+        ``"generic"``: a model that names no domain is not second-guessed).  A Coulomb friction at
+        the heat-flow junction of a thermal model is no physics (a heater block's radiation loss
+        had been answered by the friction kinds' features)."""
+        if door not in self.doors:
+            return False
+        return door not in ("1", "0") or self.domains is None or domain in self.domains + ("generic",)
 
     def propose(self, site: Site) -> list[Proposal]:
         """The candidates of this kind at `site` (none where the domain does not fit)."""

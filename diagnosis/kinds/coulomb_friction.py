@@ -11,6 +11,7 @@ from .friction_common import friction_r, level, sign, sharpened, smoothing, with
 class CoulombFriction(Kind):
     name = "coulomb_friction"
     doors = ("1",)
+    domains = ("translation", "rotation", "electrical")
     feature_doors, feature_names, feature_price = "1", ("sign(v)",), 1
     feature_params, feature_grid_params = 1, (1,)
 

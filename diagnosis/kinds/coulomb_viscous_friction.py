@@ -15,6 +15,7 @@ from .friction_common import friction_r, level, sign, sharpened, smoothing, visc
 class CoulombViscousFriction(Kind):
     name = "coulomb_viscous_friction"
     doors = ("1",)
+    domains = ("translation", "rotation")
     feature_doors, feature_names, feature_price = "1", ("sign(v)", "v"), 2
     feature_params, feature_grid_params = 2, (2,)
     nests = {"coulomb_friction": {0: 0, 2: 1}, "viscous_friction": {1: 0}}

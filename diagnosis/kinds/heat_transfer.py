@@ -42,7 +42,8 @@ class HeatTransfer(Kind):
             out.append(Proposal(
                 constants=((fresh_name(site.taken, f"P_th0_{j}"), e0, e_unit, f"initial pressure of the thermal branch at {j}"),),
                 params=(ParamSpec(fresh_name(site.taken, f"C_th_{j}"), c_th, c_th * 1e-3, c_th * 1e3,
-                                  DOMAINS[dom].compliance, f"thermal compliance at {j}"),
+                                  DOMAINS[dom].compliance,
+                                  f"{'heat capacity' if dom == 'thermal' else 'thermal compliance'} at {j}"),
                         ParamSpec(fresh_name(site.taken, f"tau_th_{j}"), scales.span / 10, scales.dt / 2,
                                   scales.span * 10, "s", f"thermal time constant at {j}"))))
         return out
@@ -70,6 +71,10 @@ class HeatTransfer(Kind):
             return (f"the gas in {cand.target} heats up when compressed or filled and exchanges heat with its "
                     f"walls through a conductance of {show(p[0])} (ratio of specific heats {show(p[1])}): "
                     f"heat transfer in {cand.target} at {j}")
+        if cand.params[0].unit == DOMAINS["thermal"].compliance:     # a thermal junction: a second mass
+            return (f"the temperature at {j} relaxes with a time constant of {show(p[1])} after each change as "
+                    f"{j} exchanges heat with a thermal mass the model leaves out (heat capacity {show(p[0])}): "
+                    f"heat transfer at {j}")
         return (f"the pressure at {j} relaxes with a time constant of {show(p[1])} after each change as the "
                 f"gas exchanges heat with its walls (thermal compliance {show(p[0])}): heat transfer at {j}")
 

@@ -28,6 +28,7 @@ FEATURE_GRID = (1.0, 3.0, 10.0, 30.0, 100.0)
 class Hysteresis(Kind):
     name = "hysteresis"
     doors = ("1",)
+    domains = ("translation", "rotation")
     feature_doors, feature_names, feature_price = "1", ("z_dahl",), 2
 
     def features(self, s):

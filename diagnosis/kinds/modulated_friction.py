@@ -90,6 +90,7 @@ FEATURE_LAG_STEPS = (2.0, 20.0, 200.0)
 class ModulatedFriction(Kind):
     name = "modulated_friction"
     doors = ("1",)
+    domains = ("translation", "rotation")
     feature_doors, feature_names, feature_price = "1", ("sign(v)", "(lag(m) - m_mean) sign(v)"), 3
     nests = {"coulomb_friction": {0: 0, 3: 1}}
     # F0, k from the coefficients; the lag from the grid.  Guessed, a slope of the wrong size or a

@@ -19,6 +19,7 @@ from .friction_common import friction_r, level, namer, sharpened, sign, smoothin
 class PressureDependentFriction(Kind):
     name = "pressure_dependent_friction"
     doors = ("1",)
+    domains = ("translation", "rotation")
     feature_doors, feature_names, feature_price = "1", ("sign(v)", "(P - P_mean) sign(v)"), 2
     feature_params, feature_grid_params = 2, (2,)
     nests = {"coulomb_friction": {0: 0, 2: 1}}

@@ -20,6 +20,7 @@ from .friction_common import friction_r, namer
 class QuadraticDrag(Kind):
     name = "quadratic_drag"
     doors = ("1",)
+    domains = ("translation", "rotation", "hydraulic", "pneumatic")
     feature_doors, feature_names, feature_price = "1", ("v |v|",), 1
     feature_params = 1
 

@@ -23,6 +23,7 @@ PEAKS, DECAYS, SIGNS = (0.5, 1.0, 2.0), FEATURE_GRID[:2], SHARPNESS_GRID[:2]
 class StribeckFriction(Kind):
     name = "stribeck_friction"
     doors = ("1",)
+    domains = ("translation", "rotation")
     feature_doors, feature_names, feature_price = "1", ("sign(v)", "exp(-(v/v_s)^2) sign(v)"), 3
     feature_params, feature_grid_params = 2, (2, 3)    # Fc, dFs from the coefficients; v_s, v_eps from the grid
     nests = {"coulomb_friction": {0: 0, 3: 1}}

@@ -8,8 +8,9 @@ bonds kept), :meth:`~GraphEditing.remove` (an element and its bonds, or a bond),
 storage element's law rewritten as a sympy expression), :meth:`~GraphEditing.with_output` (an
 output's expression rewritten), :meth:`~GraphEditing.with_outputs` (the outputs replaced),
 :meth:`~GraphEditing.with_element` (an element rebuilt from its
-description with some fields changed) and :meth:`~GraphEditing.route_input` (every user of an
-input made to read an expression of it, :mod:`bondgraph.editing_inputs`).  The graph they
+description with some fields changed), :meth:`~GraphEditing.route_input` (every user of an
+input made to read an expression of it, :mod:`bondgraph.editing_inputs`) and
+:meth:`~GraphEditing.sense_output` (an output read through a sensor's own dynamics).  The graph they
 are called on is never changed, so a model and its variants (the diagnosis catalogue's
 candidates, a sweep's plants) can live side by side.
 
@@ -229,6 +230,40 @@ class GraphEditing:
         for name, spec in outputs.items():
             expression, unit = spec if isinstance(spec, tuple) else (spec, "")
             new.add_output(name, expression, unit=unit)
+        return new
+
+    def sense_output(self, name: str, states: Mapping[str, object], reads, *, initial=None, units=None,
+                     element: str | None = None, description: str = ""):
+        """A copy whose output `name` is read through a sensor with dynamics of its own.
+
+        `states` maps each new state to its rate, and `reads` is what the output reads; each is a
+        string or sympy expression, or a callable given the output's present expression (a sympy
+        expression, every name of the graph a plain symbol of that name) and returning one.  A
+        first-order sensor lag::
+
+            lag = g.sense_output("T", {"T_s": lambda y: (y - sp.Symbol("T_s")) / sp.Symbol("tau")}, "T_s",
+                                 initial={"T_s": 296.15}, units={"T_s": "K"})
+
+        The states belong to a new equation element without ports, `element` (default
+        ``sensor_<name>``), with their `initial` values and `units`; the parameters the
+        expressions use are declared as usual (:meth:`declare`).  Unit and description of the
+        output are kept.
+        """
+        from .elements import EquationElement
+        if name not in self.outputs:
+            raise UnknownNameError("output", name, self.outputs, model=self.name)
+        table = {n: sp.Symbol(n) for n in self.names()}
+        present = as_expression(self.outputs[name].expression, table, owner=f"output {name!r}")
+
+        def text(value):
+            return str(value(present) if callable(value) else value)
+
+        new = self.copy()
+        new.add(EquationElement(element or f"sensor_{name}", ports={}, outputs={},
+                                states={s: text(rate) for s, rate in states.items()}, initial=initial, units=units,
+                                description=description or f"dynamics of the {name} sensor"))
+        new.outputs[name] = dataclasses.replace(new.outputs[name], expression=text(reads))
+        new._changed()
         return new
 
     def with_element(self, name: str, **changes):

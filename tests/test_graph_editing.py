@@ -246,3 +246,37 @@ def test_route_input_with_states_keeps_a_modulated_sources_own_parameters():
     assert lag.elements["heater"].kind == "Eq" and lag.parameters()["alpha"].value == 0.01
     Q, x, alpha, tau, Cth, Rl, q = (sym(n) for n in ("Q", "x_lag", "alpha", "tau", "Cth", "Rl", "q_Cth"))
     assert_equations(lag, ["x_lag", "q_Cth"], [(Q - x) / tau, alpha * x - q / (Cth * Rl)])
+
+
+def test_sense_output_reads_an_output_through_a_sensor_lag_that_owns_its_state():
+    """A mass pushed from rest by a constant force has v = a t (a = F/m); a first-order velocity
+    sensor then reads a (t - tau (1 - exp(-t/tau))).  The lag's state belongs to an equation
+    element without ports, which saves to JSON (valid against the schema) and loads back."""
+    import json
+    from pathlib import Path
+
+    import jsonschema
+    from bondgraph.io_json import dumps, graph_from_dict
+    from bondgraph.numerics import simulate
+    g = BondGraph("pushed")
+    for e in (Se("F", 2.0), One("v"), I("m", 4.0)):
+        g.add(e)
+    g.connect("F", "v")
+    g.connect("v", "m")
+    g.add_output("speed", "p_m/m", unit="m/s")
+    y_s, tau = sym("y_s"), sym("tau")
+    lag = g.sense_output("speed", {"y_s": lambda y: (y - y_s) / tau}, "y_s", initial={"y_s": 0.0},
+                         units={"y_s": "m/s"}).declare(Param("tau", 0.5, "s"))
+    assert lag.elements["sensor_speed"].ports == () and not lag.bonds_of("sensor_speed")
+    assert lag.outputs["speed"].expression == "y_s" and lag.outputs["speed"].unit == "m/s"
+    assert_equations(lag, ["p_m", "y_s"], [F, (p / m - y_s) / tau])
+    t = np.linspace(0.0, 3.0, 31)
+    got = simulate(lag, (0.0, 3.0), output_interval=0.1)["speed"]
+    assert np.allclose(got, 0.5 * (t - 0.5 * (1 - np.exp(-t / 0.5))), atol=1e-6)
+    schema = json.loads((Path(__file__).parents[1] / "bondgraph" / "graph.schema.json").read_text())
+    jsonschema.validate(json.loads(dumps(lag)), schema)
+    again = graph_from_dict(json.loads(dumps(lag)))
+    assert_equations(again, ["p_m", "y_s"], [F, (p / m - y_s) / tau])
+    with pytest.raises(UnknownNameError, match="output 'x'"):
+        g.sense_output("x", {}, "0")
+    assert list(g.elements) == ["F", "v", "m"]      # the original graph is untouched

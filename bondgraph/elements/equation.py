@@ -39,7 +39,9 @@ class EquationElement(Element):
     name : str
         Element name.
     ports : mapping str -> {"in", "out"}
-        Port names and their natural power direction.
+        Port names and their natural power direction.  Empty for an element that owns states
+        only and takes no bond: a sensor's or a controller's own dynamics, whose rates read the
+        graph's names (:meth:`~bondgraph.editing.GraphEditing.sense_output`).
     outputs : mapping str -> expression
         ``"e_<port>"`` or ``"f_<port>"`` for each port: which variable the
         element sets there, and its value.
@@ -78,9 +80,9 @@ class EquationElement(Element):
         self._set_locals(locals)
         ports = dict(ports)
         bad = {p: d for p, d in ports.items() if d not in ("in", "out") or not str(p).isidentifier()}
-        if not ports or bad:
-            raise DerivationError(f"Eq {name!r}: ports must map identifiers to 'in' or 'out', got {bad or ports}",
-                                  element=name)
+        if bad or not (ports or states):
+            raise DerivationError(f"Eq {name!r}: ports must map identifiers to 'in' or 'out', got {bad or ports} "
+                                  "(an element without ports must own states)", element=name)
         roles = {}
         for key in outputs:
             kind, _, port = str(key).partition("_")

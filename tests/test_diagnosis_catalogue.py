@@ -89,7 +89,7 @@ def test_kinds_are_the_issue_vocabulary_in_order():
                      "leak", "heat_transfer", "valve_lag", "transport_delay", "hysteresis", "backlash",
                      "nonlinear_stiffness", "saturation", "sensor_offset", "sensor_gain", "constant_load",
                      "coulomb_viscous_friction", "modulated_friction", "asymmetric_viscous_friction",
-                     "quadratic_drag", "nominal_value")
+                     "quadratic_drag", "sensor_lag", "nominal_value")
 
 
 def test_places_offer_the_kinds_that_make_sense():
@@ -101,7 +101,7 @@ def test_places_offer_the_kinds_that_make_sense():
                                                     "asymmetric_viscous_friction", "quadratic_drag", "nominal_value",
                                                     "nominal_value", "nominal_value"]      # m, k and b
     assert at(msd, Place("input", "F")) == ["valve_lag", "transport_delay", "saturation"]
-    assert at(msd, Place("output", "x")) == ["saturation", "sensor_offset", "sensor_gain"]
+    assert at(msd, Place("output", "x")) == ["saturation", "sensor_offset", "sensor_gain", "sensor_lag"]
     cyl = hydraulic_cylinder()
     assert "pressure_dependent_friction" in at(cyl, Place("junction", "rod"))
     assert at(cyl, Place("junction", "chamber")) == ["leak", "nonlinear_stiffness", "constant_load",
@@ -275,6 +275,40 @@ def test_output_kinds_transform_the_output():
     assert _rates(off) == _rates(msd) and _outputs(off)["v"] == _outputs(msd)["v"]
 
 
+def test_sensor_lag_reads_the_output_through_a_first_order_lag_from_its_first_reading():
+    msd = library.build("mass-spring-damper")
+    lag = _one(msd, Place("output", "x"), "sensor_lag")
+    (state, first), = lag.initial.items()
+    assert state == "y_lag_x" and first == 0.0
+    built = lag.build(msd, {"tau_sensor_x": 0.2})
+    assert built.equations().state_names[-1] == "y_lag_x" and not built.bonds_of("sensor_y_lag_x")
+    assert _outputs(built)["x"] == S("y_lag_x") and _outputs(built)["v"] == _outputs(msd)["v"]
+    assert sp.simplify(_rates(built)["y_lag_x"] - (S("q_k") - S("y_lag_x")) / S("tau_sensor_x")) == 0
+    assert all(_rates(built)[x] == rate for x, rate in _rates(msd).items())
+    assert "0.2 s" in lag.explain({"tau_sensor_x": 0.2})
+
+
+def test_a_kind_attaches_only_in_the_energy_domains_its_physics_lives_in():
+    """No dry, Stribeck or Dahl friction at the heat-flow junction of a thermal model, nor a drag;
+    a generic junction (a model that names no domain) is offered every kind."""
+    from bondgraph import MSf, Se
+    g = BondGraph("heater")
+    for e in (Se("Ta", 293.0, domain="thermal"), One("loss"), R("Rc", 80.0, domain="thermal"), Zero("block"),
+              MSf("heater", "Q", domain="thermal"), C("Cth", 2.0, domain="thermal")):
+        g.add(e)
+    for tail, head in (("Ta", "loss"), ("loss", "Rc"), ("loss", "block"), ("heater", "block"), ("block", "Cth")):
+        g.connect(tail, head)
+    assert [c.kind for c in candidates(g, Place("junction", "loss"))] == [
+        "viscous_friction", "constant_load", "asymmetric_viscous_friction", "nominal_value"]
+    generic = BondGraph("generic")
+    for e in (Sf("v"), One("j"), R("b", 1.0)):
+        generic.add(e)
+    generic.connect("v", "j")
+    generic.connect("j", "b")
+    offered = {c.kind for c in candidates(generic, Place("junction", "j"))}
+    assert {"coulomb_friction", "stribeck_friction", "hysteresis", "quadratic_drag"} <= offered
+
+
 def test_every_kind_is_reachable_and_explained_with_units():
     graphs = [library.build("mass-spring-damper"), hydraulic_cylinder(), pneumatic_tank()]
     seen = {}
@@ -412,7 +446,8 @@ def test_a_new_kind_is_one_class_in_the_registry(monkeypatch):
     monkeypatch.setitem(REGISTRY, "quadratic_drag", QuadraticDrag())
     msd = library.build("mass-spring-damper")
     drag = _one(msd, Place("junction", "v_mass"), "quadratic_drag")
-    assert [c.kind for c in candidates(msd, Place("output", "x"))] == ["saturation", "sensor_offset", "sensor_gain"]
+    assert [c.kind for c in candidates(msd, Place("output", "x"))] == ["saturation", "sensor_offset", "sensor_gain",
+                                                                        "sensor_lag"]
     v = S("p_m") / S("m")
     _differs_by(drag.build(msd, {"c_d_v_mass": 0.2}), msd, "p_m", -S("c_d_v_mass") * v * sp.Abs(v))
     assert "0.2" in drag.explain({"c_d_v_mass": 0.2})

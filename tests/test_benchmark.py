@@ -14,7 +14,7 @@ import pytest
 import plants.library as library
 from bondgraph.numerics import simulate
 from diagnosis.benchmark import plants_textbook as tb
-from diagnosis.benchmark.draw import KINDS_BEFORE_32, RATIOS, CaseSpec, draw_cases, realise
+from diagnosis.benchmark.draw import KINDS_BEFORE_32, KINDS_BEFORE_34, RATIOS, CaseSpec, draw_cases, realise
 from diagnosis.benchmark.effects import KIND_PLACES, make_effect, places_for
 from diagnosis.benchmark.plants import FAST, PLANTS
 from diagnosis.benchmark.report import markdown, summarise
@@ -197,6 +197,10 @@ def test_the_drawn_kinds_can_be_chosen_and_the_earlier_vocabulary_replayed():
     pair = ("viscous_friction", "asymmetric_viscous_friction")
     assert {s.kind for s in draw_cases(24, 11, FAST, pair)} == {"none", *pair}
     assert draw_cases(80, 3434, PLANTS, KINDS_BEFORE_32)[4].label == "004-hydraulic-viscous_friction@junction:q_pipe"
+    # session 34's sensor lag joined: until then seed 3434's case 001 was a delay, now a friction
+    assert "sensor_lag" in {s.kind for s in draw_cases(80, 11, PLANTS)}
+    assert draw_cases(80, 3434, PLANTS, KINDS_BEFORE_34)[1].label == "001-msd-transport_delay@input:F"
+    assert draw_cases(80, 3434, PLANTS)[1].label == "001-msd-stribeck_friction@junction:v_mass"
     with pytest.raises(BenchmarkError, match="unknown effect kind.*'?friction_typo"):
         draw_cases(4, 11, FAST, ("friction_typo",))
 
@@ -301,6 +305,17 @@ def test_two_seeded_cases_end_to_end(tmp_path):
         assert r["answer_kind"] == kind, r
         assert r["kind_ok"] and r["place_ok"]
     assert r["improvement"] != r["improvement"]     # NaN on a null case
+
+
+def test_a_lagging_position_sensor_is_found_at_its_time_constant(tmp_path):
+    """A truth whose position sensor reads through a 0.1 s lag (its velocity sensor does not): the
+    sensor lag at output x, its time constant within 3 %; an actuator lag on the force would lag the
+    velocity too.  Before session 34 the vocabulary had no sensor dynamics."""
+    spec = next(s for s in draw_cases(6, 3, {"msd": PLANTS["msd"]}, ("sensor_lag",)) if s.kind != "none")
+    r = run_case(spec, PLANTS, tmp_path, max_effects=1)
+    assert r["answers"] == ["sensor_lag @ output x"] and r["kind_ok"] and r["place_ok"], r
+    assert r["parameters"]["tau_sensor_x"] == pytest.approx(r["effect"]["magnitude"], rel=0.03)
+    assert r["improvement"] > 0.5
 
 
 def test_the_benchmark_command_on_a_small_seeded_subset(tmp_path, capsys):

@@ -7,6 +7,8 @@ of its spread.  The two codes share nothing but the equations on paper.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -277,3 +279,32 @@ def test_a_one_way_junctions_flow_keeps_its_sign_and_draws_no_direction_dependen
     assert np.all(flow >= 0) and np.mean(flow > 0) > 0.99           # from rest at t = 0
     assert ("junction", one_way) not in places_for(plant, "asymmetric_viscous_friction")
     assert ("junction", one_way) in places_for(plant, "viscous_friction")
+
+
+@pytest.mark.parametrize("name, output", [("msd", "x"), ("dc-motor", "w_L"), ("tanks", "h2")])
+def test_a_sensor_lag_in_the_truth_is_the_catalogues_sensor_lag_on_the_library_graph(name, output):
+    """The truth's lagged sensor (a state following the plant's output inside its right-hand side,
+    resting where the plant at rest puts it) and the library graph with the catalogue's
+    sensor_lag at the same time constant: the outputs agree, and the other outputs are unlagged."""
+    from diagnosis.benchmark.effects import make_effect
+    from diagnosis.catalogue import candidates
+    from diagnosis.place import Place
+
+    plant = PLANTS[name]()
+    t = np.arange(int(round(min(plant.duration, 20.0) * plant.rate)) + 1) / plant.rate
+    u = random_inputs(plant, t, seed=4)
+    base = simulate_truth(plant, t, u)
+    tau = 20.0 / plant.rate
+    truth = simulate_truth(plant, t, u, make_effect("sensor_lag", plant, "output", output, tau, {},
+                                                    {"y0": float(base[output][0])}))
+    graph = library.build(plant.model)
+    (cand,) = [c for c in candidates(graph, Place("output", output)) if c.kind == "sensor_lag"]
+    cand = replace(cand, initial={k: float(base[output][0]) for k in cand.initial})
+    values = {cand.params[0].name: tau}
+    res = simulate(cand.build(graph, values), (0.0, t[-1]), inputs={n: (t, v) for n, v in u.items()},
+                   output_interval=1.0 / plant.rate, x0=plant.nominal_x0, params=values, method="LSODA")
+    change = np.std(truth[output] - base[output])
+    assert change > 0.02 * np.std(base[output])
+    assert np.max(np.abs(res[output] - truth[output])) < 0.02 * change
+    others = [o.name for o in plant.outputs if o.name != output]
+    assert all(np.array_equal(truth[o], base[o]) for o in others)

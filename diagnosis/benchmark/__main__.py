@@ -25,7 +25,7 @@ import numpy as np
 
 from ..errors import BenchmarkError
 from .compound import compound_label, second_effect
-from .draw import KINDS, KINDS_BEFORE_32, draw_cases
+from .draw import KIND_LISTS, KINDS, draw_cases
 from .plants import FAST, PLANTS
 from .report import summarise, write_report
 from .run import run_case
@@ -50,8 +50,8 @@ def main(argv=None) -> int:
                     help="comma-separated plant names, or 'fast' (diagnosis.benchmark.plants.FAST; default: all)")
     ap.add_argument("--only", default="", help="comma-separated case indices to run")
     ap.add_argument("--kinds", default="",
-                    help="comma-separated effect kinds to draw, or 'before-32' (the kinds drawn until session 31: "
-                         "a seed's cases as then drawn; default: every kind)")
+                    help="comma-separated effect kinds to draw, or 'before-32' / 'before-34' (the kinds drawn "
+                         "until session 31 / 33: a seed's cases as then drawn; default: every kind)")
     ap.add_argument("--max-effects", type=int, default=2, help="passed to diagnose (default 2)")
     ap.add_argument("--compound", action="store_true",
                     help="a second concealed effect in every effect case (diagnosis.benchmark.compound)")
@@ -77,7 +77,7 @@ def main(argv=None) -> int:
         if unknown:
             ap.error(f"unknown plant(s) {', '.join(unknown)}; known: {', '.join(PLANTS)}")
         plants = {p: PLANTS[p] for p in a.plants.split(",")}
-    kinds = KINDS_BEFORE_32 if a.kinds == "before-32" else tuple(a.kinds.split(",")) if a.kinds else KINDS
+    kinds = KIND_LISTS.get(a.kinds) or (tuple(a.kinds.split(",")) if a.kinds else KINDS)
     try:
         specs = draw_cases(a.cases, a.seed, plants, kinds)
     except BenchmarkError as exc:          # an unknown kind: draw_cases names it

@@ -95,9 +95,16 @@ class CompoundEffect(NoEffect):
             y = e.read_by_sensors(y, ext)
         return y
 
-    def sensed(self, y):
-        for e in self.effects:
-            y = e.sensed(y)
+    @property
+    def reads_outputs(self) -> bool:
+        return any(getattr(e, "reads_outputs", False) for e in self.effects)
+
+    def sensor_rates(self, y, z):
+        return np.concatenate([e.sensor_rates(y, self._own(z, i)) for i, e in enumerate(self.effects)])
+
+    def sensed(self, y, z=None):
+        for i, e in enumerate(self.effects):
+            y = e.sensed(y, None if z is None else self._own(z, i))
         return y
 
 

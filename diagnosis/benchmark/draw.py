@@ -35,7 +35,11 @@ KINDS = tuple(KIND_PLACES)
 #: the kinds drawn until session 31, before ``asymmetric_viscous_friction`` and ``quadratic_drag``
 #: joined: a seed's cases as they were drawn then (``--kinds before-32``; the tests that replay a
 #: past case pin it)
-KINDS_BEFORE_32 = tuple(k for k in KINDS if k not in ("asymmetric_viscous_friction", "quadratic_drag"))
+KINDS_BEFORE_32 = tuple(k for k in KINDS if k not in ("asymmetric_viscous_friction", "quadratic_drag", "sensor_lag"))
+#: the kinds drawn until session 33, before ``sensor_lag`` joined (``--kinds before-34``)
+KINDS_BEFORE_34 = tuple(k for k in KINDS if k != "sensor_lag")
+#: the named kind lists of ``--kinds``
+KIND_LISTS = {"before-32": KINDS_BEFORE_32, "before-34": KINDS_BEFORE_34}
 #: Cases drawn on a plant whose nominal integrates its inputs, every this many.
 DRIFT_EVERY = 7
 #: Null cases, every this many (offset 3).
@@ -259,6 +263,8 @@ def _shape(spec, plant, rec, rng, scales):
     if spec.door == "input" and k == "saturation":
         i = next(i for i in plant.inputs if i.name == spec.name)
         sh["lo"], sh["hi"], sh["skew"] = i.low, i.high, float(rng.uniform(-0.3, 0.3))
+    if k == "sensor_lag":      # the sensor rests where the plant at rest puts it
+        sh["y0"] = float(rec.nominal[spec.name][0])
     if spec.door == "output" and k == "saturation":
         y = rec.nominal[spec.name]
         sh["lo"], sh["hi"] = float(np.min(y)), float(np.max(y))
@@ -273,7 +279,7 @@ def _initial_magnitude(spec, plant, rec, scales, sh, probe_gain):
     dt = 1.0 / plant.rate
     if k in ("saturation",):
         return 0.3
-    if k in ("transport_delay", "valve_lag"):
+    if k in ("transport_delay", "valve_lag", "sensor_lag"):
         return 5 * dt
     if k == "sensor_offset":
         return r * float(np.std(rec.nominal[spec.name]))

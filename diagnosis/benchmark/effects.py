@@ -36,7 +36,8 @@ storage (a C element)         nonlinear_stiffness (cubic hardening, the
                               saturation (an end stop / overflow at the
                               content's range)
 input                         saturation, transport_delay, valve_lag
-output                        sensor_offset, sensor_gain, saturation (range)
+output                        sensor_offset, sensor_gain, saturation (range),
+                              sensor_lag (a first-order lag of the sensor)
 ============================  ================================================
 """
 from __future__ import annotations
@@ -65,6 +66,7 @@ KIND_PLACES = {
     "valve_lag": ("input",), "sensor_offset": ("output",), "sensor_gain": ("output",),
     "coulomb_viscous_friction": ("junction1_mech",), "modulated_friction": ("junction1m",),
     "asymmetric_viscous_friction": ("junction1_reversing",), "quadratic_drag": ("junction1_drag",),
+    "sensor_lag": ("output",),
 }
 
 
@@ -127,7 +129,8 @@ class TruthEffect(NoEffect):
     def __init__(self, kind, plant, door, name, m, scales, shape):
         self.kind, self.plant, self.door, self.name = kind, plant, door, name
         self.m, self.scales, self.shape = float(m), scales, dict(shape)
-        self.n_states = 1 if kind in ("hysteresis", "valve_lag", "modulated_friction") else 0
+        self.n_states = 1 if kind in ("hysteresis", "valve_lag", "modulated_friction", "sensor_lag") else 0
+        self.reads_outputs = kind == "sensor_lag"
         if door == "storage":
             self.storage = plant.storage(name)
             self.junction = self.storage.junction
@@ -162,7 +165,14 @@ class TruthEffect(NoEffect):
     def z0(self, plant):
         if self.kind in ("valve_lag", "modulated_friction"):
             return np.array([self.shape["u0"]])
+        if self.kind == "sensor_lag":           # the sensor rests at what the plant at rest shows
+            return np.array([self.shape["y0"]])
         return np.zeros(self.n_states)
+
+    def sensor_rates(self, y, z):
+        if self.kind != "sensor_lag":
+            return np.zeros(self.n_states)
+        return np.array([(y[self.name] - z[0]) / self.m])   # tau dy_s/dt = y - y_s, tau = m
 
     def delayed_inputs(self, t, u):
         if self.door != "input" or self.kind not in ("saturation", "transport_delay"):
@@ -192,8 +202,8 @@ class TruthEffect(NoEffect):
         k, m, sh = self.kind, self.m, self.shape
         if k == "valve_lag":
             return {}, np.array([(u[self.name] - z[0]) / m])   # the actuator follows the command
-        if self.door not in ("junction", "storage"):
-            return {}, np.zeros(0)
+        if self.door not in ("junction", "storage"):     # a sensor's lag: its rate follows the outputs
+            return {}, np.zeros(self.n_states)
         j = self.junction
         if k == "hysteresis":
             v = sig[j]
@@ -271,12 +281,14 @@ class TruthEffect(NoEffect):
             y[name] = y[name] + change
         return y
 
-    def sensed(self, y):
+    def sensed(self, y, z=None):
         if self.door != "output":
             return y
         y = dict(y)
         v = y[self.name]
-        if self.kind == "sensor_offset":
+        if self.kind == "sensor_lag":
+            y[self.name] = float(z[0])
+        elif self.kind == "sensor_offset":
             y[self.name] = v + self.m
         elif self.kind == "sensor_gain":
             y[self.name] = v * (1.0 + self.m)

@@ -7,8 +7,8 @@ held per interval and at most one sample per step.  A plant with held
 variables (``plant.hold``, a discrete law such as Kikuuwe friction) is
 integrated with ``rk4`` only: the held values are computed at the start of
 each sub-step and passed to the right-hand side in the input dict.  The effect may add
-states (a Dahl state, a valve lag), change the inputs before the plant (a
-delay, a saturation) and the outputs after it (a sensor).
+states (a Dahl state, a valve lag, a sensor's lag following the outputs), change the inputs
+before the plant (a delay, a saturation) and the outputs after it (a sensor).
 """
 from __future__ import annotations
 
@@ -85,8 +85,17 @@ class NoEffect:
         """The outputs with a changed storage law in those that read the storage (none here)."""
         return y
 
-    def sensed(self, y: dict) -> dict:
-        """Outputs as the sensors report them."""
+    #: whether the effect's states follow the plant's outputs (a sensor's own dynamics: then the
+    #: simulation evaluates the outputs within the right-hand side, :meth:`sensor_rates`)
+    reads_outputs = False
+
+    def sensor_rates(self, y: dict, z: np.ndarray) -> np.ndarray:
+        """The rates the outputs `y` give the effect's states, one per state (0 for a state that
+        does not follow them), added to those of :meth:`extra`; none here."""
+        return np.zeros(0)
+
+    def sensed(self, y: dict, z: np.ndarray | None = None) -> dict:
+        """Outputs as the sensors report them (`z`: the effect's states)."""
         return y
 
 
@@ -171,6 +180,9 @@ def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None, *, x0
         ext, dz = effect_extra(plant, effect, x, ue, uk, z)
         if held:
             ue = {**ue, **held}
+        if effect.reads_outputs:
+            y = plant.measure(x, ue, ext) if plant.feedthrough else plant.measure(x, ue)
+            dz = dz + effect.sensor_rates(y, z)
         return np.concatenate([plant.rhs(x, ue, ext), dz])
 
     def held_at(s, uk, h):
@@ -258,7 +270,7 @@ def simulate_truth(plant: TruthPlant, t: np.ndarray, u: dict, effect=None, *, x0
         ue = effect.inputs_now(uk, z)
         ext = effect_extra(plant, effect, x, ue, uk, z)[0] if plant.feedthrough or reads_storage else {}
         y = plant.measure(x, ue, ext) if plant.feedthrough else plant.measure(x, ue)
-        y = effect.sensed(effect.read_by_sensors(y, ext))
+        y = effect.sensed(effect.read_by_sensors(y, ext), z)
         for o in plant.outputs:
             out[o.name][k] = y[o.name]
         if signals:

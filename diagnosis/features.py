@@ -441,7 +441,7 @@ def _evidence_at(graph, p, experiment, x0, regime_variables, d_hat):
     """:func:`feature_evidence` at one junction place (None when a run is not finite)."""
     from bondgraph.io_json import graph_from_dict
 
-    from .catalogue_common import junction_domain
+    from .catalogue_common import ambient_effort, junction_domain
     from .graph_location_graph import augment, junction_unit, with_inputs
     from .graph_location_linear import LinearisedResponse
     from .residuals import OutputSimulator, noise_sigma
@@ -475,8 +475,9 @@ def _evidence_at(graph, p, experiment, x0, regime_variables, d_hat):
              for o in outputs]
     w = 1.0 / np.square(sigma)
     # one set of signals for every kind (its cached sign and RMS flow computed once)
-    signals = FeatureSignals(np.asarray(t, float), values, graph.elements[p.name].kind == "1",
-                             junction_domain(graph, p.name))
+    one = graph.elements[p.name].kind == "1"
+    signals = FeatureSignals(np.asarray(t, float), values, one, junction_domain(graph, p.name),
+                             None if one else ambient_effort(graph, p.name, values.get("effort")))
     groups, grids = {}, {}
     for kind in [name for name, definition in REGISTRY.items() if definition.feature_doors]:
         for group in _kind_variants(kind, signals):

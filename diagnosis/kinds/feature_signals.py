@@ -48,12 +48,16 @@ class FeatureSignals:
         A 1-junction (else a 0-junction).
     domain : str
         The junction's domain.
+    ambient : float or None
+        The effort a leak from a 0-junction flows towards
+        (:func:`~diagnosis.catalogue_common.ambient_effort`; None: the leak's own rule).
     """
 
     t: np.ndarray
     values: dict
     one: bool
     domain: str
+    ambient: float | None = None
 
     @cached_property
     def v(self) -> np.ndarray:

@@ -1,18 +1,21 @@
-"""``leak`` at a 0-junction: an R from the junction (common effort = pressure ``e``) to the
-ambient, :math:`f = c_{leak} (e - P_{amb})`; for pneumatic pseudo-bonds a mass flow proportional
-to the pressure difference.  :math:`P_{amb}` is fixed: 101325 Pa for a pneumatic junction whose
-mean pressure exceeds 50 kPa (absolute pressures), else 0 (gauge pressures, other domains)."""
+"""``leak`` at a 0-junction: an R from the junction (common effort ``e``: a pressure, a temperature)
+to the ambient, :math:`f = c_{leak} (e - e_{amb})`; for pneumatic pseudo-bonds a mass flow
+proportional to the pressure difference, for a thermal junction a heat flow to the room.
+:math:`e_{amb}` is fixed (:func:`~diagnosis.catalogue_common.ambient_effort`): 101325 Pa for a
+pneumatic junction whose mean pressure exceeds 50 kPa (absolute pressures), the ambient
+temperature the model names for a thermal one, else 0 (gauge pressures, other domains)."""
 from __future__ import annotations
 
 import numpy as np
 
 from bondgraph import R
+from bondgraph.params import DOMAINS
 
-from ..catalogue_common import ParamSpec, fresh_name, junction_domain, junction_units
+from ..catalogue_common import P_ATMOSPHERE, ParamSpec, ambient_effort, fresh_name, junction_domain, junction_units
 from .base import Kind, Proposal, hang, register
 from .feature_signals import FeatureGroup
 
-P_AMBIENT = 101325.0  # Pa
+P_AMBIENT = P_ATMOSPHERE  # Pa (the name the kind has always exported)
 
 
 @register
@@ -24,7 +27,10 @@ class Leak(Kind):
 
     def features(self, s):
         e = np.asarray(s.values["effort"], float)
-        p_amb = P_AMBIENT if s.domain == "pneumatic" and float(np.mean(e)) > 5e4 else 0.0
+        if s.ambient is not None:
+            p_amb = s.ambient
+        else:
+            p_amb = P_AMBIENT if s.domain == "pneumatic" and float(np.mean(e)) > 5e4 else 0.0
         return [FeatureGroup(None, "", ["e - P_amb"], (e - p_amb)[:, None])]
 
     def propose(self, site):
@@ -32,7 +38,7 @@ class Leak(Kind):
         e_unit, f_unit = junction_units(graph, j)
         e = site.values.get(f"e_{graph.bonds_of(j)[0][0].name}")
         e_mean = float(e.mean()) if e is not None else 0.0
-        p_amb = P_AMBIENT if junction_domain(graph, j) == "pneumatic" and e_mean > 5e4 else 0.0
+        p_amb = ambient_effort(graph, j, e)
         dev, F = max(abs(e_mean - p_amb), site.scales.effort), site.scales.flow
         c = fresh_name(site.taken, f"c_leak_{j}")
         # a leak's flow may be any fraction of the junction's flows: starts over five decades
@@ -50,5 +56,9 @@ class Leak(Kind):
 
     def explain(self, cand, values, show):
         j = cand.place.name
+        _, ambient, unit, _ = cand.constants[0]
+        if unit == DOMAINS["thermal"].effort:
+            return (f"{j} loses {show(cand.params[0].name)} of heat flow per kelvin above the ambient "
+                    f"{ambient:.5g} {unit}: a heat leak at {j}")
         return (f"the chamber at {j} loses {show(cand.params[0].name)} of flow per unit of pressure above "
                 f"ambient: a leak at {j}")

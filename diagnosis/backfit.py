@@ -35,7 +35,7 @@ from dataclasses import replace
 import numpy as np
 
 from .errors import BondcosimError
-from .fit import needs_explaining, unpriced_error, usable_fits
+from .fit import harms, needs_explaining, unpriced_error, usable_fits
 from .fit_in_turn import HOPELESS, train_cost
 from .kinds.base import extends
 from .pairs import claims, clashes, effect_count
@@ -71,7 +71,8 @@ def build_effects(graph, effects, with_values):
 def alternatives(chosen, fits, reference: dict, floor: dict, n: int = ALTERNATIVES, taken=frozenset(),
                  changed=frozenset()) -> list:
     """The round's chosen fit and the successful fits of the next best kinds or places (one fit per
-    kind and place, lowest held-out error on the outputs that needed explaining first), at most
+    kind and place, lowest held-out error on the outputs that needed explaining first, none that
+    predicts an output worse than `reference`, :func:`~diagnosis.fit.harms`), at most
     `n` in all, the chosen first; none with a parameter named in `taken` or rewriting an element
     in `changed` (the other effects' claims: :func:`~diagnosis.pairs.clashes`), and none adding another
     number of effects than the chosen one (:func:`~diagnosis.pairs.effect_count`): a round's pairs
@@ -83,7 +84,11 @@ def alternatives(chosen, fits, reference: dict, floor: dict, n: int = ALTERNATIV
     its value alone (the detuned benchmark's carriage with an input delay and its mass 5 % off,
     seed 7474, case 024: a constant load of 5e-5 N was answered beside the mass)."""
     significant = needs_explaining(reference, floor) or list(reference)
-    ranked = sorted(usable_fits(fits, list(reference)), key=lambda f: unpriced_error(f, significant))
+    # a fit that predicts an output worse than the round's reference is no alternative
+    # (fit.harms): ranked by the outputs that needed explaining alone, a velocity sensor's lag that
+    # doubled a carriage's position error took the slot of its mass's value (seed 7474, case 024)
+    ranked = sorted((f for f in usable_fits(fits, list(reference)) if not harms(f, reference, floor)),
+                    key=lambda f: unpriced_error(f, significant))
     count = effect_count(chosen.candidate)
 
     def allowed(fit):

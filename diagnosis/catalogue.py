@@ -228,7 +228,7 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None, x
     >>> from plants import library
     >>> msd = library.build("mass-spring-damper")
     >>> [c.kind for c in candidates(msd, Place("output", "x"))]
-    ['saturation', 'sensor_offset', 'sensor_gain']
+    ['saturation', 'sensor_offset', 'sensor_gain', 'sensor_lag']
     >>> offset = candidates(msd, Place("output", "x"))[1]
     >>> offset.build(msd, {"offset_x": 0.01}).equations().h[0]
     offset_x + q_k

@@ -467,7 +467,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     def sensor_candidates(outputs, located=()):
         """The sensor candidates at `outputs` not among the places `located`, on the nominal model."""
         return [c for p in sensor_places(located, train) if p.name in outputs
-                for c in candidates(graph, p, regime_variables=rv, experiment=cand_part, x0=start_x0)]
+                for c in candidates(graph, p, regime_variables=rv, experiment=cand_part, x0=start_x0)
+                if c.definition.unranked_sensor]
 
     sensor_cands = sensor_candidates(flagged, place_list) if chosen is None else []
     if sensor_cands:
@@ -724,7 +725,7 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     except (np.linalg.LinAlgError, FloatingPointError) as exc:   # numerics: no further effect
         return Round(None, [], dict(reference), dict(reference), scores=[], located=False,
                      note=f"graph location failed: {type(exc).__name__}: {exc}")
-    places, springs = further_places(graph, scores, top, train)
+    places, springs, sensors = further_places(graph, scores, top, train)
     earlier = [c for r in rounds if r.chosen is not None and r.chosen.candidate is not None
                for c in getattr(r.chosen.candidate, "members", (r.chosen.candidate,))]
     done = {(c.kind, c.place) for c in earlier}
@@ -735,7 +736,7 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     claimed = pairs.claims(earlier)
     cands = [c for s in places for c in candidates(graph, s.place, regime_variables=rv, experiment=train, x0=x0)
              if (c.kind, c.place) not in done and not pairs.clashes(c, claimed)
-             and (s not in springs or on_storage(graph, c))]
+             and (s not in springs or on_storage(graph, c)) and (s not in sensors or c.definition.unranked_sensor)]
     evidence, cands, pruned = _features(graph, scores, [s.place for s in places], train, x0, rv, cands, say,
                                         f"{label}: feature regression")
     fit_part, fit_x0 = _fit_window(train, res.run, x0)

@@ -31,7 +31,7 @@ from .holdout_resolution import Z_RESOLVED, held_out_prediction, largest_differe
 from .shooting import FIRST_PASS, PASSES, SETTLED, Shooting
 
 __all__ = ["CandidateFit", "fit_candidate", "choose", "noise_floor", "needs_explaining", "usable_fits",
-           "single_fits_by_holdout",
+           "single_fits_by_holdout", "harms", "HARM", "HARM_EXCESS",
            "acceptance", "within_tie", "unpriced_error", "PARAMETER_PRICE", "MIN_SHARE", "MIN_GAIN", "TIE"]
 
 #: relative reduction of the held-out excess error each extra parameter must buy
@@ -53,6 +53,12 @@ NEAR_FLOOR = 2.0
 #: moves no held-out prediction by this many noise standard deviations is that law, its extra terms
 #: fitted to nothing: the feature evidence (rule 4 of :func:`choose`) does not prefer it
 COLLAPSED = 0.5
+#: a fit predicting some output this much worse than the reference model (held-out NRMSE), and
+#: clearly beyond that output's noise floor (:data:`HARM_EXCESS`), trades that output's error for the
+#: others': it is not chosen (:func:`harms`)
+HARM = 0.10
+#: the held-out excess over the floor, as a share of the floor's square, a harmed output must show
+HARM_EXCESS = 0.25
 #: nominal excess NRMSE^2 below which an output counts as explained (noise-free data)
 _EXPLAINED = 1e-6
 _FD_STEP = 1e-3  # forward-difference step on the scaled parameters
@@ -773,6 +779,7 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
         return value if np.isfinite(value) else np.inf
 
     usable = _no_idle_terms(usable_fits(fits, names), train)
+    usable = [f for f in usable if not harms(f, nominal_holdout, floor)]
     if not usable:
         return None
 
@@ -882,6 +889,24 @@ def _score(fit, floor: dict, names, e0: float) -> float:
     """Score :math:`S` of rule 2 of :func:`choose`: the held-out excess error over all `names`
     (plus :math:`10^{-4} E_0`), priced per fitted parameter."""
     return (excess_error(fit.holdout_nrmse, floor, names) + 1e-4 * e0) * (1 + PARAMETER_PRICE) ** fit.n_params
+
+
+def harms(fit, reference_holdout: dict, floor: dict) -> list:
+    """The outputs `fit` predicts worse than the reference model on the held-out part: its NRMSE
+    above the reference's by more than :data:`HARM`, and its excess over the noise floor above
+    :data:`HARM_EXCESS` of the floor's square.  A physical effect the model lacks, fitted, predicts
+    every output at least as well; one that buys a lower total error by predicting an output worse
+    absorbs what another effect left (an NRMSE is relative to its output's spread, so a drifting
+    position's error counts for little beside its velocity's: seed 7474's detuned carriage, where a
+    velocity sensor's lag replaced the force's, its position error 24 % up)."""
+    out = []
+    for o, ref in reference_holdout.items():
+        got, nu = fit.holdout_nrmse.get(o), floor.get(o, 0.0)
+        if got is None or not (np.isfinite(ref) and np.isfinite(got)):
+            continue
+        if got > ref * (1 + HARM) and got ** 2 - nu ** 2 > HARM_EXCESS * nu ** 2 + _EXPLAINED:
+            out.append(o)
+    return out
 
 
 def unpriced_error(fit, significant) -> float:

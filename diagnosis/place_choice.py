@@ -133,11 +133,12 @@ def located_places(scores, top: int) -> list:
     return kept[:top] + tied
 
 
-def further_places(graph, scores, top: int, experiment) -> tuple[list, list]:
-    """``(places, springs)``: the place scores a further round fits its candidates at (the located
-    ones, :func:`located_places`; the actuators that drive them; the sensors behind them when
-    something was located; the series springs of located 0-junctions), and which of them are
-    springs (storage kinds only).  The added places are looked up among `scores` by kind and name:
+def further_places(graph, scores, top: int, experiment) -> tuple[list, list, list]:
+    """``(places, springs, sensors)``: the place scores a further round fits its candidates at (the
+    located ones, :func:`located_places`; the actuators that drive them; the sensors behind them
+    when something was located; the series springs of located 0-junctions), which of them are
+    springs (storage kinds only) and which sensors added unranked (their
+    :attr:`~diagnosis.kinds.base.Kind.unranked_sensor` kinds only).  The added places are looked up among `scores` by kind and name:
     graph location names a junction with the bond it reports it by, which the added places lack,
     and the springs were lost so in every further round (seed 6767, compound case 005: the
     exoskeleton's hardening k_s was never fitted in round 2, and the gear spring k_g answered)."""
@@ -148,10 +149,11 @@ def further_places(graph, scores, top: int, experiment) -> tuple[list, list]:
         return [by_name[(p.kind, p.name)] for p in added if (p.kind, p.name) in by_name]
 
     places += scored(actuator_places(graph, [s.place for s in places], experiment))
-    if places:                           # behind what is located: nothing located is noise
-        places += scored(sensor_places([s.place for s in places], experiment))
+    # behind what is located: nothing located is noise
+    sensors = scored(sensor_places([s.place for s in places], experiment)) if places else []
+    places += sensors
     springs = scored(spring_places(graph, [s.place for s in places]))
-    return places + springs, springs
+    return places + springs, springs, sensors
 
 
 def without_companions(graph, scores) -> list:

@@ -154,7 +154,7 @@ def test_a_further_round_fits_the_springs_of_its_located_torque_nodes():
     assert all(s.place.bond is not None for s in scores)
     t = np.linspace(0.0, 1.0, 11)
     train = Experiment(t, {"tau_m": t, "w_h": t}, {"tau_s": t}, {"tau_m": "N*m", "w_h": "rad/s", "tau_s": "N*m"})
-    places, springs = further_places(exo, scores, 3, train)
+    places, springs, _ = further_places(exo, scores, 3, train)
     assert [s.place.name for s in springs] == ["dw_eh", "w_h_j", "dw_s"]
     assert [s.place.name for s in places if s.place.kind == "junction"] == [
         "tau_eh", "tau_g", "tau_s_j", "dw_g", "dw_eh", "w_h_j", "dw_s"]

@@ -133,6 +133,12 @@ class Kind:
     #: cubic term, dead band or end stop); a kind that only refits the target's own value does not,
     #: and so combines with one that does (:func:`diagnosis.pairs.targets`)
     rewrites_target: ClassVar[bool] = True
+    #: an output kind fitted also at the outputs graph location did not rank
+    #: (:func:`diagnosis.place_choice.sensor_places`): a sensor's static error (an offset, a gain, a
+    #: range) shows on its own output only, where a larger residual elsewhere hides it; a sensor's
+    #: dynamics (a lag) is located like any place, and fitted unranked it took up what a wrong first
+    #: answer left (seed 8181's compound carriage: a velocity sensor's lag beside an input saturation)
+    unranked_sensor: ClassVar[bool] = True
 
     def admits(self, door: str, domain: str) -> bool:
         """Whether this kind may attach at a place of `door` whose junction is of `domain`: the door

@@ -26,6 +26,7 @@ FIRST_SAMPLES = 3
 class SensorLag(Kind):
     name = "sensor_lag"
     doors = ("output",)
+    unranked_sensor = False
 
     def propose(self, site):
         y, span, dt = site.name, site.scales.span, site.scales.dt

@@ -16,7 +16,7 @@ from bondgraph.numerics import simulate
 from diagnosis.benchmark import plants_textbook as tb
 from diagnosis.benchmark.draw import KINDS_BEFORE_32, KINDS_BEFORE_34, RATIOS, CaseSpec, draw_cases, realise
 from diagnosis.benchmark.effects import KIND_PLACES, make_effect, places_for
-from diagnosis.benchmark.plants import FAST, PLANTS
+from diagnosis.benchmark.plants import FAST, PLANTS, PLANTS_BEFORE_34
 from diagnosis.benchmark.report import markdown, summarise
 from diagnosis.benchmark.run import run_case
 from diagnosis.benchmark.simulate import simulate_truth
@@ -196,11 +196,13 @@ def test_the_drawn_kinds_can_be_chosen_and_the_earlier_vocabulary_replayed():
     assert {"asymmetric_viscous_friction", "quadratic_drag"} <= {s.kind for s in draw_cases(80, 11, PLANTS)}
     pair = ("viscous_friction", "asymmetric_viscous_friction")
     assert {s.kind for s in draw_cases(24, 11, FAST, pair)} == {"none", *pair}
-    assert draw_cases(80, 3434, PLANTS, KINDS_BEFORE_32)[4].label == "004-hydraulic-viscous_friction@junction:q_pipe"
-    # session 34's sensor lag joined: until then seed 3434's case 001 was a delay, now a friction
-    assert "sensor_lag" in {s.kind for s in draw_cases(80, 11, PLANTS)}
-    assert draw_cases(80, 3434, PLANTS, KINDS_BEFORE_34)[1].label == "001-msd-transport_delay@input:F"
-    assert draw_cases(80, 3434, PLANTS)[1].label == "001-msd-stribeck_friction@junction:v_mass"
+    assert draw_cases(80, 3434, PLANTS_BEFORE_34, KINDS_BEFORE_32)[4].label == "004-hydraulic-viscous_friction@junction:q_pipe"
+    # session 34's sensor lag, radiation and heater pair joined: until then seed 3434's case 001
+    # was a delay, now a lag; the plants and kinds of before draw it as it was
+    assert {"sensor_lag", "radiation"} <= {s.kind for s in draw_cases(80, 11, PLANTS)}
+    assert "heater-pair" in {s.plant for s in draw_cases(80, 11, PLANTS)}
+    assert draw_cases(80, 3434, PLANTS_BEFORE_34, KINDS_BEFORE_34)[1].label == "001-msd-transport_delay@input:F"
+    assert draw_cases(80, 3434, PLANTS)[1].label == "001-msd-valve_lag@input:F"
     with pytest.raises(BenchmarkError, match="unknown effect kind.*'?friction_typo"):
         draw_cases(4, 11, FAST, ("friction_typo",))
 
@@ -567,7 +569,7 @@ def test_a_second_effect_the_first_hides_is_measured_invisible():
     shaft never reaches the range: the truth with both is the friction's alone, to rounding (the
     second's effect-to-noise 0), while the friction's stands out of the noise."""
     from diagnosis.benchmark.compound import realise_compound, second_effect
-    spec = draw_cases(80, 3434, PLANTS, KINDS_BEFORE_32)[6]
+    spec = draw_cases(80, 3434, PLANTS_BEFORE_34, KINDS_BEFORE_32)[6]
     plant = PLANTS[spec.plant]()
     second = second_effect(spec, plant, KINDS_BEFORE_32)
     assert (spec.kind, second.kind, second.door) == ("coulomb_friction", "saturation", "output")

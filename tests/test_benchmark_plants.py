@@ -151,7 +151,7 @@ def test_a_sensor_on_a_spring_reads_its_changed_law_as_the_library_graph_does(ma
 
 
 @pytest.mark.parametrize("name", ["drivetrain", "carriage", "hydraulic", "msd", "dc-motor", "rlc", "tanks",
-                                  "geared-inertias"])
+                                  "geared-inertias", "heater-pair"])
 def test_plants_equal_their_library_graphs(name):
     plant = PLANTS[name]()
     # the same RK4 scheme on both sides: equal to rounding
@@ -308,3 +308,29 @@ def test_a_sensor_lag_in_the_truth_is_the_catalogues_sensor_lag_on_the_library_g
     assert np.max(np.abs(res[output] - truth[output])) < 0.02 * change
     others = [o.name for o in plant.outputs if o.name != output]
     assert all(np.array_equal(truth[o], base[o]) for o in others)
+
+
+@pytest.mark.parametrize("kind, size", [("radiation", 0.9 * 5.67e-8 * 12e-4), ("leak", 0.006)])
+def test_a_heat_loss_in_the_truth_is_the_catalogues_on_the_library_graph(kind, size):
+    """The heater pair's truth with a radiation loss (c (T^4 - Ta^4), the TCLab's emissivity and
+    area) or a heat leak to the room at block 1, and the library graph with the catalogue's kind at
+    the same value: the temperatures agree, so the catalogue's ambient is the room's (296.15 K, the
+    model's ambient source), not 0 K."""
+    from diagnosis.benchmark.effects import make_effect
+    from diagnosis.catalogue import candidates
+    from diagnosis.place import Place
+
+    plant = PLANTS["heater-pair"]()
+    t = np.arange(601.0)
+    u = random_inputs(plant, t, seed=5)
+    base = simulate_truth(plant, t, u)
+    truth = simulate_truth(plant, t, u, make_effect(kind, plant, "junction", "block1", size, {}, {}))
+    graph = library.build(plant.model)
+    (cand,) = [c for c in candidates(graph, Place("junction", "block1")) if c.kind == kind]
+    assert cand.constants[0][1] == pytest.approx(296.15)
+    values = {cand.params[0].name: size}
+    res = simulate(cand.build(graph, values), (0.0, t[-1]), inputs={n: (t, v) for n, v in u.items()},
+                   output_interval=1.0, params=values, method="LSODA")
+    change = np.std(truth["T1"] - base["T1"])
+    assert change > 0.5                                            # kelvin: the loss shows
+    assert np.max(np.abs(res["T1"] - truth["T1"])) < 0.02 * change

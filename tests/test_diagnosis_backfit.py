@@ -8,14 +8,14 @@ from diagnosis.backfit import alternatives
 from diagnosis.catalogue import Candidate
 from diagnosis.benchmark.compound import second_effect
 from diagnosis.benchmark.draw import KINDS_BEFORE_32, draw_cases
-from diagnosis.benchmark.plants import FAST, PLANTS
+from diagnosis.benchmark.plants import FAST, FAST_BEFORE_34, PLANTS, PLANTS_BEFORE_34
 from diagnosis.benchmark.run import run_case
 from diagnosis.fit import CandidateFit, floor_within_reach
 
 
 def _compound(tmp_path, index: int) -> dict:
     """Seed 3434's compound benchmark case `index`, diagnosed and scored (its label checked)."""
-    spec = draw_cases(80, 3434, PLANTS, KINDS_BEFORE_32)[index]
+    spec = draw_cases(80, 3434, PLANTS_BEFORE_34, KINDS_BEFORE_32)[index]
     second = second_effect(spec, PLANTS[spec.plant](), KINDS_BEFORE_32)
     r = run_case(spec, PLANTS, tmp_path, second=second)
     assert r["label"] == LABELS[index]
@@ -81,7 +81,7 @@ def test_rounds_before_one_the_backfit_replaced_are_swept_again(tmp_path):
     lag), then round 2's lag by the delay, beside which the load ended at 5e-5 N, and the answer
     kept it.  Round 1 is now swept again beside the delay (backfit.SWEEPS), its reference without
     its own refitted mass: the mass alone."""
-    r = run_case(draw_cases(40, 7474, FAST, KINDS_BEFORE_32)[24], FAST, tmp_path, detune=0.05)
+    r = run_case(draw_cases(40, 7474, FAST_BEFORE_34, KINDS_BEFORE_32)[24], FAST, tmp_path, detune=0.05)
     assert (r["label"], r["detuned"]["parameter"]) == ("024-carriage-transport_delay@input:F", "m")
     assert r["answers"] == ["nominal_value @ junction v_cart", "transport_delay @ input F"]
     assert r["kind_ok"] and r["detuned_named"] and r["improvement"] > 0.9

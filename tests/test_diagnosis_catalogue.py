@@ -89,7 +89,7 @@ def test_kinds_are_the_issue_vocabulary_in_order():
                      "leak", "heat_transfer", "valve_lag", "transport_delay", "hysteresis", "backlash",
                      "nonlinear_stiffness", "saturation", "sensor_offset", "sensor_gain", "constant_load",
                      "coulomb_viscous_friction", "modulated_friction", "asymmetric_viscous_friction",
-                     "quadratic_drag", "sensor_lag", "nominal_value")
+                     "quadratic_drag", "sensor_lag", "radiation", "nominal_value")
 
 
 def test_places_offer_the_kinds_that_make_sense():
@@ -309,8 +309,35 @@ def test_a_kind_attaches_only_in_the_energy_domains_its_physics_lives_in():
     assert {"coulomb_friction", "stribeck_friction", "hysteresis", "quadratic_drag"} <= offered
 
 
+def test_radiation_and_a_heat_leak_go_to_the_room_the_model_names():
+    """At a thermal 0-junction of absolute temperatures: the radiated heat c (T^4 - Ta^4) and a heat
+    leak c (T - Ta) leave the block, Ta the model's ambient source (296.15 K), not 0 K; the
+    radiation is not offered where the temperatures are rises above the room (no fourth power)."""
+    from bondgraph import MSf
+    g = library.build("heater-pair")
+    T, Ta = S("q_C1") / S("C1"), sp.Float(296.15)
+    rad = _one(g, Place("junction", "block1"), "radiation")
+    assert rad.constants[0][1:3] == (296.15, "K")
+    _differs_by(rad.build(g, {"c_rad_block1": 6e-11}), g, "q_C1",
+                -S("c_rad_block1") * (T ** 4 - S("T_amb_block1") ** 4))
+    assert "296.15 K" in rad.explain({"c_rad_block1": 6.12e-11}) and "0.00108 m^2" in rad.explain(
+        {"c_rad_block1": 6.12e-11})
+    leak = _one(g, Place("junction", "block1"), "leak")
+    assert leak.constants[0][1] == pytest.approx(float(Ta))
+    _differs_by(leak.build(g, {"c_leak_block1": 0.01}), g, "q_C1",
+                -S("c_leak_block1") * (T - S("P_amb_block1")))
+    assert "heat leak" in leak.explain({"c_leak_block1": 0.01})
+    rise = BondGraph("rise")                              # temperatures above the room, K
+    for e in (MSf("heater", "Q", domain="thermal"), Zero("block"), C("Cth", 2.0, domain="thermal"),
+              R("Rl", 80.0, domain="thermal")):
+        rise.add(e)
+    for tail, head in (("heater", "block"), ("block", "Cth"), ("block", "Rl")):
+        rise.connect(tail, head)
+    assert "radiation" not in [c.kind for c in candidates(rise, Place("junction", "block"))]
+
+
 def test_every_kind_is_reachable_and_explained_with_units():
-    graphs = [library.build("mass-spring-damper"), hydraulic_cylinder(), pneumatic_tank()]
+    graphs = [library.build("mass-spring-damper"), hydraulic_cylinder(), pneumatic_tank(), library.build("heater-pair")]
     seen = {}
     for g in graphs:
         places = [Place("junction", n) for n, e in g.elements.items() if e.kind in ("0", "1")]

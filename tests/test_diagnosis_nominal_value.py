@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from diagnosis.benchmark.draw import KINDS_BEFORE_32, draw_cases, realise
-from diagnosis.benchmark.plants import FAST, PLANTS
+from diagnosis.benchmark.plants import FAST, FAST_BEFORE_34, PLANTS, PLANTS_BEFORE_34
 from diagnosis.benchmark.run import bindings, write_csv
 from diagnosis.catalogue import candidates
 from diagnosis.diagnose import diagnose
@@ -16,7 +16,7 @@ from plants import library, load
 
 def _diagnose_detuned(tmp_path, seed, index, detuned):
     """Case `index` of the benchmark seed, diagnosed with the nominal's parameters scaled by `detuned`."""
-    spec = draw_cases(80, seed, PLANTS, KINDS_BEFORE_32)[index]
+    spec = draw_cases(80, seed, PLANTS_BEFORE_34, KINDS_BEFORE_32)[index]
     plant = PLANTS[spec.plant]()
     rec = realise(spec, plant)
     graph = load(plant.model)
@@ -74,7 +74,7 @@ def test_a_later_round_does_not_change_an_element_an_earlier_one_refitted(tmp_pa
     and round 2 refitted it again with a cubic term, the rest of round 1's fit answered as a
     cubic spring, a false alarm.  An element an earlier round changed is not offered again."""
     from diagnosis.benchmark.run import run_case
-    spec = draw_cases(40, 6363, FAST, KINDS_BEFORE_32)[9]
+    spec = draw_cases(40, 6363, FAST_BEFORE_34, KINDS_BEFORE_32)[9]
     r = run_case(spec, FAST, tmp_path, detune=0.05)
     assert (r["label"], r["detuned"]["parameter"]) == ("009-hydraulic-none", "C2")
     assert r["answers"][0] == "nominal_value @ junction p2" and r["detuned_named"]
@@ -89,7 +89,7 @@ def test_two_effects_are_not_combined_on_one_element(tmp_path):
     error was five times the nominal's.  Now no two effects change one element (pairs.targets):
     the backlash and the mass's value."""
     from diagnosis.benchmark.run import run_case
-    r = run_case(draw_cases(40, 6363, FAST, KINDS_BEFORE_32)[22], FAST, tmp_path, detune=0.05)
+    r = run_case(draw_cases(40, 6363, FAST_BEFORE_34, KINDS_BEFORE_32)[22], FAST, tmp_path, detune=0.05)
     assert (r["label"], r["detuned"]["parameter"]) == ("022-msd-backlash@storage:k", "m")
     assert sorted(r["answers"]) == ["backlash @ junction v_mass", "nominal_value @ junction v_mass"]
     assert r["kind_ok"] and r["detuned_named"] and r["improvement"] > 0.9
@@ -129,7 +129,7 @@ def test_friction_beside_a_wrong_inertia_is_found_with_it(tmp_path):
     no longer pay.  Now the best effects are fitted with their junction's value beside them
     (pairs.value_pairs): the friction and the inertia together, the error at the floor."""
     from diagnosis.benchmark.run import run_case
-    r = run_case(draw_cases(40, 7474, FAST, KINDS_BEFORE_32)[32], FAST, tmp_path, detune=0.05)
+    r = run_case(draw_cases(40, 7474, FAST_BEFORE_34, KINDS_BEFORE_32)[32], FAST, tmp_path, detune=0.05)
     assert (r["label"], r["detuned"]["parameter"]) == ("032-geared-inertias-coulomb_viscous_friction@junction:w2", "J2")
     assert r["answers"] == ["coulomb_viscous_friction @ junction w2", "nominal_value @ junction w2"]
     assert r["parameters"]["Fc_w2"] == pytest.approx(r["effect"]["magnitude"], rel=0.05)
@@ -145,7 +145,7 @@ def test_a_friction_that_fits_worst_alone_is_refitted_beside_the_mass_its_featur
     (features.left_with) leaves least for the viscous friction, which is now refitted beside the
     mass too: the velocity's error halves again and the damping comes within 1 % of the truth's."""
     from diagnosis.benchmark.run import run_case
-    r = run_case(draw_cases(80, 8585, FAST, KINDS_BEFORE_32)[7], FAST, tmp_path, detune=0.05)
+    r = run_case(draw_cases(80, 8585, FAST_BEFORE_34, KINDS_BEFORE_32)[7], FAST, tmp_path, detune=0.05)
     assert (r["label"], r["detuned"]["parameter"]) == ("007-carriage-viscous_friction@junction:v_cart", "m")
     assert r["answers"] == ["viscous_friction @ junction v_cart", "nominal_value @ junction v_cart"]
     assert r["parameters"]["b_visc_v_cart"] == pytest.approx(r["effect"]["magnitude"], rel=0.01)
@@ -161,7 +161,7 @@ def test_a_hardening_spring_given_up_alone_is_refitted_beside_the_mass_it_stood_
     leave only the noise, so it is fitted and paired with the mass: error 0.003, cubic term within
     1 % of the truth's."""
     from diagnosis.benchmark.run import run_case
-    r = run_case(draw_cases(40, 7474, FAST, KINDS_BEFORE_32)[35], FAST, tmp_path, detune=0.05)
+    r = run_case(draw_cases(40, 7474, FAST_BEFORE_34, KINDS_BEFORE_32)[35], FAST, tmp_path, detune=0.05)
     assert (r["label"], r["detuned"]["parameter"]) == ("035-carriage-nonlinear_stiffness@storage:position", "m")
     assert r["answers"][:2] == ["nonlinear_stiffness @ junction v_cart", "nominal_value @ junction v_cart"]
     assert r["parameters"]["k3_position"] == pytest.approx(r["effect"]["magnitude"], rel=0.02)
@@ -176,7 +176,7 @@ def test_a_richer_law_beside_a_value_that_fits_the_training_part_no_better_is_no
     A pair whose member extends the other pair's member now holds that pair (kinds.base.holds), and
     an extra term that does not lower the training error is idle (fit._no_idle_terms)."""
     from diagnosis.benchmark.run import run_case
-    r = run_case(draw_cases(40, 7474, FAST, KINDS_BEFORE_32)[10], FAST, tmp_path, detune=0.05)
+    r = run_case(draw_cases(40, 7474, FAST_BEFORE_34, KINDS_BEFORE_32)[10], FAST, tmp_path, detune=0.05)
     assert (r["label"], r["detuned"]["parameter"]) == ("010-geared-inertias-coulomb_friction@junction:w1", "J1")
     assert r["answer_kind"] == "coulomb_friction" and r["kind_ok"] and r["place_ok"]
     assert r["improvement"] > 0.9

@@ -3,7 +3,7 @@ import numpy as np
 
 from diagnosis.benchmark.compound import second_effect
 from diagnosis.benchmark.draw import KINDS_BEFORE_32, draw_cases
-from diagnosis.benchmark.plants import PLANTS
+from diagnosis.benchmark.plants import PLANTS, PLANTS_BEFORE_34
 from diagnosis.benchmark.run import run_case
 from diagnosis.catalogue import Candidate, ParamSpec
 from diagnosis.fit import CandidateFit
@@ -77,7 +77,7 @@ def test_a_lag_and_a_hardening_spring_that_neither_explains_alone_are_found_toge
     whose position spring hardens (cubic term 3.0 N/m^3).  Each candidate alone bent to the other's
     error and lowered the velocity's held-out error by at most 8 % (answer "none"); the pair takes
     it from 0.103 to the noise and finds both values."""
-    spec = draw_cases(80, 5656, PLANTS, KINDS_BEFORE_32)[7]
+    spec = draw_cases(80, 5656, PLANTS_BEFORE_34, KINDS_BEFORE_32)[7]
     second = second_effect(spec, PLANTS[spec.plant](), KINDS_BEFORE_32)
     r = run_case(spec, PLANTS, tmp_path, second=second)
     assert r["label"] == "007-carriage-valve_lag@input:F+nonlinear_stiffness@storage:position"
@@ -94,7 +94,7 @@ def test_a_wrong_first_answer_that_leaves_the_residual_far_above_the_noise_is_me
     1.61 -> 0.79, five times its floor), and round 2 found nothing on that wrong model.  Pairs are
     now fitted where round 2 finds nothing on round 1's single answer while some output stays at
     twice its floor or more, and the pair of the two concealed effects wins with both values."""
-    spec = draw_cases(40, 8181, PLANTS, KINDS_BEFORE_32)[0]
+    spec = draw_cases(40, 8181, PLANTS_BEFORE_34, KINDS_BEFORE_32)[0]
     second = second_effect(spec, PLANTS[spec.plant](), KINDS_BEFORE_32)
     r = run_case(spec, PLANTS, tmp_path, second=second)
     assert r["label"] == "000-carriage-valve_lag@input:F+constant_load@junction:v_cart"

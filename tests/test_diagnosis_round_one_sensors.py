@@ -6,7 +6,7 @@ import csv
 import pytest
 
 from diagnosis.benchmark.draw import KINDS_BEFORE_32, draw_cases
-from diagnosis.benchmark.plants import PLANTS
+from diagnosis.benchmark.plants import PLANTS, PLANTS_BEFORE_34
 from diagnosis.benchmark.run import run_case
 
 
@@ -16,7 +16,7 @@ def test_a_current_sensor_that_clips_two_brief_peaks_is_found(tmp_path):
     armature junction at 90 %: the electrical pole is fast), round 1 fitted the junctions' kinds
     and answered none.  Now the current sensor's range is fitted and judged on the training part,
     at the recorded extremes."""
-    spec = draw_cases(80, 2323, PLANTS, KINDS_BEFORE_32)[50]
+    spec = draw_cases(80, 2323, PLANTS_BEFORE_34, KINDS_BEFORE_32)[50]
     r = run_case(spec, PLANTS, tmp_path)
     assert r["label"] == "050-dc-motor-saturation@output:i"
     assert (r["answer_kind"], r["answer_place"]) == ("saturation", "output i")

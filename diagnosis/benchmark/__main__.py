@@ -26,7 +26,7 @@ import numpy as np
 from ..errors import BenchmarkError
 from .compound import compound_label, second_effect
 from .draw import KIND_LISTS, KINDS, draw_cases
-from .plants import FAST, PLANTS
+from .plants import PLANT_LISTS, PLANTS
 from .report import summarise, write_report
 from .run import run_case
 
@@ -47,7 +47,8 @@ def main(argv=None) -> int:
     ap.add_argument("--report", default="benchmark-report", help="output directory")
     ap.add_argument("--jobs", type=int, default=1, help="cases diagnosed in parallel (processes)")
     ap.add_argument("--plants", default="",
-                    help="comma-separated plant names, or 'fast' (diagnosis.benchmark.plants.FAST; default: all)")
+                    help="comma-separated plant names, or 'fast' (diagnosis.benchmark.plants.FAST), 'before-34' or "
+                         "'fast-before-34' (those drawn until session 33: a seed's cases as then drawn; default: all)")
     ap.add_argument("--only", default="", help="comma-separated case indices to run")
     ap.add_argument("--kinds", default="",
                     help="comma-separated effect kinds to draw, or 'before-32' / 'before-34' (the kinds drawn "
@@ -70,8 +71,8 @@ def main(argv=None) -> int:
     if not a.sampling >= 1.0:
         ap.error(f"--sampling must be a factor of at least 1, got {a.sampling}")
     plants = PLANTS
-    if a.plants == "fast":
-        plants = FAST
+    if a.plants in PLANT_LISTS:
+        plants = PLANT_LISTS[a.plants]
     elif a.plants:
         unknown = [p for p in a.plants.split(",") if p not in PLANTS]
         if unknown:

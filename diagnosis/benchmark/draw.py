@@ -35,9 +35,10 @@ KINDS = tuple(KIND_PLACES)
 #: the kinds drawn until session 31, before ``asymmetric_viscous_friction`` and ``quadratic_drag``
 #: joined: a seed's cases as they were drawn then (``--kinds before-32``; the tests that replay a
 #: past case pin it)
-KINDS_BEFORE_32 = tuple(k for k in KINDS if k not in ("asymmetric_viscous_friction", "quadratic_drag", "sensor_lag"))
-#: the kinds drawn until session 33, before ``sensor_lag`` joined (``--kinds before-34``)
-KINDS_BEFORE_34 = tuple(k for k in KINDS if k != "sensor_lag")
+KINDS_BEFORE_32 = tuple(k for k in KINDS if k not in ("asymmetric_viscous_friction", "quadratic_drag", "sensor_lag",
+                                                     "radiation"))
+#: the kinds drawn until session 33, before ``sensor_lag`` and ``radiation`` joined (``--kinds before-34``)
+KINDS_BEFORE_34 = tuple(k for k in KINDS if k not in ("sensor_lag", "radiation"))
 #: the named kind lists of ``--kinds``
 KIND_LISTS = {"before-32": KINDS_BEFORE_32, "before-34": KINDS_BEFORE_34}
 #: Cases drawn on a plant whose nominal integrates its inputs, every this many.
@@ -301,6 +302,8 @@ def _initial_magnitude(spec, plant, rec, scales, sh, probe_gain):
         return base / (sh["c0"] + 0.5)
     if k == "leak":
         return base / (scales["rms"][j] - plant.junction(j).ambient or 1.0)
+    if k == "radiation":
+        return base / (scales["rms"][j] ** 4 - plant.junction(j).ambient ** 4 or 1.0)
     if k == "pressure_dependent_friction":
         return base / (sh["c0"] + sum(scales["rms"][p] for p in plant.junction(j).pressures) - sh["p_ref"])
     if k == "nonlinear_stiffness":

@@ -27,7 +27,8 @@ junction (1: common flow)     viscous_friction, asymmetric_viscous_friction
 law (an effort in series     hysteresis (Dahl: a muscle's braid friction)
 with a constitutive law)
 junction (0: common effort)   leak (laminar, towards the ambient effort),
-                              constant_load (a constant flow)
+                              constant_load (a constant flow), radiation
+                              (a thermal junction's c (T^4 - Ta^4))
 storage (a C element)         nonlinear_stiffness (cubic hardening, the
                               nominal's linear stiffness carrying part of the
                               cubic term's average, as a linear fit would),
@@ -66,7 +67,7 @@ KIND_PLACES = {
     "valve_lag": ("input",), "sensor_offset": ("output",), "sensor_gain": ("output",),
     "coulomb_viscous_friction": ("junction1_mech",), "modulated_friction": ("junction1m",),
     "asymmetric_viscous_friction": ("junction1_reversing",), "quadratic_drag": ("junction1_drag",),
-    "sensor_lag": ("output",),
+    "sensor_lag": ("output",), "radiation": ("junction0_thermal",),
 }
 
 
@@ -102,6 +103,8 @@ def places_for(plant: TruthPlant, kind: str) -> list[tuple[str, str]]:
             out += [("junction", j.name) for j in plant.junctions if j.kind == "1" and j.modulators]
         elif door == "junction0":
             out += [("junction", j.name) for j in plant.junctions if j.kind == "0"]
+        elif door == "junction0_thermal":       # absolute temperatures radiate
+            out += [("junction", j.name) for j in plant.junctions if j.kind == "0" and j.domain == "thermal"]
         elif door == "storage_linear":
             out += [("storage", s.name) for s in plant.storages if s.stiffness is not None]
         elif door == "storage_linear1":
@@ -236,6 +239,8 @@ class TruthEffect(NoEffect):
             return {j: sh["sign"] * m}, np.zeros(0)
         if k == "leak":
             return {j: -m * (x - self.plant.junction(j).ambient)}, np.zeros(0)
+        if k == "radiation":                    # Stefan-Boltzmann to the room, m = eps sigma A
+            return {j: -m * (x ** 4 - self.plant.junction(j).ambient ** 4)}, np.zeros(0)
         assert jk == "1"
         eps = sh["eps"]
         if k == "coulomb_friction":

@@ -42,12 +42,13 @@ class Radiation(Kind):
     def propose(self, site):
         graph, j = site.graph, site.name
         T = site.values.get(f"e_{graph.bonds_of(j)[0][0].name}")
-        if T is None or not float(np.mean(T)) > ABSOLUTE:
-            return []
         ambient = ambient_effort(graph, j, T)
+        # without data the ambient the model names tells whether its temperatures are absolute
+        if not (float(np.mean(T)) if T is not None else ambient) > ABSOLUTE:
+            return []
         # the radiated flow's typical size per unit of c_rad: its spread about the ambient's
-        dev = max(float(np.sqrt(np.mean((np.asarray(T) ** 4 - ambient ** 4) ** 2))),
-                  4.0 * ambient ** 3 * site.scales.effort)
+        spread = float(np.sqrt(np.mean((np.asarray(T) ** 4 - ambient ** 4) ** 2))) if T is not None else 0.0
+        dev = max(spread, 4.0 * ambient ** 3 * site.scales.effort)
         F = site.scales.flow
         c = fresh_name(site.taken, f"c_rad_{j}")
         return [Proposal(

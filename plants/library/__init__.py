@@ -7,7 +7,7 @@ gives one line.  Textbook graphs: ``mass-spring-damper``, ``dc-motor``,
 nonlinear), ``chain`` (the derivation benchmark, 5 stages).  Seed plants:
 ``exoskeleton`` (seed 004, Fig. 6), ``pam``, ``pam-frictionless``,
 ``pam-locked`` (seed 000).  Machines: ``pneumatic-cylinder``,
-``drivetrain``, ``carriage``, ``hydraulic``.
+``drivetrain``, ``carriage``, ``hydraulic``, ``heater-pair`` (thermal).
 """
 from __future__ import annotations
 
@@ -20,11 +20,12 @@ from .drivetrain import drivetrain
 from .exoskeleton import exoskeleton
 from .hydraulic import hydraulic
 from .pam import pam
+from .thermal import heater_pair
 from .textbook import coupled_tanks, dc_motor, geared_inertias, mass_spring_damper, resistor_loop, rlc_series
 
 __all__ = ["build", "names", "describe", "register", "exoskeleton", "pam", "mass_spring_chain", "mass_spring_damper", "dc_motor",
            "rlc_series", "coupled_tanks", "geared_inertias", "resistor_loop", "drivetrain", "carriage",
-           "hydraulic", "pneumatic_cylinder"]
+           "hydraulic", "pneumatic_cylinder", "heater_pair"]
 
 _MODELS: dict[str, tuple[Callable, str]] = {}
 
@@ -51,6 +52,7 @@ register("pneumatic-cylinder", pneumatic_cylinder, "seal-friction rig: ideal cyl
 register("drivetrain", drivetrain, "two-mass drivetrain: motor, 10:1 gear, compliant shaft, load (3 states)")
 register("carriage", carriage, "force-driven rigid carriage, no friction or spring: integrates its input (2 states)")
 register("hydraulic", hydraulic, "pump, oil volume, pipe (inertance, laminar loss), volume, orifice to tank (3 states)")
+register("heater-pair", heater_pair, "two heaters on two blocks sharing heat, convection to the room (2 states, K)")
 
 
 def names() -> list[str]:

@@ -722,7 +722,9 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     say(f"{label}: graph location", "training part")
     try:
         scores = locate_on_graph(graph, train, x0=x0)
-    except (np.linalg.LinAlgError, FloatingPointError) as exc:   # numerics: no further effect
+    except (np.linalg.LinAlgError, FloatingPointError, SimulationError) as exc:   # numerics: no further effect
+        # (a loop an earlier effect closed may fail at a probe's perturbed state: the round did
+        # not look, and the effects found so far stand)
         return Round(None, [], dict(reference), dict(reference), scores=[], located=False,
                      note=f"graph location failed: {type(exc).__name__}: {exc}")
     places, springs, sensors = further_places(graph, scores, top, train)

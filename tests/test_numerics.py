@@ -213,6 +213,25 @@ def test_two_unknown_loop_and_total_jacobian(backend):
 
 
 @pytest.mark.parametrize("backend", _backends())
+def test_a_loop_whose_residual_subtracts_absolute_levels_is_solved_to_its_rounding_floor(backend):
+    """Two blocks at 296.15 K and a temperature step d of 1e-6 K across a resistance R and a
+    one-way law e = b max(f, 0) of slope b/R = 3389 (graph location's probe of a heater pair with a
+    direction-dependent friction fitted at its link): the residual, which subtracts the two levels,
+    is known to about 1e-10, and the Newton steps stay near 2e-14, above the absolute tolerance; the
+    loop was "not solved" in 50 iterations.  Converged at the floor, f is the analytic flow."""
+    q1, q2, d, e = R("q_C1"), R("q_C2"), R("d_link"), R("e_law")     # the blocks' heat, 2 J/K each
+    b, res = 1.69441411e6, 500.0
+    f = (d - e - q2 / 2 + q1 / 2) / res
+    eqs = StateEquations(name="floor", t=R("t"), states=(q1, q2), inputs=(d,), params=(), outputs=(),
+                         f=(-f, f), h=(), algebraic=(e,), residuals=(e - b * sp.Max(0, f),))
+    model = compile_model(eqs, backend=backend)
+    x = np.full((2, 2), 2 * 296.15)
+    u = np.array([[1e-6], [1e-3]])
+    # to the flow's own rounding floor: one ulp of 296 K over R
+    np.testing.assert_allclose(model.f(x, u)[:, 1], u[:, 0] / (res + b), rtol=1e-6, atol=np.spacing(296.15) / res)
+
+
+@pytest.mark.parametrize("backend", _backends())
 def test_unsolvable_loop_names_the_unknown(backend):
     t, x, zbad = R("t"), R("x"), R("zbad")
     eqs = StateEquations(name="bad", t=t, states=(x,), inputs=(), params=(), outputs=(),

@@ -102,7 +102,7 @@ PARTS = {
 _ROW_ARGS = ("double t, const double *x, const double *u, const double *z, "
              "const double *d, const double *p, double step")
 _ROW_CALL = "t, x, u, z, d, p, step"
-GENERATOR_VERSION = "bondcosim-codegen-c 3"   # 3: bc_rk4_every
+GENERATOR_VERSION = "bondcosim-codegen-c 4"   # 3: bc_rk4_every; 4: Newton stops at the rounding floor
 
 
 class _Printer(C99CodePrinter):

@@ -17,20 +17,32 @@ Newton's method for :math:`0 = r(z)` on one row, warm-started in place:
 
 a full step unless it increases :math:`|r|^2`, then halved at most 10 times;
 converged when :math:`|\\Delta z_k| \\le` ``NEWTON_RTOL`` :math:`|z_k| +`
-``NEWTON_ATOL`` for every k.  The linear solve is Gaussian elimination with
-partial pivoting.
+``NEWTON_ATOL`` for every k, or at the residual's rounding floor: where every
+:math:`|\\Delta z_k| \\le` ``NEWTON_FLOOR_RTOL`` :math:`|z_k| +` ``NEWTON_ATOL`` and no
+trial step lowers :math:`|r|^2` (z kept), or after ``NEWTON_FLOOR_RUN`` such steps in a
+row (Newton near a simple root meets the first test in the step after so small a one).  A loop whose residual subtracts absolute
+levels, such as the temperatures of two blocks at 296 K across a friction law of slope
+3400, evaluates it to about 1e-10 at the root, and the steps then stay near 2e-14, above
+the absolute tolerance, however long Newton iterates.  The linear solve is Gaussian
+elimination with partial pivoting.
 """
 from __future__ import annotations
 
 __all__ = [
     "newton_source", "rk4_source", "BATCH_HEAD",
-    "NEWTON_OK", "NEWTON_STATUS", "NEWTON_MAX_ITER", "NEWTON_RTOL", "NEWTON_ATOL",
+    "NEWTON_OK", "NEWTON_STATUS", "NEWTON_MAX_ITER", "NEWTON_RTOL", "NEWTON_ATOL", "NEWTON_FLOOR_RTOL",
+    "NEWTON_FLOOR_RUN",
 ]
 
 #: Relative / absolute step tolerance of the Newton iteration:
 #: converged when :math:`|\\Delta z_i| \\le 10^{-12} |z_i| + 10^{-14}` for all i.
 NEWTON_RTOL = 1e-12
 NEWTON_ATOL = 1e-14
+#: Relative step below which an iterate that no trial step improves, or the last of
+#: :data:`NEWTON_FLOOR_RUN` such steps in a row, is at the residual's rounding floor: converged
+#: (see the module docstring).
+NEWTON_FLOOR_RTOL = 1e-6
+NEWTON_FLOOR_RUN = 3
 #: Most Newton iterations per row.
 NEWTON_MAX_ITER = 50
 #: Status codes of :func:`bc_solve` rows.
@@ -108,27 +120,33 @@ static int bc_newton_row(double t, const double *x, const double *u, double *z,
 static int bc_newton_iterate(double t, const double *x, const double *u, double *z,
                              const double *d, const double *p, double step, double *r,
                              double nr, double *J, double *dz, double *zt, double *rt) {
+  int tiny_run = 0;
   for (int it = 0; it < MAXIT_; ++it) {
     jac_rz_row(t, x, u, z, d, p, step, J);
     for (int k = 0; k < NZ_; ++k) dz[k] = -r[k];
     if (bc_gauss(NZ_, J, dz)) return 2;
-    int small = 1;
+    int small = 1, tiny = 1;
     for (int k = 0; k < NZ_; ++k) {
       if (!isfinite(dz[k])) return 2;
       if (fabs(dz[k]) > RTOL_ * fabs(z[k]) + ATOL_) small = 0;
+      if (fabs(dz[k]) > FLOOR_RTOL_ * fabs(z[k]) + ATOL_) tiny = 0;
     }
     double lam = 1.0, nrt = 0.0;
+    int accepted = 0;
     for (int ls = 0; ls <= 10; ++ls) {
       for (int k = 0; k < NZ_; ++k) zt[k] = z[k] + lam * dz[k];
       residuals_row(t, x, u, zt, d, p, step, rt);
       nrt = bc_norm2(NZ_, rt);
-      if (isfinite(nrt) && (nrt <= nr || small)) break;
+      if (isfinite(nrt) && (nrt <= nr || small)) { accepted = 1; break; }
       lam *= 0.5;
     }
+    if (!accepted && tiny) return 0;   /* no step lowers |r|: its rounding floor, z kept */
     if (!isfinite(nrt)) return 3;
     for (int k = 0; k < NZ_; ++k) { z[k] = zt[k]; r[k] = rt[k]; }
     nr = nrt;
     if ((small && lam == 1.0) || nr == 0.0) return 0;
+    tiny_run = tiny ? tiny_run + 1 : 0;
+    if (tiny_run >= FLOOR_RUN_) return 0;   /* tiny steps that never become small: its floor */
   }
   return 1;
 }
@@ -160,6 +178,7 @@ def newton_source(dims: dict) -> list[str]:
                     "free(r);")
         body = (_NEWTON_TEMPLATE.replace("WORKSPACE_", work[0]).replace("RELEASE_", work[1])
                 .replace("NZ_", str(nz)).replace("MAXIT_", str(NEWTON_MAX_ITER))
+                .replace("FLOOR_RTOL_", repr(NEWTON_FLOOR_RTOL)).replace("FLOOR_RUN_", str(NEWTON_FLOOR_RUN))
                 .replace("RTOL_", repr(NEWTON_RTOL)).replace("ATOL_", repr(NEWTON_ATOL)))
         lines = body.splitlines() + lines
         lines += [

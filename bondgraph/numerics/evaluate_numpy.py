@@ -14,7 +14,7 @@ import numpy as np
 import sympy as sp
 
 from .codegen_c import PARTS, jacobian_entries, prepare_expression
-from .codegen_c_templates import NEWTON_ATOL, NEWTON_MAX_ITER, NEWTON_RTOL
+from .codegen_c_templates import NEWTON_ATOL, NEWTON_FLOOR_RTOL, NEWTON_FLOOR_RUN, NEWTON_MAX_ITER, NEWTON_RTOL
 
 __all__ = ["NumpyKernels", "select_rows"]
 
@@ -136,7 +136,10 @@ def _newton_numpy(kern, t, x, u, z, d, p):
     The same iteration as the C ``bc_newton_row``: :math:`J \\Delta z = -r`
     with :math:`J = \\partial r/\\partial z`; full step unless it increases
     :math:`|r|^2`, then halved at most 10 times; converged when
-    :math:`|\\Delta z_k| \\le` ``NEWTON_RTOL`` :math:`|z_k| +` ``NEWTON_ATOL``.
+    :math:`|\\Delta z_k| \\le` ``NEWTON_RTOL`` :math:`|z_k| +` ``NEWTON_ATOL``, or at the
+    residual's rounding floor: :math:`|\\Delta z_k| \\le` ``NEWTON_FLOOR_RTOL``
+    :math:`|z_k| +` ``NEWTON_ATOL`` and no trial step lowers :math:`|r|^2` (z kept), or
+    after ``NEWTON_FLOOR_RUN`` such steps in a row.
     """
     n, nz = z.shape
     status = np.zeros(n, dtype=np.intc)
@@ -156,6 +159,7 @@ def _newton_numpy(kern, t, x, u, z, d, p):
     status[~np.isfinite(nr)] = 3
     keep = np.isfinite(nr) & (nr != 0.0)
     active, r, nr = active[keep], r[keep], nr[keep]
+    run = np.zeros(active.size, dtype=int)     # tiny steps in a row, per row
     for _ in range(NEWTON_MAX_ITER):
         if active.size == 0:
             break
@@ -166,6 +170,7 @@ def _newton_numpy(kern, t, x, u, z, d, p):
         dz, singular = _solve_stacked(J, -r)
         za = z[active]
         small = np.all(np.abs(dz) <= NEWTON_RTOL * np.abs(za) + NEWTON_ATOL, axis=1)
+        tiny = np.all(np.abs(dz) <= NEWTON_FLOOR_RTOL * np.abs(za) + NEWTON_ATOL, axis=1)
         # backtracking on |r|^2, rows independently
         lam = np.ones(active.size)
         pending = ~singular
@@ -182,13 +187,15 @@ def _newton_numpy(kern, t, x, u, z, d, p):
             pending[sel[ok]] = False
             lam[sel[~ok]] *= 0.5
         status[active[singular]] = 2
-        bad = ~singular & ~np.isfinite(nrt)
+        floor = ~singular & pending & tiny          # no trial lowered |r|: its rounding floor, z kept
+        bad = ~singular & ~floor & ~np.isfinite(nrt)
         status[active[bad]] = 3
-        go = ~singular & ~bad
+        go = ~singular & ~bad & ~floor
         z[active[go]] = zt[go]
-        done = go & ((small & (lam == 1.0)) | (nrt == 0.0))
+        run = np.where(tiny, run + 1, 0)
+        done = go & ((small & (lam == 1.0)) | (nrt == 0.0) | (run >= NEWTON_FLOOR_RUN))
         cont = go & ~done
-        active, r, nr = active[cont], rt[cont], nrt[cont]
+        active, r, nr, run = active[cont], rt[cont], nrt[cont], run[cont]
     status[active] = 1
     return status
 

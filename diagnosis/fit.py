@@ -55,7 +55,7 @@ NEAR_FLOOR = 2.0
 COLLAPSED = 0.5
 #: a fit predicting some output this much worse than the reference model (held-out NRMSE), and
 #: clearly beyond that output's noise floor (:data:`HARM_EXCESS`), trades that output's error for the
-#: others': it is not chosen (:func:`harms`)
+#: others': no backfit alternative (:func:`harms`)
 HARM = 0.10
 #: the held-out excess over the floor, as a share of the floor's square, a harmed output must show
 HARM_EXCESS = 0.25
@@ -779,7 +779,6 @@ def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=N
         return value if np.isfinite(value) else np.inf
 
     usable = _no_idle_terms(usable_fits(fits, names), train)
-    usable = [f for f in usable if not harms(f, nominal_holdout, floor)]
     if not usable:
         return None
 
@@ -894,11 +893,16 @@ def _score(fit, floor: dict, names, e0: float) -> float:
 def harms(fit, reference_holdout: dict, floor: dict) -> list:
     """The outputs `fit` predicts worse than the reference model on the held-out part: its NRMSE
     above the reference's by more than :data:`HARM`, and its excess over the noise floor above
-    :data:`HARM_EXCESS` of the floor's square.  A physical effect the model lacks, fitted, predicts
-    every output at least as well; one that buys a lower total error by predicting an output worse
-    absorbs what another effect left (an NRMSE is relative to its output's spread, so a drifting
-    position's error counts for little beside its velocity's: seed 7474's detuned carriage, where a
-    velocity sensor's lag replaced the force's, its position error 24 % up)."""
+    :data:`HARM_EXCESS` of the floor's square.  Beside the effects already in place
+    (backfitting, :func:`diagnosis.backfit.alternatives`), a physical effect the model lacks
+    predicts every output at least as well; one that buys a lower total error by predicting an
+    output worse absorbs what another effect left (an NRMSE is relative to its output's spread, so
+    a drifting position's error counts for little beside its velocity's: seed 7474's detuned
+    carriage, where a velocity sensor's lag replaced the force's delay, its position error 24 % up).
+    Not a rule of the first choice: with a second effect still missing, the right first one may
+    predict an output worse (compound seed 8181: a tank's constant inflow beside a concealed orifice
+    friction, a carriage's friction beside a velocity sensor's offset, answered a sensor gain and
+    none under it)."""
     out = []
     for o, ref in reference_holdout.items():
         got, nu = fit.holdout_nrmse.get(o), floor.get(o, 0.0)

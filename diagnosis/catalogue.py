@@ -44,7 +44,7 @@ import numpy as np
 from bondgraph import Param
 
 from .catalogue_common import ParamSpec, junction_domain, priced
-from .catalogue_scales import Scales, experiment_times, junction_scales
+from .catalogue_scales import Scales, command_hold, experiment_times, junction_scales
 from .errors import DiagnosisError, UnknownNameError
 from .kinds import KINDS, REGISTRY, Site, kind_named
 from .kinds.modulated_friction import modulating_signals
@@ -282,5 +282,6 @@ def site_of(graph, place: Place, *, regime_variables=None, experiment=None, x0=N
     start = dict(x0) if isinstance(x0, dict) else None
     if x0 is not None and start is None:       # a state vector in the model's order
         start = dict(zip(graph.equations().state_names, map(float, np.ravel(x0))))
-    return Site(graph, place, place.kind, taken, Scales(span=span, dt=dt, from_data=experiment is not None),
+    hold = command_hold(experiment) if experiment is not None and place.kind == "output" else None
+    return Site(graph, place, place.kind, taken, Scales(span=span, dt=dt, from_data=experiment is not None, hold=hold),
                 regime_variables=regime_variables, recorded=recorded, x0=start)

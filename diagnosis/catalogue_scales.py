@@ -13,7 +13,7 @@ import numpy as np
 
 from .errors import BondcosimError
 
-__all__ = ["Scales", "simulate_expressions", "rms", "pressure_variables"]
+__all__ = ["command_hold", "Scales", "simulate_expressions", "rms", "pressure_variables"]
 
 
 @dataclass(frozen=True)
@@ -35,6 +35,9 @@ class Scales:
         Median sample interval.
     from_data : bool
         False when no experiment was given (every scale 1).
+    hold : float or None, s
+        Median time the recorded inputs hold a level (:func:`command_hold`; None: no held levels
+        to tell, such as smooth commands, or no experiment).
     """
 
     flow: float = 1.0
@@ -43,6 +46,7 @@ class Scales:
     span: float = 1.0
     dt: float = 0.01
     from_data: bool = False
+    hold: float | None = None
 
 
 def rms(values) -> float:
@@ -78,6 +82,19 @@ def simulate_expressions(graph, experiment, expressions: dict, x0=None) -> dict:
     except BondcosimError:
         return {}
     return {label: np.asarray(result[key], dtype=float) for key, label in labels.items()}
+
+
+def command_hold(experiment) -> float | None:
+    """Median time the experiment's recorded inputs hold a level between two changes, s; None
+    where no input changes level at least three times (a smooth or constant command)."""
+    t = np.asarray(experiment.t, dtype=float)
+    holds = []
+    for u in experiment.inputs.values():
+        u = np.asarray(u, dtype=float)
+        steps = np.flatnonzero(np.abs(np.diff(u)) > 1e-12 * max(float(np.max(np.abs(u))), 1e-300))
+        if steps.size >= 3 and steps.size < 0.5 * u.size:       # held levels, not a smooth signal
+            holds.extend(np.diff(t[steps + 1]))
+    return float(np.median(holds)) if holds else None
 
 
 def experiment_times(experiment) -> tuple[float, float]:

@@ -7,7 +7,11 @@ The lag's state belongs to an equation element without ports
 (the median of the first three samples): a sensor's state is its own reading, whatever the plant's
 state.  On a plant with one input and one output that is linear, an actuator lag
 (``valve_lag``) passes for it exactly (the two first-order factors commute); a second output
-the input drives without the lag, or a nonlinearity between them, tells them apart.
+the input drives without the lag, or a nonlinearity between them, tells them apart.  Its time
+constant is at most the commands' median hold (:func:`~diagnosis.catalogue_scales.command_hold`):
+a sensor slower than the steps it logs would show none of them, while an actuator may be that
+slow (a carriage whose force lagged 1.7 s behind commands held 0.2 s, with a wrong first answer
+in place, was answered a 0.54 s lag of its velocity sensor).
 """
 from __future__ import annotations
 
@@ -33,10 +37,13 @@ class SensorLag(Kind):
         tau = fresh_name(site.taken, f"tau_sensor_{y}")
         state = fresh_name(site.taken, f"y_lag_{y}")
         first = 0.0 if site.recorded is None else float(np.median(np.asarray(site.recorded)[:FIRST_SAMPLES]))
+        # a sensor follows the commands' steps: a lag beyond the levels' typical hold would show
+        # none of them (an actuator may be that slow, a logged sensor is not)
+        upper = min(span / 2, site.scales.hold) if site.scales.hold else span / 2
+        guess = min(max(5 * dt, span / 100), upper / 2)
         return [Proposal(initial={state: first},
-                         starts=tuple({tau: v} for v in trial_times(site)),
-                         params=(ParamSpec(tau, max(5 * dt, span / 100), dt / 20, span / 2, "s",
-                                           f"time constant of the {y} sensor"),))]
+                         starts=tuple({tau: v} for v in trial_times(site) if v < upper),
+                         params=(ParamSpec(tau, guess, dt / 20, upper, "s", f"time constant of the {y} sensor"),))]
 
     def build(self, graph, cand, values):
         y, tau = cand.place.name, sp.Symbol(cand.params[0].name)

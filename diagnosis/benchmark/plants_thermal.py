@@ -10,7 +10,10 @@ Doors: the 0-junctions ``block1``, ``block2`` (a heat flow added there: a heat l
 ``loss2`` (convection to the room) and ``link`` (between the blocks), each an R alone, so an effort
 added there (a temperature difference: a series resistance, a room warmer than the model's) changes
 the flow through it (``algebraic``); the losses' heat flows leave the blocks in every recording
-(``one_way``: heaters only heat), the link's reverses with the hotter block.
+(``one_way``: heaters only heat), the link's reverses with the hotter block.  A loss junction is
+an R alone between its block and the room's fixed temperature, so an effort law there is a flow
+law of the block's temperature at the block: the two are one place (``equivalent``; a constant
+temperature offset on the path to the room is a constant heat flow out of the block).
 """
 from __future__ import annotations
 
@@ -51,9 +54,10 @@ def heater_pair() -> TruthPlant:
         nominal_x0={"q_C1": C1 * Ta, "q_C2": C2 * Ta},
         rhs=rhs, signals=signals,
         measure=lambda x, u: {"T1": float(x[0]), "T2": float(x[1])},
-        junctions=(JunctionSpec("block1", "0", th, ambient=Ta), JunctionSpec("block2", "0", th, ambient=Ta),
-                   JunctionSpec("loss1", "1", th, algebraic=True, one_way=True),
-                   JunctionSpec("loss2", "1", th, algebraic=True, one_way=True),
+        junctions=(JunctionSpec("block1", "0", th, ambient=Ta, equivalent=("loss1",)),
+                   JunctionSpec("block2", "0", th, ambient=Ta, equivalent=("loss2",)),
+                   JunctionSpec("loss1", "1", th, algebraic=True, one_way=True, equivalent=("block1",)),
+                   JunctionSpec("loss2", "1", th, algebraic=True, one_way=True, equivalent=("block2",)),
                    JunctionSpec("link", "1", th, algebraic=True)),
         rate=1.0, duration=1200.0, substeps=2,
         description="two heaters on two blocks that share heat (TCLab), absolute temperatures")

@@ -138,10 +138,11 @@ def further_places(graph, scores, top: int, experiment) -> tuple[list, list, lis
     located ones, :func:`located_places`; the actuators that drive them; the sensors behind them
     when something was located; the series springs of located 0-junctions), which of them are
     springs (storage kinds only) and which sensors added unranked (their
-    :attr:`~diagnosis.kinds.base.Kind.unranked_sensor` kinds only).  The added places are looked up among `scores` by kind and name:
-    graph location names a junction with the bond it reports it by, which the added places lack,
-    and the springs were lost so in every further round (seed 6767, compound case 005: the
-    exoskeleton's hardening k_s was never fitted in round 2, and the gear spring k_g answered)."""
+    :attr:`~diagnosis.kinds.base.Kind.unranked_sensor` kinds only).  The added places are looked
+    up among `scores` by kind and name: graph location names a junction with the bond it reports
+    it by, which the added places lack, and the springs were lost so in every further round (seed
+    6767, compound case 005: the exoskeleton's hardening k_s was never fitted in round 2, and the
+    gear spring k_g answered)."""
     places = located_places(without_companions(graph, scores), top)
     by_name = {(s.place.kind, s.place.name): s for s in scores}
 

@@ -196,7 +196,8 @@ def test_the_drawn_kinds_can_be_chosen_and_the_earlier_vocabulary_replayed():
     assert {"asymmetric_viscous_friction", "quadratic_drag"} <= {s.kind for s in draw_cases(80, 11, PLANTS)}
     pair = ("viscous_friction", "asymmetric_viscous_friction")
     assert {s.kind for s in draw_cases(24, 11, FAST, pair)} == {"none", *pair}
-    assert draw_cases(80, 3434, PLANTS_BEFORE_34, KINDS_BEFORE_32)[4].label == "004-hydraulic-viscous_friction@junction:q_pipe"
+    assert (draw_cases(80, 3434, PLANTS_BEFORE_34, KINDS_BEFORE_32)[4].label
+            == "004-hydraulic-viscous_friction@junction:q_pipe")
     # session 34's sensor lag, radiation and heater pair joined: until then seed 3434's case 001
     # was a delay, now a lag; the plants and kinds of before draw it as it was
     assert {"sensor_lag", "radiation"} <= {s.kind for s in draw_cases(80, 11, PLANTS)}

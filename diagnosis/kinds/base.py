@@ -136,8 +136,8 @@ class Kind:
     #: an output kind fitted also at the outputs graph location did not rank
     #: (:func:`diagnosis.place_choice.sensor_places`): a sensor's static error (an offset, a gain, a
     #: range) shows on its own output only, where a larger residual elsewhere hides it; a sensor's
-    #: dynamics (a lag) is located like any place, and fitted unranked it took up what a wrong first
-    #: answer left (seed 8181's compound carriage: a velocity sensor's lag beside an input saturation)
+    #: dynamics (a lag) is located like any place (graph location's output correction lags too) and
+    #: trades against every dynamic effect on that output, so it is fitted where it is ranked
     unranked_sensor: ClassVar[bool] = True
 
     def admits(self, door: str, domain: str) -> bool:

@@ -32,8 +32,9 @@ T_AMBIENT = 296.15   # K
 
 def heater_pair(*, C1=2.0, C2=2.0, R1=1 / 0.012, R2=1 / 0.012, R_link=500.0, alpha1=0.01, alpha2=0.0075,
                 Ta=T_AMBIENT) -> BondGraph:
-    """Heater commands ``Q1``, ``Q2`` (percent, inputs; the ambient ``Ta``, K, a third) into two blocks losing heat to the ambient and
-    sharing it (2 states ``q_C1``, ``q_C2``, J); outputs the block temperatures ``T1``, ``T2`` (K)."""
+    """Heater commands ``Q1``, ``Q2`` (percent, inputs; the ambient ``Ta``, K, a third) into two
+    blocks losing heat to the ambient and sharing it (2 states ``q_C1``, ``q_C2``, J); outputs the
+    block temperatures ``T1``, ``T2`` (K)."""
     th = "thermal"
     g = BondGraph("heater_pair", description="two heaters on two blocks that share heat (TCLab)")
     for i, alpha in ((1, alpha1), (2, alpha2)):

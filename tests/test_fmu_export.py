@@ -227,3 +227,26 @@ def test_a_stiff_model_steps_at_its_stability_limit_not_below():
     """The exoskeleton's fastest modes are well damped: RK4 at 1 / rho(A) (1e-5 s), not 0.05 / rho."""
     assert default_solver_step(library.build("exoskeleton").equations()) == 1e-5
     assert default_solver_step(library.build("dc-motor").equations()) == 2e-5     # accuracy rule, not stiff
+
+
+@pytest.mark.parametrize("version", VERSIONS)
+def test_a_model_with_a_sensor_lag_exports_its_signal_state(tmp_path, version):
+    """The diagnosis's improved model may read an output through a sensor's own state (an
+    equation element without ports, ``sense_output``): the FMU validates and, co-simulated and
+    model-exchanged, gives the Python model's lagged position."""
+    import sympy as sp
+
+    from bondgraph import Param
+    g = library.build("mass-spring-damper")
+    y_s, tau = sp.Symbol("y_s"), sp.Symbol("tau_x")
+    lag = g.sense_output("x", {"y_s": lambda y: (y - y_s) / tau}, y_s, initial={"y_s": 0.0},
+                         units={"y_s": "m"}).declare(Param("tau_x", 0.2, "s", "time constant of the x sensor"))
+    path = export(lag, tmp_path / f"lagged_v{version}.fmu", fmi_version=version)
+    assert validate_fmu(str(path)) == []
+    T, dt = 2.0, 1e-3
+    ref = simulate(lag, (0.0, T), output_interval=dt, inputs={"F": 1.0})
+    assert np.ptp(ref["x"]) > 0.05
+    for kind in ("CoSimulation", "ModelExchange"):
+        res = simulate_fmu(str(path), stop_time=T, output_interval=dt, fmi_type=kind, start_values={"F": 1.0},
+                           relative_tolerance=1e-10)
+        assert np.allclose(res["x"], ref["x"], rtol=0, atol=1e-6), kind

@@ -23,8 +23,8 @@ trial step lowers :math:`|r|^2` (z kept), or after ``NEWTON_FLOOR_RUN`` such ste
 row (Newton near a simple root meets the first test in the step after so small a one).  A
 loop whose residual subtracts absolute levels, such as the temperatures of two blocks at
 296 K across a friction law of slope 3400, evaluates it to about 1e-10 at the root, and the
-steps then stay near 2e-14, above the absolute tolerance, however long Newton iterates.  The linear solve is Gaussian
-elimination with partial pivoting.
+steps then stay near 2e-14, above the absolute tolerance, however long Newton iterates.  The
+linear solve is Gaussian elimination with partial pivoting.
 """
 from __future__ import annotations
 

@@ -18,7 +18,7 @@ from bondgraph.params import DOMAINS
 from .errors import DiagnosisError
 
 __all__ = ["RELEASED", "released", "ParamSpec", "priced", "fresh_name", "junction_elements", "junction_domain",
-           "junction_units", "domain_units", "P_ATMOSPHERE", "ambient_effort"]
+           "junction_units", "domain_units", "P_ATMOSPHERE", "pneumatic_ambient", "ambient_effort"]
 
 
 #: The value of a limit with no evidence behind it (a saturation side no training sample
@@ -140,27 +140,34 @@ def junction_units(graph, junction: str) -> tuple[str, str]:
 P_ATMOSPHERE = 101325.0
 
 
+def pneumatic_ambient(effort) -> float:
+    """Where a pneumatic junction of pressure `effort` (along the run) vents to: the atmosphere
+    (:data:`P_ATMOSPHERE`) where the mean pressure exceeds 50 kPa (absolute pressures), else 0
+    (gauge pressures, or no data)."""
+    e = None if effort is None else np.asarray(effort, dtype=float).ravel()
+    return P_ATMOSPHERE if e is not None and e.size and float(np.mean(e)) > 5e4 else 0.0
+
+
 def ambient_effort(graph, junction: str, effort) -> float:
     """The effort a leak from `junction` flows towards, given the junction's effort along the run.
 
-    * pneumatic: the atmosphere (:data:`P_ATMOSPHERE`) where the mean pressure exceeds 50 kPa
-      (absolute pressures), else 0 (gauge pressures);
+    * pneumatic: :func:`pneumatic_ambient`;
     * thermal: the ambient the model itself names, the temperature of a thermal effort source (of
       several, the one nearest the junction's first temperature), else that first temperature (the
       plant at rest at its ambient when the record starts).  Heat leaks to the room, not to 0 K: a
       heater block's leak towards 0 K had been a constant heat loss of 0.057 W with it;
     * any other domain: 0 (an electrical ground, a hydraulic tank at gauge pressure).
     """
-    e = None if effort is None else np.asarray(effort, dtype=float).ravel()
     dom = junction_domain(graph, junction)
     if dom == "pneumatic":
-        return P_ATMOSPHERE if e is not None and e.size and float(np.mean(e)) > 5e4 else 0.0
+        return pneumatic_ambient(effort)
+    e = None if effort is None else np.asarray(effort, dtype=float).ravel()
     if dom != "thermal":
         return 0.0
     first = float(e[0]) if e is not None and e.size else None
     defaults = {d.name: d.default for d in graph.inputs()}
-    sources = [float(defaults.get(getattr(el, "input", name), getattr(el, "value", 0.0) or 0.0))
-               for name, el in graph.elements.items() if el.kind == "Se" and getattr(el, "domain", "") == "thermal"]
+    sources = [float(defaults[el.input]) for el in graph.elements.values()
+               if el.kind == "Se" and el.domain == "thermal"]
     if sources:
         return sources[0] if first is None else min(sources, key=lambda v: abs(v - first))
     return 0.0 if first is None else first

@@ -294,6 +294,8 @@ class _Context:
         from .residuals import noise_sigma
 
         self.sim, self.run, self.t, self.outputs, self.x0 = sim, run, run.t, outputs, x0
+        #: the median sample interval, s (the grid of the input and output lags)
+        self.dt = float(np.median(np.diff(self.t))) if self.t.size > 1 else 1.0
         self.measured = {o: np.asarray(experiment.outputs[o], dtype=float) for o in outputs}
         self.residual = {o: self.measured[o] - run.outputs[o] for o in outputs}
         self.weight = {}
@@ -359,8 +361,7 @@ def _score_output(ctx, place) -> PlaceScore:
     cuts = np.quantile(y_hat, _RANGE_QUANTILES)
     hinges = [np.minimum(y_hat - c, 0.0) if q < 0.5 else np.maximum(y_hat - c, 0.0)
               for q, c in zip(_RANGE_QUANTILES, cuts)]
-    t = ctx.t
-    dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
+    t, dt = ctx.t, ctx.dt
     # (basis, degrees of freedom beyond its columns: the lag chosen from the grid)
     bases = [(linear, 0.0), (np.column_stack([linear] + hinges), 0.0)]
     bases += [(np.column_stack([linear, _lagged(y_hat, t, k * dt) - y_hat]), 1.0) for k in _LAGS]
@@ -442,8 +443,7 @@ def _input_sequences(ctx, place):
     """The correction terms of an input place as columns: the static ones (offset, gain, hinges
     at quantiles of u) then the dynamic ones (lags, then delays); (sequences (n, m), n_static)."""
     u = ctx.run.inputs[:, ctx.sim.model.input_index[place.name]].copy()
-    t = ctx.t
-    dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
+    t, dt = ctx.t, ctx.dt
     static = [np.ones_like(u), u]
     for c in np.unique(np.quantile(u, _HINGES)):
         hinge = np.maximum(u - c, 0.0)

@@ -97,7 +97,7 @@ class CompoundEffect(NoEffect):
 
     @property
     def reads_outputs(self) -> bool:
-        return any(getattr(e, "reads_outputs", False) for e in self.effects)
+        return any(e.reads_outputs for e in self.effects)
 
     def sensor_rates(self, y, z):
         return np.concatenate([e.sensor_rates(y, self._own(z, i)) for i, e in enumerate(self.effects)])

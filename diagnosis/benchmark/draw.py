@@ -32,13 +32,12 @@ __all__ = ["CaseSpec", "Realised", "draw_cases", "realise", "excitation", "EXCIT
 
 EXCITATIONS = ("levels", "prbs", "levels+sine")
 KINDS = tuple(KIND_PLACES)
+#: the kinds drawn until session 33, before ``sensor_lag`` and ``radiation`` joined (``--kinds before-34``)
+KINDS_BEFORE_34 = tuple(k for k in KINDS if k not in ("sensor_lag", "radiation"))
 #: the kinds drawn until session 31, before ``asymmetric_viscous_friction`` and ``quadratic_drag``
 #: joined: a seed's cases as they were drawn then (``--kinds before-32``; the tests that replay a
 #: past case pin it)
-KINDS_BEFORE_32 = tuple(k for k in KINDS if k not in ("asymmetric_viscous_friction", "quadratic_drag", "sensor_lag",
-                                                     "radiation"))
-#: the kinds drawn until session 33, before ``sensor_lag`` and ``radiation`` joined (``--kinds before-34``)
-KINDS_BEFORE_34 = tuple(k for k in KINDS if k not in ("sensor_lag", "radiation"))
+KINDS_BEFORE_32 = tuple(k for k in KINDS_BEFORE_34 if k not in ("asymmetric_viscous_friction", "quadratic_drag"))
 #: the named kind lists of ``--kinds``
 KIND_LISTS = {"before-32": KINDS_BEFORE_32, "before-34": KINDS_BEFORE_34}
 #: Cases drawn on a plant whose nominal integrates its inputs, every this many.

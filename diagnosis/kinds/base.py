@@ -77,6 +77,12 @@ class Site:
         """The place's name (junction, input or output)."""
         return self.place.name
 
+    @property
+    def effort(self):
+        """The effort of the junction's first bond along the nominal run (a 0-junction's common
+        effort: its pressure, its temperature), or None without data."""
+        return self.values.get(f"e_{self.graph.bonds_of(self.name)[0][0].name}")
+
     @cached_property
     def shared(self) -> dict:
         """Values the kinds at this site compute once and share (e.g. an input's resting value)."""

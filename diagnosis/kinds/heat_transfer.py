@@ -36,7 +36,7 @@ class HeatTransfer(Kind):
         if dom in ("pneumatic", "thermal") and not chambers:
             e_unit, _ = junction_units(graph, j)
             E, F = scales.effort, scales.flow
-            e = site.values.get(f"e_{graph.bonds_of(j)[0][0].name}")
+            e = site.effort
             e0 = float(e[0]) if e is not None else 0.0
             c_th = F * scales.span / max(E, 1e-12) * 0.05
             out.append(Proposal(
@@ -83,10 +83,10 @@ def _chamber_heat(site, chamber) -> Proposal:
     """The candidate of a pneumatic chamber's thermal form, with the wall conductance hA (W/K)
     scaled so that the heat capacity of the gas at the junction's mean pressure relaxes in a
     tenth of the record."""
-    graph, j, scales = site.graph, site.name, site.scales
+    graph, scales = site.graph, site.scales
     params = {n: p.value for n, p in graph.parameters().items()}
     t_wall = float(params.get(chamber.temperature, 293.0))
-    e = site.values.get(f"e_{graph.bonds_of(j)[0][0].name}")
+    e = site.effort
     pressure = float(np.mean(e)) if e is not None else chamber.initial_pressure
     heat_capacity = pressure * _chamber_volume(graph, chamber, params) / (0.4 * t_wall)   # m c_v, J/K
     h_a, gamma = fresh_name(site.taken, f"hA_{chamber.name}"), fresh_name(site.taken, f"gamma_{chamber.name}")

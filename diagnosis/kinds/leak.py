@@ -11,11 +11,10 @@ import numpy as np
 from bondgraph import R
 from bondgraph.params import DOMAINS
 
-from ..catalogue_common import P_ATMOSPHERE, ParamSpec, ambient_effort, fresh_name, junction_domain, junction_units
+from ..catalogue_common import (ParamSpec, ambient_effort, fresh_name, junction_domain, junction_units,
+                                pneumatic_ambient)
 from .base import Kind, Proposal, hang, register
 from .feature_signals import FeatureGroup
-
-P_AMBIENT = P_ATMOSPHERE  # Pa (the name the kind has always exported)
 
 
 @register
@@ -30,13 +29,13 @@ class Leak(Kind):
         if s.ambient is not None:
             p_amb = s.ambient
         else:
-            p_amb = P_AMBIENT if s.domain == "pneumatic" and float(np.mean(e)) > 5e4 else 0.0
+            p_amb = pneumatic_ambient(e) if s.domain == "pneumatic" else 0.0
         return [FeatureGroup(None, "", ["e - P_amb"], (e - p_amb)[:, None])]
 
     def propose(self, site):
         j, graph = site.name, site.graph
         e_unit, f_unit = junction_units(graph, j)
-        e = site.values.get(f"e_{graph.bonds_of(j)[0][0].name}")
+        e = site.effort
         e_mean = float(e.mean()) if e is not None else 0.0
         p_amb = ambient_effort(graph, j, e)
         dev, F = max(abs(e_mean - p_amb), site.scales.effort), site.scales.flow

@@ -41,7 +41,7 @@ class Radiation(Kind):
 
     def propose(self, site):
         graph, j = site.graph, site.name
-        T = site.values.get(f"e_{graph.bonds_of(j)[0][0].name}")
+        T = site.effort
         ambient = ambient_effort(graph, j, T)
         # without data the ambient the model names tells whether its temperatures are absolute
         if not (float(np.mean(T)) if T is not None else ambient) > ABSOLUTE:

@@ -84,13 +84,13 @@ def pneumatic_tank():
 
 def test_kinds_are_the_issue_vocabulary_in_order():
     # issue 6, section 2c, verbatim order; then issue 11's constant load and friction laws (a
-    # damping that depends on the direction last), a sensor's lag, radiation, an input's offset, and
+    # damping that depends on the direction last), a sensor's lag, radiation, an input's offset, a relaxing branch, and
     # a storage element's nominal value refitted alone
     assert KINDS == ("coulomb_friction", "viscous_friction", "stribeck_friction", "pressure_dependent_friction",
                      "leak", "heat_transfer", "valve_lag", "transport_delay", "hysteresis", "backlash",
                      "nonlinear_stiffness", "saturation", "sensor_offset", "sensor_gain", "constant_load",
                      "coulomb_viscous_friction", "modulated_friction", "asymmetric_viscous_friction",
-                     "quadratic_drag", "sensor_lag", "radiation", "input_offset", "nominal_value")
+                     "quadratic_drag", "sensor_lag", "radiation", "input_offset", "relaxation", "nominal_value")
 
 
 def test_places_offer_the_kinds_that_make_sense():
@@ -99,8 +99,8 @@ def test_places_offer_the_kinds_that_make_sense():
     assert at(msd, Place("junction", "v_mass")) == ["coulomb_friction", "viscous_friction", "stribeck_friction",
                                                     "hysteresis", "backlash", "nonlinear_stiffness",
                                                     "constant_load", "coulomb_viscous_friction",
-                                                    "asymmetric_viscous_friction", "quadratic_drag", "nominal_value",
-                                                    "nominal_value", "nominal_value"]      # m, k and b
+                                                    "asymmetric_viscous_friction", "quadratic_drag", "relaxation",
+                                                    "nominal_value", "nominal_value", "nominal_value"]   # m, k and b
     assert at(msd, Place("input", "F")) == ["valve_lag", "transport_delay", "saturation", "input_offset"]
     assert at(msd, Place("output", "x")) == ["saturation", "sensor_offset", "sensor_gain", "sensor_lag"]
     cyl = hydraulic_cylinder()
@@ -352,6 +352,7 @@ def test_every_kind_is_reachable_and_explained_with_units():
     assert "0.25 N" in seen["coulomb_friction"].explain({"Fc_v_mass": 0.25})
     assert " s" in seen["valve_lag"].explain()
     assert "F -0.3 N off its record" in seen["input_offset"].explain({"offset_F": -0.3})
+    assert "Maxwell element" in seen["relaxation"].explain()
 
 
 def test_guesses_and_bounds_scale_with_the_data():

@@ -81,3 +81,26 @@ def test_a_current_sensors_bias_is_an_input_offset_the_drift_open_loop_tells(tmp
     assert data["fit"]["judge"] == "segments"
     loop = data["fit"]["open_loop"]
     assert loop["improved"]["V"] < 0.1 * loop["nominal"]["V"]
+
+
+def test_a_relaxing_branch_charges_with_its_time_constant():
+    """The candidate's graph against the closed form of an RC pair charged by a current step."""
+    cell = load(str(MODEL))
+    (cand,) = [c for c in candidates(cell, Place("junction", "cell")) if c.kind == "relaxation"]
+    r, tau = (spec.name for spec in cand.params)
+    relaxed = cand.build(cell, {r: 0.02, tau: 40.0})
+    run = simulate(relaxed, (0.0, 200.0), inputs={"I": 2.0}, output_interval=20.0, rtol=1e-11, atol=1e-11)
+    t = np.asarray(run.t)
+    ohmic = E0 + (Q0 + 2.0 * t) * SLOPE / QCAP + R0 * 2.0
+    assert run["V"] == pytest.approx(ohmic + 0.02 * 2.0 * (1.0 - np.exp(-t / 40.0)), abs=1e-9)
+
+
+def test_a_cells_polarisation_is_a_relaxation_with_its_rc_pair(tmp_path):
+    report = _diagnose(_recording(tmp_path / "rc.csv", "rc"))
+    data = report.to_json()
+    (effect,) = data["missing_physics"]
+    assert (effect["kind"], effect["attached_to"]) == ("relaxation", "junction cell")
+    assert effect["parameters"]["R_relax_cell"] == pytest.approx(R1, rel=0.03)
+    assert effect["parameters"]["tau_relax_cell"] == pytest.approx(R1 * C1, rel=0.03)
+    assert "RC pair" in effect["explanation"] and "Ohm" in effect["explanation"]
+    assert data["fit"]["improved"]["V"] < 0.1 * data["fit"]["nominal"]["V"]

@@ -14,7 +14,8 @@ import pytest
 import plants.library as library
 from bondgraph.numerics import simulate
 from diagnosis.benchmark import plants_textbook as tb
-from diagnosis.benchmark.draw import KINDS_BEFORE_32, KINDS_BEFORE_34, RATIOS, CaseSpec, draw_cases, realise
+from diagnosis.benchmark.draw import (KINDS_BEFORE_32, KINDS_BEFORE_34, KINDS_BEFORE_35, RATIOS, CaseSpec, draw_cases,
+                                      realise)
 from diagnosis.benchmark.effects import KIND_PLACES, make_effect, places_for
 from diagnosis.benchmark.plants import FAST, PLANTS, PLANTS_BEFORE_34
 from diagnosis.benchmark.report import markdown, summarise
@@ -203,7 +204,10 @@ def test_the_drawn_kinds_can_be_chosen_and_the_earlier_vocabulary_replayed():
     assert {"sensor_lag", "radiation"} <= {s.kind for s in draw_cases(80, 11, PLANTS)}
     assert "heater-pair" in {s.plant for s in draw_cases(80, 11, PLANTS)}
     assert draw_cases(80, 3434, PLANTS_BEFORE_34, KINDS_BEFORE_34)[1].label == "001-msd-transport_delay@input:F"
-    assert draw_cases(80, 3434, PLANTS)[1].label == "001-msd-valve_lag@input:F"
+    assert draw_cases(80, 3434, PLANTS, KINDS_BEFORE_35)[1].label == "001-msd-valve_lag@input:F"
+    # session 35's input offset and relaxation joined: the case is now a relaxing branch
+    assert {"input_offset", "relaxation"} <= {s.kind for s in draw_cases(80, 11, PLANTS)}
+    assert draw_cases(80, 3434, PLANTS)[1].label == "001-msd-relaxation@junction:v_mass"
     with pytest.raises(BenchmarkError, match="unknown effect kind.*'?friction_typo"):
         draw_cases(4, 11, FAST, ("friction_typo",))
 
@@ -254,7 +258,8 @@ def test_kind_right_or_indistinguishable_is_a_measure_apart_from_kind_right():
     spec = CaseSpec(0, 5, "msd", "constant_load", "junction", "v_mass", target_change=0.1, ratio=10.0)
     rec = SimpleNamespace(spec=spec, plant=SimpleNamespace(model="mass-spring-damper", drifts=False), change=0.1,
                           nominal_drifts=False, affected="x",
-                          effect=SimpleNamespace(place="v_mass", accepted_places=lambda: ["junction v_mass"]))
+                          effect=SimpleNamespace(place="v_mass", accepted_places=lambda: ["junction v_mass"],
+                                                 equivalent_answers=set))
     answer = {"missing_physics": [{"kind": "coulomb_friction", "attached_to": "junction v_mass", "parameters": {},
                                    "indistinguishable": [{"kind": "constant_load", "place": "junction v_mass"}]}],
               "fit": {"nominal": {"x": 0.2}, "improved": {"x": 0.03}}}
@@ -644,3 +649,24 @@ def test_a_compound_truth_carries_both_effects_and_is_scored_on_each():
                         also_visible=0.5)])["headline"]
     assert (h["second_visible"], h["both_visible"], h["second_found"], h["both_found"]) == (1, 1, 1.0, 1.0)
     assert "compound_cases" not in summarise([dict(base, label="c", also_kind="")])["headline"]
+
+
+def test_an_input_offset_and_the_constant_load_its_source_makes_are_one_answer():
+    """A force's offset on the mass-spring-damper is a constant force at its mass (no recording
+    tells them apart): either answer scores the other right; a valve voltage's is no load."""
+    from types import SimpleNamespace
+    from diagnosis.benchmark.run import score_case
+    msd, pam = PLANTS["msd"](), PLANTS["pam"]()
+    load = make_effect("constant_load", msd, "junction", "v_mass", 0.1, {}, {"sign": 1.0})
+    offset = make_effect("input_offset", msd, "input", "F", 0.1, {}, {"sign": 1.0})
+    assert load.equivalent_answers() == {("input_offset", "input F")}
+    assert offset.equivalent_answers() == {("constant_load", "junction v_mass")}
+    assert make_effect("input_offset", pam, "input", "u1", 0.1, {}, {"sign": 1.0}).equivalent_answers() == set()
+    spec = CaseSpec(0, 5, "msd", "input_offset", "input", "F", target_change=0.1, ratio=10.0)
+    rec = SimpleNamespace(spec=spec, plant=msd, change=0.1, nominal_drifts=False, affected="x", effect=offset)
+    answer = {"missing_physics": [{"kind": "constant_load", "attached_to": "junction v_mass", "parameters": {}}],
+              "fit": {"nominal": {"x": 0.2}, "improved": {"x": 0.01}}}
+    s = score_case(rec, answer)
+    assert s.kind_ok and s.place_ok
+    answer["missing_physics"][0]["attached_to"] = "junction elsewhere"
+    assert not score_case(rec, answer).kind_ok

@@ -334,3 +334,40 @@ def test_a_heat_loss_in_the_truth_is_the_catalogues_on_the_library_graph(kind, s
     change = np.std(truth["T1"] - base["T1"])
     assert change > 0.5                                            # kelvin: the loss shows
     assert np.max(np.abs(res["T1"] - truth["T1"])) < 0.02 * change
+
+
+@pytest.mark.parametrize("name, door, where, kind, size", [
+    ("dc-motor", "junction", "i_arm", "relaxation", 0.5),                 # Ohm, half the armature's
+    ("msd", "junction", "v_mass", "relaxation", 0.3),                     # N s/m
+    ("hydraulic", "junction", "q_pipe", "relaxation", 3e9),               # Pa s/m^3
+    ("tanks", "input", "Q_in", "input_offset", 2e-5), ("heater-pair", "input", "Q2", "input_offset", 8.0)])
+def test_a_relaxation_or_input_offset_in_the_truth_is_the_catalogues_on_the_library_graph(name, door, where, kind,
+                                                                                           size):
+    """The truth's relaxing branch (its own state, tau de/dt = R f - e, taken from the junction) or
+    offset input, and the library graph with the catalogue's kind at the same values: the outputs
+    agree on a random excitation."""
+    from diagnosis.benchmark.effects import make_effect
+    from diagnosis.catalogue import candidates
+    from diagnosis.place import Place
+
+    plant = PLANTS[name]()
+    t = np.arange(int(round(min(plant.duration, 30.0) * plant.rate)) + 1) / plant.rate
+    u = random_inputs(plant, t, seed=6)
+    base = simulate_truth(plant, t, u)
+    graph = library.build(plant.model)
+    place = Place("junction" if door == "junction" else "input", where)
+    (cand,) = [c for c in candidates(graph, place) if c.kind == kind]
+    if kind == "relaxation":
+        tau = 20.0 / plant.rate
+        values = {cand.params[0].name: size, cand.params[1].name: tau}
+        effect = make_effect(kind, plant, "junction", where, size, {}, {"tau": tau})
+    else:
+        values = {cand.params[0].name: size}
+        effect = make_effect(kind, plant, "input", where, size, {}, {"sign": 1.0})
+    truth = simulate_truth(plant, t, u, effect)
+    res = simulate(cand.build(graph, values), (0.0, t[-1]), inputs={n: (t, v) for n, v in u.items()},
+                   output_interval=1.0 / plant.rate, x0=plant.nominal_x0, params=values, method="LSODA")
+    for o in plant.outputs:
+        change = np.std(truth[o.name] - base[o.name])
+        assert np.max(np.abs(res[o.name] - truth[o.name])) < 0.02 * change + 1e-6 * np.std(base[o.name])
+    assert max(np.std(truth[o.name] - base[o.name]) / np.std(base[o.name]) for o in plant.outputs) > 0.02

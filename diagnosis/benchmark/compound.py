@@ -56,6 +56,9 @@ class CompoundEffect(NoEffect):
     def accepted_places(self):
         return self.effects[0].accepted_places()
 
+    def equivalent_answers(self):
+        return self.effects[0].equivalent_answers()
+
     def describe(self) -> dict:
         return {**self.effects[0].describe(), "also": [e.describe() for e in self.effects[1:]]}
 

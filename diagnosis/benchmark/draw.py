@@ -32,14 +32,16 @@ __all__ = ["CaseSpec", "Realised", "draw_cases", "realise", "excitation", "EXCIT
 
 EXCITATIONS = ("levels", "prbs", "levels+sine")
 KINDS = tuple(KIND_PLACES)
+#: the kinds drawn until session 34, before ``input_offset`` and ``relaxation`` joined (``--kinds before-35``)
+KINDS_BEFORE_35 = tuple(k for k in KINDS if k not in ("input_offset", "relaxation"))
 #: the kinds drawn until session 33, before ``sensor_lag`` and ``radiation`` joined (``--kinds before-34``)
-KINDS_BEFORE_34 = tuple(k for k in KINDS if k not in ("sensor_lag", "radiation"))
+KINDS_BEFORE_34 = tuple(k for k in KINDS_BEFORE_35 if k not in ("sensor_lag", "radiation"))
 #: the kinds drawn until session 31, before ``asymmetric_viscous_friction`` and ``quadratic_drag``
 #: joined: a seed's cases as they were drawn then (``--kinds before-32``; the tests that replay a
 #: past case pin it)
 KINDS_BEFORE_32 = tuple(k for k in KINDS_BEFORE_34 if k not in ("asymmetric_viscous_friction", "quadratic_drag"))
 #: the named kind lists of ``--kinds``
-KIND_LISTS = {"before-32": KINDS_BEFORE_32, "before-34": KINDS_BEFORE_34}
+KIND_LISTS = {"before-32": KINDS_BEFORE_32, "before-34": KINDS_BEFORE_34, "before-35": KINDS_BEFORE_35}
 #: Cases drawn on a plant whose nominal integrates its inputs, every this many.
 DRIFT_EVERY = 7
 #: Null cases, every this many (offset 3).
@@ -251,6 +253,8 @@ def _shape(spec, plant, rec, rng, scales):
         sh["u0"] = next(i.ambient for i in plant.inputs if i.name == spec.name)
     if k == "coulomb_viscous_friction":
         sh["beta"], sh["v_rms"] = float(rng.uniform(0.5, 2.0)), v_rms
+    if k == "relaxation":      # a time constant the held levels show: a tenth of a hold to two holds
+        sh["tau"] = float(np.exp(rng.uniform(np.log(0.1), np.log(2.0)))) * hold
     if k == "nonlinear_stiffness":
         sh["alpha"] = float(rng.uniform(0.0, 1.0))
         sh["q2"] = 3.0 * scales["rms"][spec.name] ** 2       # <q^4>/<q^2> of a Gaussian motion
@@ -283,13 +287,16 @@ def _initial_magnitude(spec, plant, rec, scales, sh, probe_gain):
         return 5 * dt
     if k == "sensor_offset":
         return r * float(np.std(rec.nominal[spec.name]))
+    if k == "input_offset":
+        i = next(i for i in plant.inputs if i.name == spec.name)
+        return r * (i.high - i.low)
     if k == "sensor_gain":
         y = rec.nominal[spec.name]
         return r * float(np.std(y)) / max(_rms(y), 1e-300)
     j = plant.storage(spec.name).junction if spec.door == "storage" else spec.name
     g = probe_gain()
     base = r / g      # a constant effort/flow of this size changes the output by about r
-    if k == "viscous_friction":
+    if k in ("viscous_friction", "relaxation"):
         return base / (scales["rms"][j] or 1.0)
     if k == "quadratic_drag":
         return base / (scales["rms"][j] or 1.0) ** 2

@@ -23,7 +23,10 @@ junction (1: common flow)     viscous_friction, asymmetric_viscous_friction
                               (mechanical); pressure_dependent_friction
                               (where the plant has pressures there);
                               modulated_friction (where an input sets the
-                              level, through a first-order lag: an MR damper)
+                              level, through a first-order lag: an MR damper);
+                              relaxation (an effort that follows the flow
+                              through a lag: a cell's RC pair, a Maxwell
+                              element; electrical, mechanical, hydraulic)
 law (an effort in series     hysteresis (Dahl: a muscle's braid friction)
 with a constitutive law)
 junction (0: common effort)   leak (laminar, towards the ambient effort),
@@ -36,7 +39,9 @@ storage (a C element)         nonlinear_stiffness (cubic hardening, the
                               spring),
                               saturation (an end stop / overflow at the
                               content's range)
-input                         saturation, transport_delay, valve_lag
+input                         saturation, transport_delay, valve_lag,
+                              input_offset (the plant gets the command plus
+                              an offset: a biased current or force sensor)
 output                        sensor_offset, sensor_gain, saturation (range),
                               sensor_lag (a first-order lag of the sensor)
 ============================  ================================================
@@ -68,6 +73,7 @@ KIND_PLACES = {
     "coulomb_viscous_friction": ("junction1_mech",), "modulated_friction": ("junction1m",),
     "asymmetric_viscous_friction": ("junction1_reversing",), "quadratic_drag": ("junction1_drag",),
     "sensor_lag": ("output",), "radiation": ("junction0_thermal",),
+    "input_offset": ("input",), "relaxation": ("junction1_relax",),
 }
 
 
@@ -92,6 +98,9 @@ def places_for(plant: TruthPlant, kind: str) -> list[tuple[str, str]]:
         elif door == "junction1_drag":          # a body in a fluid, a fan, turbulent pipe flow
             out += [("junction", j.name) for j in plant.junctions if j.kind == "1" and not j.algebraic
                     and j.domain in MECHANICAL + ("hydraulic",)]
+        elif door == "junction1_relax":         # an RC pair, a Maxwell element, a hose's compliance
+            out += [("junction", j.name) for j in plant.junctions if j.kind == "1" and not j.algebraic
+                    and j.domain in MECHANICAL + ("electrical", "hydraulic")]
         elif door == "junction1_mech":
             out += [("junction", j.name) for j in plant.junctions if j.kind == "1" and j.domain in MECHANICAL]
         elif door == "junction1_dry":
@@ -132,7 +141,8 @@ class TruthEffect(NoEffect):
     def __init__(self, kind, plant, door, name, m, scales, shape):
         self.kind, self.plant, self.door, self.name = kind, plant, door, name
         self.m, self.scales, self.shape = float(m), scales, dict(shape)
-        self.n_states = 1 if kind in ("hysteresis", "valve_lag", "modulated_friction", "sensor_lag") else 0
+        stateful = ("hysteresis", "valve_lag", "modulated_friction", "sensor_lag", "relaxation")
+        self.n_states = 1 if kind in stateful else 0
         self.reads_outputs = kind == "sensor_lag"
         if door == "storage":
             self.storage = plant.storage(name)
@@ -160,6 +170,20 @@ class TruthEffect(NoEffect):
             out |= {f"storage {self.name}", f"element {self.name}"}
         return out
 
+    def equivalent_answers(self) -> set[tuple[str, str]]:
+        """``(kind, place)`` answers that no recording tells apart from this effect: a constant
+        load at the junction an input's source acts on linearly (``InputSpec.load_at``, or one
+        equivalent to it) is an offset of that input, and the other way round."""
+        if self.kind == "constant_load" and self.door == "junction":
+            here = {self.junction, *self.plant.junction(self.junction).equivalent}
+            return {("input_offset", f"input {i.name}") for i in self.plant.inputs if i.load_at in here}
+        if self.kind == "input_offset":
+            at = next(i.load_at for i in self.plant.inputs if i.name == self.name)
+            if at:
+                return {("constant_load", self.plant.junction(j).place)
+                        for j in (at, *self.plant.junction(at).equivalent)}
+        return set()
+
     def describe(self) -> dict:
         return {"kind": self.kind, "place": f"{self.door} {self.name}", "magnitude": self.m,
                 "shape": self.shape}
@@ -178,11 +202,13 @@ class TruthEffect(NoEffect):
         return np.array([(y[self.name] - z[0]) / self.m])   # tau dy_s/dt = y - y_s, tau = m
 
     def delayed_inputs(self, t, u):
-        if self.door != "input" or self.kind not in ("saturation", "transport_delay"):
+        if self.door != "input" or self.kind not in ("saturation", "transport_delay", "input_offset"):
             return u
         u = dict(u)
         v = np.asarray(u[self.name], float)
-        if self.kind == "saturation":
+        if self.kind == "input_offset":         # the plant gets what the record says plus m
+            u[self.name] = v + self.shape["sign"] * self.m
+        elif self.kind == "saturation":
             lo, hi = self.shape["lo"], self.shape["hi"]
             # m in (0, 1]: the usable fraction of the command's span around its centre
             mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
@@ -242,6 +268,8 @@ class TruthEffect(NoEffect):
         if k == "radiation":                    # Stefan-Boltzmann to the room, m = eps sigma A
             return {j: -m * (x ** 4 - self.plant.junction(j).ambient ** 4)}, np.zeros(0)
         assert jk == "1"
+        if k == "relaxation":                 # tau de/dt = m f - e: m settled per unit flow
+            return {j: -z[0]}, np.array([(m * x - z[0]) / sh["tau"]])
         eps = sh["eps"]
         if k == "coulomb_friction":
             return {j: -m * math.tanh(x / eps)}, np.zeros(0)

@@ -55,6 +55,10 @@ class InputSpec:
     ``hold`` is the (shortest, longest) time a random level is held, s: long
     enough for the plant to respond, short enough to excite its dynamics.
     ``ambient`` is the value the input rests at (pam valves: 5 V closed).
+    ``load_at`` names the junction where the input's source acts, linearly in it (a force on
+    its mass, a pump's flow into its tank, a heater's power into its block): an offset of the
+    input is there a constant load, and the two are one answer (``""``: none, as a valve's
+    voltage through its nonlinear flow law).
     ``profile(t, rng)``, when given, draws the command instead of random held
     levels (an imposed motion that must be smooth, such as a rod's strokes).
     """
@@ -67,6 +71,7 @@ class InputSpec:
     hold: tuple[float, float]
     ambient: float = 0.0
     profile: Callable | None = None
+    load_at: str = ""
 
 
 @dataclass(frozen=True)

@@ -41,8 +41,8 @@ def drivetrain() -> TruthPlant:
     rot = "rotation"
     return TruthPlant(
         name="drivetrain", model="drivetrain",
-        inputs=(InputSpec("tau_m", "N m", -0.2, 0.2, 0.001, (0.05, 0.5)),
-                InputSpec("tau_L", "N m", -1.0, 1.0, 0.01, (0.5, 2.0))),
+        inputs=(InputSpec("tau_m", "N m", -0.2, 0.2, 0.001, (0.05, 0.5), load_at="w_motor"),
+                InputSpec("tau_L", "N m", -1.0, 1.0, 0.01, (0.5, 2.0), load_at="w_load")),
         outputs=(OutputSpec("w_m", "rad/s"), OutputSpec("w_L", "rad/s"), OutputSpec("tau_s", "N m")),
         states=("w_m", "q_shaft", "w_L"), x0=np.zeros(3), rhs=rhs, signals=signals,
         measure=lambda x, u: {"w_m": float(x[0]), "w_L": float(x[2]), "tau_s": shaft(x, {})},
@@ -66,7 +66,7 @@ def carriage() -> TruthPlant:
 
     return TruthPlant(
         name="carriage", model="carriage",
-        inputs=(InputSpec("F", "N", -10.0, 10.0, 0.01, (0.1, 0.5)),),
+        inputs=(InputSpec("F", "N", -10.0, 10.0, 0.01, (0.1, 0.5), load_at="v_cart"),),
         outputs=(OutputSpec("x", "m"), OutputSpec("v", "m/s")),
         states=("x", "v"), x0=np.zeros(2), rhs=rhs,
         signals=lambda x, u: {"v_cart": float(x[1]), "position": float(x[0])},

@@ -85,7 +85,7 @@ def exoskeleton() -> TruthPlant:
         name="exoskeleton", model="exoskeleton",
         # as the cases drive it: motor torque levels +-0.2 N m (32 N m at the gear output), trunk
         # flexion phases +-0.4 rad/s held 1-2.5 s
-        inputs=(InputSpec("tau_m", "N m", -0.2, 0.2, 0.001, (0.05, 0.3)),
+        inputs=(InputSpec("tau_m", "N m", -0.2, 0.2, 0.001, (0.05, 0.3), load_at="w_m"),
                 InputSpec("w_h", "rad/s", -0.4, 0.4, math.radians(0.1), (1.0, 2.5))),
         outputs=(OutputSpec("tau_s", "N m"), OutputSpec("w_m", "rad/s"), OutputSpec("tau_b", "N m"),
                  OutputSpec("theta_h", "rad")),

@@ -46,7 +46,7 @@ def hydraulic() -> TruthPlant:
     return TruthPlant(
         name="hydraulic", model="hydraulic",
         # pump flows 1.2-10 L/min: pressures up to ~100 bar
-        inputs=(InputSpec("Q_p", "m^3/s", 2e-5, 1.67e-4, 1e-7, (0.2, 1.0)),),
+        inputs=(InputSpec("Q_p", "m^3/s", 2e-5, 1.67e-4, 1e-7, (0.2, 1.0), load_at="p1"),),
         outputs=(OutputSpec("p1", "Pa"), OutputSpec("p2", "Pa"), OutputSpec("q", "m^3/s")),
         states=("V1", "V2", "q"), x0=np.zeros(3), rhs=rhs, signals=signals,
         measure=lambda x, u: {"p1": float(x[0]) / C, "p2": float(x[1]) / C, "q": float(x[2])},

@@ -23,7 +23,7 @@ def mass_spring_damper() -> TruthPlant:
 
     return TruthPlant(
         name="msd", model="mass-spring-damper",
-        inputs=(InputSpec("F", "N", -2.0, 2.0, 0.001, (0.5, 3.0)),),
+        inputs=(InputSpec("F", "N", -2.0, 2.0, 0.001, (0.5, 3.0), load_at="v_mass"),),
         outputs=(OutputSpec("x", "m"), OutputSpec("v", "m/s")),
         states=("x", "v"), x0=np.zeros(2), rhs=rhs,
         signals=lambda x, u: {"v_mass": x[1], "k": x[0]},
@@ -51,7 +51,7 @@ def dc_motor() -> TruthPlant:
 
     return TruthPlant(
         name="dc-motor", model="dc-motor",
-        inputs=(InputSpec("V", "V", -12.0, 12.0, 0.01, (0.1, 0.6)),
+        inputs=(InputSpec("V", "V", -12.0, 12.0, 0.01, (0.1, 0.6), load_at="i_arm"),
                 InputSpec("tau_L", "N m", 0.0, 0.0, 0.001, (1.0, 1.0))),
         outputs=(OutputSpec("i", "A"), OutputSpec("w_m", "rad/s"), OutputSpec("w_L", "rad/s")),
         states=("i", "w_m"), x0=np.zeros(2), rhs=rhs,
@@ -74,7 +74,7 @@ def rlc() -> TruthPlant:
 
     return TruthPlant(
         name="rlc", model="rlc",
-        inputs=(InputSpec("V", "V", -5.0, 5.0, 0.01, (0.05, 0.3)),),
+        inputs=(InputSpec("V", "V", -5.0, 5.0, 0.01, (0.05, 0.3), load_at="i_loop"),),
         outputs=(OutputSpec("v_C", "V"), OutputSpec("i", "A")),
         states=("i", "q"), x0=np.zeros(2), rhs=rhs,
         signals=lambda x, u: {"i_loop": x[0], "Cs": x[1]},
@@ -127,7 +127,8 @@ def coupled_tanks() -> TruthPlant:
 
     return TruthPlant(
         name="tanks", model="coupled-tanks",
-        inputs=(InputSpec("Q_in", "m^3/s", 0.5e-4, 3.0e-4, 1e-6, (20.0, 60.0), ambient=float(q_rest)),),
+        inputs=(InputSpec("Q_in", "m^3/s", 0.5e-4, 3.0e-4, 1e-6, (20.0, 60.0), ambient=float(q_rest),
+                          load_at="P1"),),
         outputs=(OutputSpec("h1", "m"), OutputSpec("h2", "m"), OutputSpec("Q_out", "m^3/s")),
         states=("V1", "V2"), x0=x0, nominal_x0={"V1": float(x0[0]), "V2": float(x0[1])}, rhs=rhs,
         signals=signals,
@@ -151,7 +152,7 @@ def geared_inertias() -> TruthPlant:
 
     return TruthPlant(
         name="geared-inertias", model="geared-inertias",
-        inputs=(InputSpec("tau", "N m", -1.0, 1.0, 0.001, (0.5, 3.0)),),
+        inputs=(InputSpec("tau", "N m", -1.0, 1.0, 0.001, (0.5, 3.0), load_at="w1"),),
         outputs=(OutputSpec("w1", "rad/s"), OutputSpec("w2", "rad/s")),
         states=("w1",), x0=np.zeros(1), rhs=rhs,
         signals=lambda x, u: {"w1": x[0], "w2": n * x[0]},

@@ -47,8 +47,8 @@ def heater_pair() -> TruthPlant:
     th = "thermal"
     return TruthPlant(
         name="heater-pair", model="heater-pair",
-        inputs=(InputSpec("Q1", "%", 0.0, 100.0, 0.1, (60.0, 240.0)),
-                InputSpec("Q2", "%", 0.0, 100.0, 0.1, (60.0, 240.0))),
+        inputs=(InputSpec("Q1", "%", 0.0, 100.0, 0.1, (60.0, 240.0), load_at="block1"),
+                InputSpec("Q2", "%", 0.0, 100.0, 0.1, (60.0, 240.0), load_at="block2")),
         outputs=(OutputSpec("T1", "K"), OutputSpec("T2", "K")),
         states=("T1", "T2"), x0=np.array([Ta, Ta]),
         nominal_x0={"q_C1": C1 * Ta, "q_C2": C2 * Ta},

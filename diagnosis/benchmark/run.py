@@ -138,14 +138,17 @@ def score_case(rec: Realised, report, detuned: dict | None = None) -> Score:
         s.affected = ""
         return s
     s.kind_ok = s.answer_kind == spec.kind
-    s.kind_or_indistinguishable_ok = s.kind_ok or spec.kind in s.indistinguishable
     s.place_ok = s.answer_place in eff.accepted_places()
+    if (s.answer_kind, s.answer_place) in eff.equivalent_answers():     # one answer in two words
+        s.kind_ok = s.place_ok = True
+    s.kind_or_indistinguishable_ok = s.kind_ok or spec.kind in s.indistinguishable
     s.affected = rec.affected
     also = getattr(rec, "also", None)          # a compound case's second effect (a Realised)
     if also is not None:
         s.also_kind, s.also_place = also.spec.kind, also.effect.place
-        s.first_found = _names(found, spec.kind, rec.effect.effects[0].accepted_places())
-        s.also_found = _names(found, s.also_kind, also.effect.accepted_places())
+        first = rec.effect.effects[0]
+        s.first_found = _names(found, spec.kind, first.accepted_places(), first.equivalent_answers())
+        s.also_found = _names(found, s.also_kind, also.effect.accepted_places(), also.effect.equivalent_answers())
         s.first_visible, s.also_visible = rec.visible or (float("nan"), float("nan"))
     nom, imp = data["fit"]["nominal"].get(rec.affected), data["fit"]["improved"].get(rec.affected)
     if nom is not None and imp is not None:
@@ -154,12 +157,13 @@ def score_case(rec: Realised, report, detuned: dict | None = None) -> Score:
     return s
 
 
-def _names(found: list, kind: str, places: set) -> bool:
+def _names(found: list, kind: str, places: set, equivalents: set = frozenset()) -> bool:
     """Whether one of the answered effects `found` (report JSON) names `kind` at one of `places`,
     or lists `kind` at one of them as not told apart from its own (the alternative's place, which
     may differ from the answer's: a constant force on a cylinder's piston whose force is measured
-    is a force sensor's offset, seed 6767's compound case 012)."""
-    return any((e["kind"] == kind and e["attached_to"] in places)
+    is a force sensor's offset, seed 6767's compound case 012), or is one of its `equivalents`
+    (``(kind, place)`` pairs no recording tells apart from it: ``TruthEffect.equivalent_answers``)."""
+    return any((e["kind"] == kind and e["attached_to"] in places) or (e["kind"], e["attached_to"]) in equivalents
                or any(a["kind"] == kind and (a.get("place") or e["attached_to"]) in places
                       for a in e.get("indistinguishable", []))
                for e in found)

@@ -205,8 +205,8 @@ def test_the_drawn_kinds_can_be_chosen_and_the_earlier_vocabulary_replayed():
     assert "heater-pair" in {s.plant for s in draw_cases(80, 11, PLANTS)}
     assert draw_cases(80, 3434, PLANTS_BEFORE_34, KINDS_BEFORE_34)[1].label == "001-msd-transport_delay@input:F"
     assert draw_cases(80, 3434, PLANTS, KINDS_BEFORE_35)[1].label == "001-msd-valve_lag@input:F"
-    # session 35's input offset and relaxation joined: the case is now a relaxing branch
-    assert {"input_offset", "relaxation"} <= {s.kind for s in draw_cases(80, 11, PLANTS)}
+    # session 35's input offset and gain and relaxation joined: the case is now a relaxing branch
+    assert {"input_offset", "input_gain", "relaxation"} <= {s.kind for s in draw_cases(80, 11, PLANTS)}
     assert draw_cases(80, 3434, PLANTS)[1].label == "001-msd-relaxation@junction:v_mass"
     with pytest.raises(BenchmarkError, match="unknown effect kind.*'?friction_typo"):
         draw_cases(4, 11, FAST, ("friction_typo",))

@@ -340,7 +340,8 @@ def test_a_heat_loss_in_the_truth_is_the_catalogues_on_the_library_graph(kind, s
     ("dc-motor", "junction", "i_arm", "relaxation", 0.5),                 # Ohm, half the armature's
     ("msd", "junction", "v_mass", "relaxation", 0.3),                     # N s/m
     ("hydraulic", "junction", "q_pipe", "relaxation", 3e9),               # Pa s/m^3
-    ("tanks", "input", "Q_in", "input_offset", 2e-5), ("heater-pair", "input", "Q2", "input_offset", 8.0)])
+    ("tanks", "input", "Q_in", "input_offset", 2e-5), ("heater-pair", "input", "Q2", "input_offset", 8.0),
+    ("tanks", "input", "Q_in", "input_gain", 0.2), ("msd", "input", "F", "input_gain", -0.3)])
 def test_a_relaxation_or_input_offset_in_the_truth_is_the_catalogues_on_the_library_graph(name, door, where, kind,
                                                                                            size):
     """The truth's relaxing branch (its own state, tau de/dt = R f - e, taken from the junction) or
@@ -361,9 +362,15 @@ def test_a_relaxation_or_input_offset_in_the_truth_is_the_catalogues_on_the_libr
         tau = 20.0 / plant.rate
         values = {cand.params[0].name: size, cand.params[1].name: tau}
         effect = make_effect(kind, plant, "junction", where, size, {}, {"tau": tau})
-    else:
+    elif kind == "input_offset":
         values = {cand.params[0].name: size}
         effect = make_effect(kind, plant, "input", where, size, {}, {"sign": 1.0})
+    else:                        # a gain exp(size) about the input's ambient value
+        ambient = next(i.ambient for i in plant.inputs if i.name == where)
+        (zero, _, unit, words), = cand.constants
+        cand = replace(cand, constants=((zero, ambient, unit, words),))
+        values = {cand.params[0].name: float(np.exp(size))}
+        effect = make_effect(kind, plant, "input", where, abs(size), {}, {"sign": float(np.sign(size)), "u0": ambient})
     truth = simulate_truth(plant, t, u, effect)
     res = simulate(cand.build(graph, values), (0.0, t[-1]), inputs={n: (t, v) for n, v in u.items()},
                    output_interval=1.0 / plant.rate, x0=plant.nominal_x0, params=values, method="LSODA")

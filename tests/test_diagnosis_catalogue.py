@@ -84,13 +84,13 @@ def pneumatic_tank():
 
 def test_kinds_are_the_issue_vocabulary_in_order():
     # issue 6, section 2c, verbatim order; then issue 11's constant load and friction laws (a
-    # damping that depends on the direction last), a sensor's lag, radiation, an input's offset, a relaxing branch, and
+    # damping that depends on the direction last), a sensor's lag, radiation, an input's offset and gain, a relaxing branch, and
     # a storage element's nominal value refitted alone
     assert KINDS == ("coulomb_friction", "viscous_friction", "stribeck_friction", "pressure_dependent_friction",
                      "leak", "heat_transfer", "valve_lag", "transport_delay", "hysteresis", "backlash",
                      "nonlinear_stiffness", "saturation", "sensor_offset", "sensor_gain", "constant_load",
                      "coulomb_viscous_friction", "modulated_friction", "asymmetric_viscous_friction",
-                     "quadratic_drag", "sensor_lag", "radiation", "input_offset", "relaxation", "nominal_value")
+                     "quadratic_drag", "sensor_lag", "radiation", "input_offset", "input_gain", "relaxation", "nominal_value")
 
 
 def test_places_offer_the_kinds_that_make_sense():
@@ -101,7 +101,8 @@ def test_places_offer_the_kinds_that_make_sense():
                                                     "constant_load", "coulomb_viscous_friction",
                                                     "asymmetric_viscous_friction", "quadratic_drag", "relaxation",
                                                     "nominal_value", "nominal_value", "nominal_value"]   # m, k and b
-    assert at(msd, Place("input", "F")) == ["valve_lag", "transport_delay", "saturation", "input_offset"]
+    assert at(msd, Place("input", "F")) == ["valve_lag", "transport_delay", "saturation", "input_offset",
+                                            "input_gain"]
     assert at(msd, Place("output", "x")) == ["saturation", "sensor_offset", "sensor_gain", "sensor_lag"]
     cyl = hydraulic_cylinder()
     assert "pressure_dependent_friction" in at(cyl, Place("junction", "rod"))
@@ -353,6 +354,7 @@ def test_every_kind_is_reachable_and_explained_with_units():
     assert " s" in seen["valve_lag"].explain()
     assert "F -0.3 N off its record" in seen["input_offset"].explain({"offset_F": -0.3})
     assert "Maxwell element" in seen["relaxation"].explain()
+    assert "1.2 times what input F records" in seen["input_gain"].explain({"gain_F": 1.2})
 
 
 def test_guesses_and_bounds_scale_with_the_data():

@@ -3,8 +3,9 @@ user would (``tests/data/models/cell.py``: a Thevenin model without its RC pair,
 voltage ``E0 + q/Cb`` a linear fit of the OCV curve, the charging current a flow source), its truth
 the tests' own RK4 (``tests/msd_truth.py``), 1 Hz for an hour of held current levels, 1 mV noise and
 resolution.  A current sensor's bias had been answered as a hardening of the charge storage, with a
-held-out error 26 % higher than the nominal's: nothing in the vocabulary shifts an input.  Its
-polarisation (the RC pair the model leaves out) had been answered as a series resistance."""
+held-out error 26 % higher than the nominal's, and a 5 % scale error of it as nothing: the
+vocabulary neither shifted nor scaled an input.  Its polarisation (the RC pair the model leaves
+out) had been answered as a series resistance."""
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +22,7 @@ MODEL = Path(__file__).parent / "data" / "models" / "cell.py"
 QCAP, E0, R0, Q0 = 9000.0, 3.3, 0.05, 4500.0      # C (2.5 Ah), V, Ohm, C (half charged)
 SLOPE = 0.8                                        # V: the OCV's rise from empty to full
 BIAS = 0.05                                        # A: the current sensor reads this much high
+SCALE = 0.95                                       # the cell takes this share of the current recorded
 R1, C1 = 0.01, 3000.0                              # Ohm, F: the polarisation pair (30 s)
 
 
@@ -43,6 +45,7 @@ def _recording(path, effect, seed=1):
     t = np.arange(3601.0)
     recorded = _currents(t.size, rng)
     current = recorded - (BIAS if effect == "bias" else 0.0)      # what the cell really takes
+    current = current * (SCALE if effect == "gain" else 1.0)
 
     def rate(x, i):
         q, v1 = x                       # charge, C; the polarisation pair's voltage, V
@@ -104,3 +107,11 @@ def test_a_cells_polarisation_is_a_relaxation_with_its_rc_pair(tmp_path):
     assert effect["parameters"]["tau_relax_cell"] == pytest.approx(R1 * C1, rel=0.03)
     assert "RC pair" in effect["explanation"] and "Ohm" in effect["explanation"]
     assert data["fit"]["improved"]["V"] < 0.1 * data["fit"]["nominal"]["V"]
+
+
+def test_a_current_sensors_scale_error_is_an_input_gain(tmp_path):
+    data = _diagnose(_recording(tmp_path / "gain.csv", "gain")).to_json()
+    (effect,) = data["missing_physics"]
+    assert (effect["kind"], effect["attached_to"]) == ("input_gain", "input I")
+    assert effect["parameters"]["gain_I"] == pytest.approx(SCALE, rel=0.005)
+    assert data["fit"]["improved"]["V"] < 0.5 * data["fit"]["nominal"]["V"]

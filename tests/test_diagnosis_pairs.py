@@ -98,9 +98,15 @@ def test_a_wrong_first_answer_that_leaves_the_residual_far_above_the_noise_is_me
     second = second_effect(spec, PLANTS[spec.plant](), KINDS_BEFORE_32)
     r = run_case(spec, PLANTS, tmp_path, second=second)
     assert r["label"] == "000-carriage-valve_lag@input:F+constant_load@junction:v_cart"
-    assert sorted(r["answers"]) == ["constant_load @ junction v_cart", "valve_lag @ input F"]
+    # the constant force at the carriage, or the same force as an offset of the force input (one
+    # answer: diagnosis.benchmark's equivalent answers)
+    assert sorted(r["answers"]) in (["constant_load @ junction v_cart", "valve_lag @ input F"],
+                                    ["input_offset @ input F", "valve_lag @ input F"])
+    assert r["first_found"] and r["also_found"]
     truth = {e["kind"]: e["magnitude"] for e in [r["effect"], *r["effect"]["also"]]}
-    assert np.isclose(-r["parameters"]["F0_v_cart"], truth["constant_load"], rtol=0.02)   # the first's
+    # a load taken from the carriage, a force added to the input
+    load = -r["parameters"]["F0_v_cart"] if "F0_v_cart" in r["parameters"] else r["parameters"]["offset_F"]
+    assert np.isclose(load, truth["constant_load"], rtol=0.02)                              # the first's
     assert r["improvement"] > 0.9
 
 

@@ -32,8 +32,9 @@ __all__ = ["CaseSpec", "Realised", "draw_cases", "realise", "excitation", "EXCIT
 
 EXCITATIONS = ("levels", "prbs", "levels+sine")
 KINDS = tuple(KIND_PLACES)
-#: the kinds drawn until session 34, before ``input_offset`` and ``relaxation`` joined (``--kinds before-35``)
-KINDS_BEFORE_35 = tuple(k for k in KINDS if k not in ("input_offset", "relaxation"))
+#: the kinds drawn until session 34, before ``input_offset``, ``relaxation`` and ``input_gain`` joined
+#: (``--kinds before-35``)
+KINDS_BEFORE_35 = tuple(k for k in KINDS if k not in ("input_offset", "relaxation", "input_gain"))
 #: the kinds drawn until session 33, before ``sensor_lag`` and ``radiation`` joined (``--kinds before-34``)
 KINDS_BEFORE_34 = tuple(k for k in KINDS_BEFORE_35 if k not in ("sensor_lag", "radiation"))
 #: the kinds drawn until session 31, before ``asymmetric_viscous_friction`` and ``quadratic_drag``
@@ -247,7 +248,7 @@ def _shape(spec, plant, rec, rng, scales):
         p_ref = sum(101325.0 if scales["rms"][name] > 5e4 else 0.0 for name in names)
         p = sum(scales["rms"][name] for name in names) - p_ref
         sh["c0"], sh["p_ref"] = float(rng.uniform(0.1, 0.5)) * p, p_ref
-    if k in ("valve_lag", "transport_delay"):
+    if k in ("valve_lag", "transport_delay", "input_gain"):
         # the recording starts with the plant at rest at the inputs' ambient values: the actuator
         # delivered the ambient value before t = 0 (its first command is a step at t = 0)
         sh["u0"] = next(i.ambient for i in plant.inputs if i.name == spec.name)
@@ -290,6 +291,8 @@ def _initial_magnitude(spec, plant, rec, scales, sh, probe_gain):
     if k == "input_offset":
         i = next(i for i in plant.inputs if i.name == spec.name)
         return r * (i.high - i.low)
+    if k == "input_gain":
+        return r
     if k == "sensor_gain":
         y = rec.nominal[spec.name]
         return r * float(np.std(y)) / max(_rms(y), 1e-300)

@@ -41,7 +41,9 @@ storage (a C element)         nonlinear_stiffness (cubic hardening, the
                               content's range)
 input                         saturation, transport_delay, valve_lag,
                               input_offset (the plant gets the command plus
-                              an offset: a biased current or force sensor)
+                              an offset: a biased current or force sensor),
+                              input_gain (its departures from the input's
+                              ambient value scaled by exp(+-m))
 output                        sensor_offset, sensor_gain, saturation (range),
                               sensor_lag (a first-order lag of the sensor)
 ============================  ================================================
@@ -73,7 +75,7 @@ KIND_PLACES = {
     "coulomb_viscous_friction": ("junction1_mech",), "modulated_friction": ("junction1m",),
     "asymmetric_viscous_friction": ("junction1_reversing",), "quadratic_drag": ("junction1_drag",),
     "sensor_lag": ("output",), "radiation": ("junction0_thermal",),
-    "input_offset": ("input",), "relaxation": ("junction1_relax",),
+    "input_offset": ("input",), "relaxation": ("junction1_relax",), "input_gain": ("input",),
 }
 
 
@@ -202,12 +204,15 @@ class TruthEffect(NoEffect):
         return np.array([(y[self.name] - z[0]) / self.m])   # tau dy_s/dt = y - y_s, tau = m
 
     def delayed_inputs(self, t, u):
-        if self.door != "input" or self.kind not in ("saturation", "transport_delay", "input_offset"):
+        if self.door != "input" or self.kind not in ("saturation", "transport_delay", "input_offset", "input_gain"):
             return u
         u = dict(u)
         v = np.asarray(u[self.name], float)
         if self.kind == "input_offset":         # the plant gets what the record says plus m
             u[self.name] = v + self.shape["sign"] * self.m
+        elif self.kind == "input_gain":         # its departures from rest scaled, gain exp(+-m) > 0
+            u0 = self.shape["u0"]
+            u[self.name] = u0 + math.exp(self.shape["sign"] * self.m) * (v - u0)
         elif self.kind == "saturation":
             lo, hi = self.shape["lo"], self.shape["hi"]
             # m in (0, 1]: the usable fraction of the command's span around its centre

@@ -86,6 +86,14 @@ def test_a_current_sensors_bias_is_an_input_offset_the_drift_open_loop_tells(tmp
     assert loop["improved"]["V"] < 0.1 * loop["nominal"]["V"]
 
 
+def test_a_resistance_outside_mechanics_is_said_in_its_domains_words_and_unit():
+    cell = load(str(MODEL))
+    (cand,) = [c for c in candidates(cell, Place("junction", "cell")) if c.kind == "viscous_friction"]
+    assert cand.params[0].unit == "Ohm"
+    words = cand.explain({cand.params[0].name: 0.0075})
+    assert "series resistance" in words and "0.0075 Ohm" in words and "motion" not in words
+
+
 def test_a_relaxing_branch_charges_with_its_time_constant():
     """The candidate's graph against the closed form of an RC pair charged by a current step."""
     cell = load(str(MODEL))

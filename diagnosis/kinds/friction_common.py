@@ -21,10 +21,10 @@ at rest a sharp sign costs is a real decaying mode, which the linearly implicit 
 from __future__ import annotations
 
 from bondgraph import R
+from bondgraph.params import DOMAINS
 
 from ..catalogue_common import ParamSpec, fresh_name, junction_domain, junction_units
 from .base import Proposal, hang
-from .feature_signals import FeatureGroup
 
 __all__ = ["V_EPS_FRACTION", "V_EPS_RANGE", "SHARPNESS_GRID", "smoothing", "sharpened", "namer", "level", "viscous",
            "with_level_starts", "friction_r", "sign", "displacement_unit"]
@@ -72,10 +72,12 @@ def level(site, base: str, what: str) -> ParamSpec:
 
 
 def viscous(site) -> ParamSpec:
-    """The viscous friction coefficient at `site`."""
+    """The viscous friction coefficient at `site`, in its domain's unit of resistance (an Ohm, not
+    a V/(A))."""
     e_unit, f_unit = junction_units(site.graph, site.name)
     E, V = site.scales.effort, site.scales.flow
-    b_unit = f"{e_unit} s/m" if f_unit == "m/s" else (f"{e_unit}/({f_unit})" if f_unit else "")
+    b_unit = DOMAINS[junction_domain(site.graph, site.name)].resistance or (
+        f"{e_unit} s/m" if f_unit == "m/s" else (f"{e_unit}/({f_unit})" if f_unit else ""))
     return ParamSpec(namer(site)("b_visc"), 0.1 * E / V, 0.0, 100 * E / V, b_unit,
                      f"viscous friction coefficient at {site.name}")
 

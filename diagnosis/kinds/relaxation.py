@@ -23,7 +23,6 @@ from __future__ import annotations
 import numpy as np
 
 from bondgraph import C, R, Zero
-from bondgraph.params import DOMAINS
 
 from ..catalogue_common import ParamSpec, junction_domain
 from .base import Kind, Proposal, hang, register
@@ -65,8 +64,7 @@ class Relaxation(Kind):
         resistance = viscous(site)
         tau = namer(site)("tau_relax")
         taus = _taus(scales.dt, scales.span)
-        unit = DOMAINS[junction_domain(site.graph, site.name)].resistance or resistance.unit
-        resistance = ParamSpec(namer(site)("R_relax"), resistance.guess, 0.0, resistance.upper, unit,
+        resistance = ParamSpec(namer(site)("R_relax"), resistance.guess, 0.0, resistance.upper, resistance.unit,
                                f"resistance of the relaxing branch at {site.name} (its effort per flow, settled)")
         return [Proposal((resistance, ParamSpec(tau, taus[len(taus) // 2], scales.dt / 2, scales.span / 2, "s",
                                                 f"time constant of the relaxing branch at {site.name}")),

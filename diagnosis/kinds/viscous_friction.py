@@ -23,6 +23,13 @@ class ViscousFriction(Kind):
         return friction_r(graph, cand, f"{cand.params[0].name}*f")
 
     def explain(self, cand, values, show):
-        j = cand.place.name
-        return (f"the motion at {j} is braked in proportion to its speed ({show(cand.params[0].name)}): "
-                f"viscous friction at {j}")
+        j, b = cand.place.name, cand.params[0].name
+        other = _NOT_MOTION.get(cand.params[0].unit)
+        if other:           # the same law outside mechanics: a resistance the model leaves out
+            return f"{other} at {j}: an effort in proportion to its flow ({show(b)}): viscous friction at {j}"
+        return f"the motion at {j} is braked in proportion to its speed ({show(b)}): viscous friction at {j}"
+
+
+#: the linear resistance in the words of the domains that are not mechanics, by its unit
+_NOT_MOTION = {"Ohm": "a series resistance the model leaves out", "Pa s/m^3": "a flow resistance the model leaves out",
+               "Pa s/kg": "a flow resistance the model leaves out", "K/W": "a thermal resistance the model leaves out"}

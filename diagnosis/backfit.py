@@ -40,7 +40,7 @@ from .fit_in_turn import HOPELESS, train_cost
 from .kinds.base import extends
 from .pairs import claims, clashes, effect_count
 
-__all__ = ["ALTERNATIVES", "SWEEPS", "alternatives", "backfit", "build_effects", "refittable"]
+__all__ = ["ALTERNATIVES", "SWEEPS", "alternatives", "backfit", "build_effects", "refittable", "placed_in"]
 
 #: the round's candidates fitted again: its chosen kind and the next best, by held-out error
 #: (seed 3434, compound case 028: the right kind was the sixth of its round)
@@ -188,6 +188,10 @@ def backfit(graph, rounds, *, fit, floor: dict, judge_model, choose, with_values
         except BondcosimError as exc:     # a later effect placed on the earlier one's element, a run diverging
             say("backfitting", f"round {rounds.index(r) + 1} left as chosen: without it, {exc}")
             return False
+        except KeyError as exc:           # a later effect placed at a junction this round's effect made
+            say("backfitting", f"round {rounds.index(r) + 1} left as chosen: a later effect sits at {exc}, "
+                               f"a junction this round's effect made")
+            return False
         # a candidate named for the nominal model may clash with the others' names (not with the
         # nominal's: a storage kind refits its element's own linear value), nor rewrite an element
         # another effect rewrites: a backlash in front of a spring that a later round gave a cubic
@@ -195,7 +199,8 @@ def backfit(graph, rounds, *, fit, floor: dict, judge_model, choose, with_values
         # held-out error was five times the nominal's (the detuned benchmark's msd, seed 6363 on the
         # fast plants, case 022)
         claimed = claims(o.candidate for o in others)
-        tried = [(f.candidate, f.values) for f in alternatives(r.chosen, r.fits, r.reference, floor, n, *claimed)]
+        tried = [(f.candidate, f.values) for f in alternatives(r.chosen, r.fits, r.reference, floor, n, *claimed)
+                 if placed_in(base, f.candidate)]
         keys = {_key(c) for c, _ in tried}
         unexplained = needs_explaining(reference, floor)
         tried += [(c, None) for c in (sensors(unexplained) if sensors is not None else [])
@@ -254,3 +259,12 @@ def refittable(graph, effects) -> tuple[list, dict]:
 def _key(fit_or_candidate) -> tuple:
     cand = getattr(fit_or_candidate, "candidate", fit_or_candidate)
     return cand.kind, tuple(str(p) for p in getattr(cand, "places", (cand.place,)))
+
+
+def placed_in(graph, cand) -> bool:
+    """Whether every junction `cand` (or each member of a group) attaches to is in `graph`: a
+    candidate of a later round may sit at a junction an earlier round's effect made (the 0-junction
+    of a relaxing branch), which a model without that effect lacks (seed 8181's compound case 011,
+    whose Dahl friction round 1 had answered as a relaxation, ended with a KeyError)."""
+    members = getattr(cand, "members", None) or (cand,)
+    return all(m.place.kind != "junction" or m.place.name in graph.elements for m in members)

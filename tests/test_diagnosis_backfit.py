@@ -260,3 +260,20 @@ def test_a_refit_hopeless_beside_the_rounds_own_choice_is_given_up():
             sensors=lambda outputs: [gain])
     assert asked == [("coulomb_friction", None), ("sensor_gain", HOPELESS * 0.02),
                      ("backlash", None), ("sensor_gain", HOPELESS * 0.03)]
+
+
+def test_a_later_effect_at_a_junction_an_earlier_one_made_is_not_refitted_without_it():
+    """A relaxing branch brings a 0-junction of its own; a later round's constant load there cannot
+    be built on a model without the branch (seed 8181's compound case 011 had ended in a KeyError),
+    so backfitting leaves it out (diagnosis.backfit.placed_in)."""
+    from pathlib import Path
+    from diagnosis.backfit import placed_in
+    from diagnosis.catalogue import candidates
+    from diagnosis.place import Place
+    from plants import load
+    cell = load(str(Path(__file__).parent / "data" / "models" / "cell.py"))
+    (relax,) = [c for c in candidates(cell, Place("junction", "cell")) if c.kind == "relaxation"]
+    relaxed = relax.build(cell, {spec.name: spec.guess for spec in relax.params})
+    (load_there,) = [c for c in candidates(relaxed, Place("junction", "relax_cell")) if c.kind == "constant_load"]
+    assert placed_in(relaxed, load_there) and not placed_in(cell, load_there)
+    assert placed_in(cell, relax)

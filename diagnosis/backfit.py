@@ -267,4 +267,5 @@ def placed_in(graph, cand) -> bool:
     of a relaxing branch), which a model without that effect lacks (seed 8181's compound case 011,
     whose Dahl friction round 1 had answered as a relaxation, ended with a KeyError)."""
     members = getattr(cand, "members", None) or (cand,)
-    return all(m.place.kind != "junction" or m.place.name in graph.elements for m in members)
+    places = [getattr(m, "place", None) for m in members]
+    return all(getattr(p, "kind", None) != "junction" or p.name in graph.elements for p in places)

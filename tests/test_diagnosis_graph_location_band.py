@@ -7,7 +7,6 @@ levels, sampled at 1 kHz for 30 s; the nominal model is the linear oscillator.  
 the spring's junction explained 0.1 % there; confined to a window it must be located.
 """
 import numpy as np
-import pytest
 
 from bondgraph.io_json import graph_from_dict
 import plants.library as library

@@ -125,10 +125,11 @@ def dahl_state(v, t, alpha):
     return z
 
 
-def lagged(m, t, tau):
-    """First-order lag (time constant `tau`, s) of a held signal, started at its first value."""
-    y = np.empty_like(m)
-    y[0] = m[0]
+def lagged(m, t, tau, start=None):
+    """First-order lag (time constant `tau`, s) of a held signal, started at `start` (default: its
+    first value)."""
+    y = np.empty_like(m, dtype=float)
+    y[0] = m[0] if start is None else start
     decay = np.exp(-np.diff(t) / tau)
     for k in range(m.size - 1):
         y[k + 1] = m[k] + (y[k] - m[k]) * decay[k]

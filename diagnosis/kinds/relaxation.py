@@ -23,10 +23,11 @@ from __future__ import annotations
 import numpy as np
 
 from bondgraph import C, R, Zero
+from bondgraph.params import DOMAINS
 
 from ..catalogue_common import ParamSpec, junction_domain
 from .base import Kind, Proposal, hang, register
-from .feature_signals import FeatureGroup
+from .feature_signals import FeatureGroup, lagged
 from .friction_common import namer, viscous
 
 #: the time constants the features try and the fit starts from, in sample intervals (each four
@@ -38,15 +39,6 @@ def _taus(dt: float, span: float) -> list[float]:
     return [n * dt for n in FEATURE_LAG_STEPS if n * dt < span / 4] or [dt]
 
 
-def _charged(v, t, tau) -> np.ndarray:
-    """The branch's effort per unit resistance, :math:`\\tau \\dot y = v - y` from 0, `v` held."""
-    y = np.zeros_like(v, dtype=float)
-    decay = np.exp(-np.diff(t) / tau)
-    for k in range(v.size - 1):
-        y[k + 1] = v[k] + (y[k] - v[k]) * decay[k]
-    return y
-
-
 @register
 class Relaxation(Kind):
     name = "relaxation"
@@ -56,15 +48,16 @@ class Relaxation(Kind):
     feature_params, feature_grid_params = 1, (1,)
 
     def features(self, s):
-        return [FeatureGroup(None, f"tau {tau:.3g} s", ["lag(v)"], _charged(s.v, s.t, tau)[:, None], (float(tau),))
-                for tau in _taus(s.dt, s.span)]
+        """The flow through a lag of each trial time constant, from 0 as the branch starts."""
+        return [FeatureGroup(None, f"tau {tau:.3g} s", ["lag(v)"], lagged(s.v, s.t, tau, start=0.0)[:, None],
+                             (float(tau),)) for tau in _taus(s.dt, s.span)]
 
     def propose(self, site):
         scales = site.scales
-        resistance = viscous(site)
+        damping = viscous(site)                 # its scale and unit: the branch settles to one
         tau = namer(site)("tau_relax")
         taus = _taus(scales.dt, scales.span)
-        resistance = ParamSpec(namer(site)("R_relax"), resistance.guess, 0.0, resistance.upper, resistance.unit,
+        resistance = ParamSpec(namer(site)("R_relax"), damping.guess, 0.0, damping.upper, damping.unit,
                                f"resistance of the relaxing branch at {site.name} (its effort per flow, settled)")
         return [Proposal((resistance, ParamSpec(tau, taus[len(taus) // 2], scales.dt / 2, scales.span / 2, "s",
                                                 f"time constant of the relaxing branch at {site.name}")),
@@ -90,7 +83,8 @@ class Relaxation(Kind):
         pair = ""
         if values.get(r, 0.0) > 0:
             c = values[tau] / values[r]
-            pair = f", {c:.3g} {'F' if unit == 'Ohm' else '(' + unit + ')^-1 s'}"
+            compliance = next((d.compliance for d in DOMAINS.values() if unit and d.resistance == unit), "")
+            pair = f", {c:.3g} {compliance}".rstrip()
         words = {"Ohm": "the voltage across an RC pair the model leaves out (a cell's polarisation)",
                  "N s/m": "a spring and damper in series to the ground (a Maxwell element: a mount, a belt)",
                  "N m s/rad": "a torsional spring and damper in series to the ground (a Maxwell element)"}

@@ -5,7 +5,8 @@ the tests' own RK4 (``tests/msd_truth.py``), 1 Hz for an hour of held current le
 resolution.  A current sensor's bias had been answered as a hardening of the charge storage, with a
 held-out error 26 % higher than the nominal's, and a 5 % scale error of it as nothing: the
 vocabulary neither shifted nor scaled an input.  Its polarisation (the RC pair the model leaves
-out) had been answered as a series resistance."""
+out) had been answered as a series resistance, its voltage hysteresis as a 127 s RC pair (Dahl's
+law was offered at mechanical junctions only)."""
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +25,7 @@ SLOPE = 0.8                                        # V: the OCV's rise from empt
 BIAS = 0.05                                        # A: the current sensor reads this much high
 SCALE = 0.95                                       # the cell takes this share of the current recorded
 R1, C1 = 0.01, 3000.0                              # Ohm, F: the polarisation pair (30 s)
+M, Q_TURN = 0.015, 180.0                           # V, C: the voltage hysteresis and the charge it turns over in
 
 
 def _currents(n, rng):
@@ -48,7 +50,9 @@ def _recording(path, effect, seed=1):
     current = current * (SCALE if effect == "gain" else 1.0)
 
     def rate(x, i):
-        q, v1 = x                       # charge, C; the polarisation pair's voltage, V
+        q, v1 = x                       # charge, C; the pair's (or the hysteresis's) voltage, V
+        if effect == "hysteresis":      # Plett's one-state hysteresis: M h, dh/dq = (sgn(i) - h)/Q_turn
+            return np.array([i, (M * i - abs(i) * v1) / Q_TURN])
         return np.array([i, (i - v1 / R1) / C1 if effect == "rc" else 0.0])
 
     x = rk4_states(rate, t, current, substeps=2, x0=(Q0, 0.0))
@@ -123,3 +127,15 @@ def test_a_current_sensors_scale_error_is_an_input_gain(tmp_path):
     assert (effect["kind"], effect["attached_to"]) == ("input_gain", "input I")
     assert effect["parameters"]["gain_I"] == pytest.approx(SCALE, rel=0.005)
     assert data["fit"]["improved"]["V"] < 0.5 * data["fit"]["nominal"]["V"]
+
+
+def test_a_cells_voltage_hysteresis_is_a_dahl_law_in_the_charge(tmp_path):
+    """Plett's one-state hysteresis, M h with dh/dq = (sgn(i) - h)/Q_turn, is Dahl's law with
+    F_h = M and sigma = M/Q_turn."""
+    data = _diagnose(_recording(tmp_path / "hysteresis.csv", "hysteresis")).to_json()
+    (effect,) = data["missing_physics"]
+    assert (effect["kind"], effect["attached_to"]) == ("hysteresis", "junction cell")
+    assert effect["parameters"]["Fh_cell"] == pytest.approx(M, rel=0.02)
+    assert effect["parameters"]["sigma_dahl_cell"] == pytest.approx(M / Q_TURN, rel=0.03)
+    assert "voltage hysteresis" in effect["explanation"] and "180 C" in effect["explanation"]
+    assert data["fit"]["improved"]["V"] < 0.2 * data["fit"]["nominal"]["V"]

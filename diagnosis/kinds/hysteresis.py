@@ -1,12 +1,17 @@
 """``hysteresis`` at a 1-junction: Dahl friction [1]_, an equation element with the friction
 effort :math:`z` as state, :math:`\\dot z = \\sigma (f - |f| z / F_h)`: elastic (stiffness
 :math:`\\sigma`) for small reversals, :math:`\\pm F_h` in steady sliding, rate-independent
-hysteresis loops in between.
+hysteresis loops in between.  Also electrical: a battery cell's open-circuit-voltage hysteresis
+in Plett's one-state form [2]_, :math:`\dot h = |\eta i \gamma / Q| (\mathrm{sgn}(i) - h)`
+with :math:`M h` added to the voltage, is this law in the charge (:math:`F_h = M`,
+:math:`\sigma = \eta \gamma M / Q`).
 
 References
 ----------
 .. [1] P. R. Dahl, "Solid friction damping of mechanical vibrations", AIAA Journal 14(12), 1976,
    eq. (1) with exponent 1.
+.. [2] G. L. Plett, "Extended Kalman filtering for battery management systems of LiPB-based HEV
+   battery packs, Part 2", J. Power Sources 134(2), 2004, sec. 3.4 (one-state hysteresis).
 """
 from __future__ import annotations
 
@@ -28,7 +33,7 @@ FEATURE_GRID = (1.0, 3.0, 10.0, 30.0, 100.0)
 class Hysteresis(Kind):
     name = "hysteresis"
     doors = ("1",)
-    domains = ("translation", "rotation")
+    domains = ("translation", "rotation", "electrical")
     feature_doors, feature_names, feature_price = "1", ("z_dahl",), 2
 
     def features(self, s):
@@ -76,5 +81,10 @@ class Hysteresis(Kind):
     def explain(self, cand, values, show):
         j = cand.place.name
         fh, sigma = (p.name for p in cand.params)
+        if cand.params[0].unit == "V":      # a cell's voltage hysteresis, in charge
+            span = values.get(fh, 0.0) / values[sigma] if values.get(sigma, 0.0) > 0 else float("nan")
+            return (f"the voltage at {j} carries a hysteresis of up to +-{show(fh)} that turns over with the "
+                    f"current's direction within about {span:.3g} C of charge ({show(sigma)}): a voltage "
+                    f"hysteresis (Plett's one-state model, a Dahl law in the charge) at {j}")
         return (f"the motion at {j} meets a friction of up to {show(fh)} that builds up elastically "
                 f"({show(sigma)}) after each reversal: hysteretic (Dahl) friction at {j}")

@@ -50,20 +50,21 @@ def _recording(path, effect, seed=1):
     current = current * (SCALE if effect == "gain" else 1.0)
 
     def rate(x, i):
-        q, v1 = x                       # charge, C; the pair's (or the hysteresis's) voltage, V
-        if effect == "hysteresis":      # Plett's one-state hysteresis: M h, dh/dq = (sgn(i) - h)/Q_turn
-            return np.array([i, (M * i - abs(i) * v1) / Q_TURN])
-        return np.array([i, (i - v1 / R1) / C1 if effect == "rc" else 0.0])
+        q, v1, vh = x                   # charge, C; the pair's voltage, V; the hysteresis's voltage, V
+        pair = (i - v1 / R1) / C1 if "rc" in effect else 0.0
+        # Plett's one-state hysteresis: M h, dh/dq = (sgn(i) - h)/Q_turn
+        turn = (M * i - abs(i) * vh) / Q_TURN if "hysteresis" in effect else 0.0
+        return np.array([i, pair, turn])
 
-    x = rk4_states(rate, t, current, substeps=2, x0=(Q0, 0.0))
-    V = E0 + SLOPE * x[:, 0] / QCAP + R0 * current + x[:, 1]
+    x = rk4_states(rate, t, current, substeps=2, x0=(Q0, 0.0, 0.0))
+    V = E0 + SLOPE * x[:, 0] / QCAP + R0 * current + x[:, 1] + x[:, 2]
     y = np.round((V + rng.normal(0.0, 1e-3, t.size)) / 1e-3) * 1e-3
     path.write_text("t,I,V\n" + "\n".join(f"{t[i]:g},{recorded[i]:g},{y[i]:.4f}" for i in range(t.size)) + "\n")
     return path
 
 
-def _diagnose(path):
-    return diagnose(str(MODEL), str(path), inputs=["I=I"], outputs=["V=V:V"], max_effects=1)
+def _diagnose(path, max_effects=1):
+    return diagnose(str(MODEL), str(path), inputs=["I=I"], outputs=["V=V:V"], max_effects=max_effects)
 
 
 def test_an_input_offset_shifts_what_the_plant_receives():
@@ -139,3 +140,16 @@ def test_a_cells_voltage_hysteresis_is_a_dahl_law_in_the_charge(tmp_path):
     assert effect["parameters"]["sigma_dahl_cell"] == pytest.approx(M / Q_TURN, rel=0.03)
     assert "voltage hysteresis" in effect["explanation"] and "180 C" in effect["explanation"]
     assert data["fit"]["improved"]["V"] < 0.2 * data["fit"]["nominal"]["V"]
+
+
+def test_a_cells_pair_and_hysteresis_together_are_the_enhanced_self_correcting_model(tmp_path):
+    """Both at once (Plett's enhanced self-correcting cell model, less its OCV curve): two rounds
+    name the pair and the hysteresis, each with its values."""
+    data = _diagnose(_recording(tmp_path / "both.csv", "rc+hysteresis"), max_effects=2).to_json()
+    found = {e["kind"]: e for e in data["missing_physics"]}
+    assert set(found) == {"relaxation", "hysteresis"}
+    assert {e["attached_to"] for e in found.values()} == {"junction cell"}
+    assert found["relaxation"]["parameters"]["R_relax_cell"] == pytest.approx(R1, rel=0.03)
+    assert found["relaxation"]["parameters"]["tau_relax_cell"] == pytest.approx(R1 * C1, rel=0.03)
+    assert found["hysteresis"]["parameters"]["Fh_cell"] == pytest.approx(M, rel=0.03)
+    assert data["fit"]["improved"]["V"] < 0.1 * data["fit"]["nominal"]["V"]

@@ -2,9 +2,9 @@
 effort :math:`z` as state, :math:`\\dot z = \\sigma (f - |f| z / F_h)`: elastic (stiffness
 :math:`\\sigma`) for small reversals, :math:`\\pm F_h` in steady sliding, rate-independent
 hysteresis loops in between.  Also electrical: a battery cell's open-circuit-voltage hysteresis
-in Plett's one-state form [2]_, :math:`\dot h = |\eta i \gamma / Q| (\mathrm{sgn}(i) - h)`
+in Plett's one-state form [2]_, :math:`\\dot h = |\\eta i \\gamma / Q| (\\mathrm{sgn}(i) - h)`
 with :math:`M h` added to the voltage, is this law in the charge (:math:`F_h = M`,
-:math:`\sigma = \eta \gamma M / Q`).
+:math:`\\sigma = \\eta \\gamma M / Q`).
 
 References
 ----------

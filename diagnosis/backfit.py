@@ -34,7 +34,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .errors import BondcosimError
+from .errors import BondcosimError, DiagnosisError
 from .fit import harms, needs_explaining, unpriced_error, usable_fits
 from .fit_in_turn import HOPELESS, train_cost
 from .kinds.base import extends
@@ -60,8 +60,11 @@ SWEEPS = 2
 def build_effects(graph, effects, with_values):
     """`graph` with each of `effects` (CandidateFits, in order) built in at its fitted values; the
     values of parameters that are not the candidate's own (refitted nominal ones) set by
-    ``with_values(graph, values)``."""
+    ``with_values(graph, values)``.  An effect at a junction `graph` lacks (one an effect left out
+    made: :func:`placed_in`) is a :class:`~diagnosis.errors.DiagnosisError`."""
     for effect in effects:
+        if not placed_in(graph, effect.candidate):
+            raise DiagnosisError(f"{effect.candidate} sits at a junction that an effect left out made")
         own = {p.name for p in effect.candidate.params}
         graph = effect.candidate.build(graph, {k: v for k, v in effect.values.items() if k in own})
         graph = with_values(graph, {k: v for k, v in effect.values.items() if k not in own})
@@ -187,10 +190,6 @@ def backfit(graph, rounds, *, fit, floor: dict, judge_model, choose, with_values
             reference = judge_model(base)
         except BondcosimError as exc:     # a later effect placed on the earlier one's element, a run diverging
             say("backfitting", f"round {rounds.index(r) + 1} left as chosen: without it, {exc}")
-            return False
-        except KeyError as exc:           # a later effect placed at a junction this round's effect made
-            say("backfitting", f"round {rounds.index(r) + 1} left as chosen: a later effect sits at {exc}, "
-                               f"a junction this round's effect made")
             return False
         # a candidate named for the nominal model may clash with the others' names (not with the
         # nominal's: a storage kind refits its element's own linear value), nor rewrite an element

@@ -18,7 +18,7 @@ from bondgraph.params import DOMAINS
 from .errors import DiagnosisError
 
 __all__ = ["RELEASED", "released", "ParamSpec", "priced", "fresh_name", "junction_elements", "junction_domain",
-           "junction_units", "domain_units", "P_ATMOSPHERE", "pneumatic_ambient", "ambient_effort"]
+           "junction_units", "domain_units", "unit_domain", "P_ATMOSPHERE", "pneumatic_ambient", "ambient_effort"]
 
 
 #: The value of a limit with no evidence behind it (a saturation side no training sample
@@ -120,6 +120,15 @@ def domain_units(dom: str) -> tuple[str, str]:
     """(effort unit, flow unit) of a domain."""
     d = DOMAINS[dom]
     return d.effort, d.flow
+
+
+def unit_domain(unit: str, quantity: str) -> str:
+    """The energy domain whose `quantity` (a :class:`~bondgraph.params.Domain` field: ``"effort"``,
+    ``"resistance"``, ...) is measured in `unit`; ``""`` for none (a generic model's empty unit, or
+    one two domains share, as the pressure of the hydraulic and pneumatic ones).  A candidate's
+    explanation knows its parameters' units, not its junction's domain."""
+    names = [d.name for d in DOMAINS.values() if unit and getattr(d, quantity) == unit]
+    return names[0] if len(names) == 1 else ""
 
 
 def junction_units(graph, junction: str) -> tuple[str, str]:

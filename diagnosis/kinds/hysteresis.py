@@ -19,7 +19,7 @@ import numpy as np
 
 from bondgraph import EquationElement
 
-from ..catalogue_common import ParamSpec, junction_units
+from ..catalogue_common import ParamSpec, junction_units, unit_domain
 from .base import Kind, hang, register
 from .feature_signals import FeatureGroup, dahl_state, rms
 from .friction_common import displacement_unit, namer, with_level_starts
@@ -81,7 +81,7 @@ class Hysteresis(Kind):
     def explain(self, cand, values, show):
         j = cand.place.name
         fh, sigma = (p.name for p in cand.params)
-        if cand.params[0].unit == "V":      # a cell's voltage hysteresis, in charge
+        if unit_domain(cand.params[0].unit, "effort") == "electrical":     # a cell's voltage hysteresis, in charge
             span = values.get(fh, 0.0) / values[sigma] if values.get(sigma, 0.0) > 0 else float("nan")
             return (f"the voltage at {j} carries a hysteresis of up to +-{show(fh)} that turns over with the "
                     f"current's direction within about {span:.3g} C of charge ({show(sigma)}): a voltage "

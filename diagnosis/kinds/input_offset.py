@@ -11,10 +11,10 @@ from ..catalogue_common import ParamSpec, fresh_name
 from .base import Kind, Proposal, register
 from .signal_common import input_record
 
-#: the first fit's starts, as fractions of the input's recorded span each side of 0 (the offset's
-#: effect is linear on a linear plant, but an offset that shifts a nonlinear law's operating point,
-#: a valve's, is not)
-START_SHARES = (0.0, -0.02, 0.02)
+#: the fit's further starts beside its guess 0, as fractions of the input's recorded span (the
+#: offset's effect is linear on a linear plant, but an offset that shifts a nonlinear law's
+#: operating point, a valve's, is not)
+START_SHARES = (-0.02, 0.02)
 
 
 @register
@@ -28,7 +28,7 @@ class InputOffset(Kind):
         width = record.width
         return [Proposal((ParamSpec(name, 0.0, -width, width, record.unit,
                                     f"offset of what input {site.name} delivers from its record"),),
-                         starts=tuple({name: share * width} for share in START_SHARES[1:]))]
+                         starts=tuple({name: share * width} for share in START_SHARES))]
 
     def build(self, graph, cand, values):
         u = cand.place.name

@@ -20,12 +20,10 @@ trial time constant (:data:`FEATURE_LAG_STEPS`), started at 0 as the branch is.
 """
 from __future__ import annotations
 
-import numpy as np
-
 from bondgraph import C, R, Zero
 from bondgraph.params import DOMAINS
 
-from ..catalogue_common import ParamSpec, junction_domain
+from ..catalogue_common import ParamSpec, junction_domain, unit_domain
 from .base import Kind, Proposal, hang, register
 from .feature_signals import FeatureGroup, lagged
 from .friction_common import namer, viscous
@@ -79,15 +77,13 @@ class Relaxation(Kind):
     def explain(self, cand, values, show):
         j = cand.place.name
         r, tau = (spec.name for spec in cand.params)
-        unit = cand.params[0].unit
+        dom = unit_domain(cand.params[0].unit, "resistance")
         pair = ""
         if values.get(r, 0.0) > 0:
-            c = values[tau] / values[r]
-            compliance = next((d.compliance for d in DOMAINS.values() if unit and d.resistance == unit), "")
-            pair = f", {c:.3g} {compliance}".rstrip()
-        words = {"Ohm": "the voltage across an RC pair the model leaves out (a cell's polarisation)",
-                 "N s/m": "a spring and damper in series to the ground (a Maxwell element: a mount, a belt)",
-                 "N m s/rad": "a torsional spring and damper in series to the ground (a Maxwell element)"}
-        what = words.get(unit, "a resistance and a storage in parallel that the model leaves out")
+            pair = f", {values[tau] / values[r]:.3g} {DOMAINS[dom].compliance if dom else ''}".rstrip()
+        words = {"electrical": "the voltage across an RC pair the model leaves out (a cell's polarisation)",
+                 "translation": "a spring and damper in series to the ground (a Maxwell element: a mount, a belt)",
+                 "rotation": "a torsional spring and damper in series to the ground (a Maxwell element)"}
+        what = words.get(dom, "a resistance and a storage in parallel that the model leaves out")
         return (f"a share of the effort at {j} follows its flow with a lag of {show(tau)}, settling at {show(r)} "
                 f"times the flow: {what} ({show(r)}{pair}): relaxation at {j}")

@@ -1,6 +1,7 @@
 """``viscous_friction`` at a 1-junction: an R with :math:`e = b f`."""
 from __future__ import annotations
 
+from ..catalogue_common import unit_domain
 from .base import Kind, register
 from .feature_signals import FeatureGroup
 from .friction_common import friction_r, viscous, with_level_starts
@@ -24,12 +25,14 @@ class ViscousFriction(Kind):
 
     def explain(self, cand, values, show):
         j, b = cand.place.name, cand.params[0].name
-        other = _NOT_MOTION.get(cand.params[0].unit)
+        other = _NOT_MOTION.get(unit_domain(cand.params[0].unit, "resistance"))
         if other:           # the same law outside mechanics: a resistance the model leaves out
             return f"{other} at {j}: an effort in proportion to its flow ({show(b)}): viscous friction at {j}"
         return f"the motion at {j} is braked in proportion to its speed ({show(b)}): viscous friction at {j}"
 
 
-#: the linear resistance in the words of the domains that are not mechanics, by its unit
-_NOT_MOTION = {"Ohm": "a series resistance the model leaves out", "Pa s/m^3": "a flow resistance the model leaves out",
-               "Pa s/kg": "a flow resistance the model leaves out", "K/W": "a thermal resistance the model leaves out"}
+#: the linear resistance in the words of the domains that are not mechanics
+_NOT_MOTION = {"electrical": "a series resistance the model leaves out",
+               "hydraulic": "a flow resistance the model leaves out",
+               "pneumatic": "a flow resistance the model leaves out",
+               "thermal": "a thermal resistance the model leaves out"}

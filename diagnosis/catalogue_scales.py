@@ -115,7 +115,7 @@ def junction_scales(graph, junction: str, experiment, signals=None, x0=None) -> 
     (Scales, dict str -> ndarray)
         The values are keyed ``e_<bond>`` / ``f_<bond>`` for the junction's bonds,
         ``pressure:<label>`` for :func:`pressure_variables`, ``state:<name>`` for
-        the states of the C elements on the junction and ``signal:<label>`` for
+        the states of the C and I elements on the junction and ``signal:<label>`` for
         `signals` (empty without an experiment).
     """
     if experiment is None:
@@ -128,7 +128,7 @@ def junction_scales(graph, junction: str, experiment, signals=None, x0=None) -> 
     exprs.update({f"signal:{label}": expr for label, expr in (signals or {}).items()})
     for b, end in graph.bonds_of(junction):
         other = graph.elements[b.head.element if end == "tail" else b.tail.element]
-        if other.kind == "C":
+        if other.kind in ("C", "I"):
             exprs[f"state:{other.state}"] = other.state
     values = simulate_expressions(graph, experiment, exprs, x0=x0)
     if not values:

@@ -246,6 +246,8 @@ def _signals(graph, junction: str, regime_variables) -> dict:
     for element, _ in junction_elements(graph, junction):
         if element.kind == "C" and element.state:
             out[f"content:{element.name}"] = element.state
+        elif element.kind == "I" and element.state:
+            out[f"momentum:{element.name}"] = element.state
     return out
 
 

@@ -14,8 +14,8 @@ import pytest
 import plants.library as library
 from bondgraph.numerics import simulate
 from diagnosis.benchmark import plants_textbook as tb
-from diagnosis.benchmark.draw import (KINDS_BEFORE_32, KINDS_BEFORE_34, KINDS_BEFORE_35, RATIOS, CaseSpec, draw_cases,
-                                      realise)
+from diagnosis.benchmark.draw import (KINDS_BEFORE_32, KINDS_BEFORE_34, KINDS_BEFORE_35, KINDS_BEFORE_36, RATIOS,
+                                      CaseSpec, draw_cases, realise)
 from diagnosis.benchmark.effects import KIND_PLACES, make_effect, places_for
 from diagnosis.benchmark.plants import FAST, PLANTS, PLANTS_BEFORE_34
 from diagnosis.benchmark.report import markdown, summarise
@@ -207,7 +207,10 @@ def test_the_drawn_kinds_can_be_chosen_and_the_earlier_vocabulary_replayed():
     assert draw_cases(80, 3434, PLANTS, KINDS_BEFORE_35)[1].label == "001-msd-valve_lag@input:F"
     # session 35's input offset and gain and relaxation joined: the case is now a relaxing branch
     assert {"input_offset", "input_gain", "relaxation"} <= {s.kind for s in draw_cases(80, 11, PLANTS)}
-    assert draw_cases(80, 3434, PLANTS)[1].label == "001-msd-relaxation@junction:v_mass"
+    assert draw_cases(80, 3434, PLANTS, KINDS_BEFORE_36)[1].label == "001-msd-relaxation@junction:v_mass"
+    # session 36's saturating inductor joined
+    assert "inductor_saturation" in {s.kind for s in draw_cases(80, 11, PLANTS)}
+    assert draw_cases(80, 3434, PLANTS)[1].label == "001-drivetrain-coulomb_friction@junction:dw_shaft"
     with pytest.raises(BenchmarkError, match="unknown effect kind.*'?friction_typo"):
         draw_cases(4, 11, FAST, ("friction_typo",))
 

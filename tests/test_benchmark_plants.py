@@ -378,3 +378,32 @@ def test_a_relaxation_or_input_offset_in_the_truth_is_the_catalogues_on_the_libr
         change = np.std(truth[o.name] - base[o.name])
         assert np.max(np.abs(res[o.name] - truth[o.name])) < 0.02 * change + 1e-6 * np.std(base[o.name])
     assert max(np.std(truth[o.name] - base[o.name]) / np.std(base[o.name]) for o in plant.outputs) > 0.02
+
+
+def test_a_saturating_core_in_the_truth_is_a_flux_linkage_that_levels_off():
+    """The rlc truth with its inductor saturating (differential inductance L / (1 + m i^2)) against
+    the flux form of the same law, integrated by scipy: flux linkage lambda' = V - R i - q/C with
+    i = tan(sqrt(m) lambda / L) / sqrt(m), q' = i."""
+    from scipy.integrate import solve_ivp
+
+    from diagnosis.benchmark.effects import make_effect
+
+    plant = PLANTS["rlc"]()
+    t = np.arange(0.0, 0.3, 1.0 / plant.rate)
+    volts = np.where(t < 0.15, 5.0, -5.0)
+    m = 1.0 / 0.4 ** 2                                   # 1/A^2: the knee near 0.4 A
+    truth = simulate_truth(plant, t, {"V": volts}, make_effect("inductor_saturation", plant, "inductor", "L",
+                                                                m, {}, {}))
+    L, R, C = 0.1, 10.0, 1e-3
+
+    def current(lam):
+        return np.tan(np.sqrt(m) * lam / L) / np.sqrt(m)
+
+    def rate(time, x):
+        v = 5.0 if time < 0.15 - 1e-12 else -5.0
+        return [v - R * current(x[0]) - x[1] / C, current(x[0])]
+
+    ref = solve_ivp(rate, (0.0, t[-1]), [0.0, 0.0], t_eval=t, rtol=1e-10, atol=1e-12, max_step=1e-4)
+    assert truth["i"] == pytest.approx(current(ref.y[0]), abs=1e-5)
+    assert truth["v_C"] == pytest.approx(ref.y[1] / C, abs=1e-4)
+    assert np.max(np.abs(truth["i"])) > 0.4              # past the knee

@@ -90,7 +90,8 @@ def test_kinds_are_the_issue_vocabulary_in_order():
                      "leak", "heat_transfer", "valve_lag", "transport_delay", "hysteresis", "backlash",
                      "nonlinear_stiffness", "saturation", "sensor_offset", "sensor_gain", "constant_load",
                      "coulomb_viscous_friction", "modulated_friction", "asymmetric_viscous_friction",
-                     "quadratic_drag", "sensor_lag", "radiation", "input_offset", "input_gain", "relaxation", "nominal_value")
+                     "quadratic_drag", "sensor_lag", "radiation", "input_offset", "input_gain", "relaxation",
+                         "inductor_saturation", "nominal_value")
 
 
 def test_places_offer_the_kinds_that_make_sense():
@@ -339,7 +340,8 @@ def test_radiation_and_a_heat_leak_go_to_the_room_the_model_names():
 
 
 def test_every_kind_is_reachable_and_explained_with_units():
-    graphs = [library.build("mass-spring-damper"), hydraulic_cylinder(), pneumatic_tank(), library.build("heater-pair")]
+    graphs = [library.build("mass-spring-damper"), hydraulic_cylinder(), pneumatic_tank(), library.build("heater-pair"),
+              library.build("rlc")]
     seen = {}
     for g in graphs:
         places = [Place("junction", n) for n, e in g.elements.items() if e.kind in ("0", "1")]
@@ -355,6 +357,8 @@ def test_every_kind_is_reachable_and_explained_with_units():
     assert "F -0.3 N off its record" in seen["input_offset"].explain({"offset_F": -0.3})
     assert "Maxwell element" in seen["relaxation"].explain()
     assert "1.2 times what input F records" in seen["input_gain"].explain({"gain_F": 1.2})
+    core = seen["inductor_saturation"].explain({"lambda_sat_L": 0.05, "n_sat_L": 5.0, "L": 0.09})
+    assert "0.05 Wb" in core and "0.09 H" in core and "5th power" in core
 
 
 def test_guesses_and_bounds_scale_with_the_data():

@@ -51,8 +51,9 @@ def main(argv=None) -> int:
                          "'fast-before-34' (those drawn until session 33: a seed's cases as then drawn; default: all)")
     ap.add_argument("--only", default="", help="comma-separated case indices to run")
     ap.add_argument("--kinds", default="",
-                    help="comma-separated effect kinds to draw, or 'before-32' / 'before-34' / 'before-35' (the "
-                         "kinds drawn until session 31 / 33 / 34: a seed's cases as then drawn; default: every kind)")
+                    help="comma-separated effect kinds to draw, or 'before-32' / 'before-34' / 'before-35' / "
+                         "'before-36' (the kinds drawn until session 31 / 33 / 34 / 35: a seed's cases as then drawn; "
+                         "default: every kind)")
     ap.add_argument("--max-effects", type=int, default=2, help="passed to diagnose (default 2)")
     ap.add_argument("--compound", action="store_true",
                     help="a second concealed effect in every effect case (diagnosis.benchmark.compound)")

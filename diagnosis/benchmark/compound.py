@@ -112,16 +112,14 @@ class CompoundEffect(NoEffect):
 
 
 def _junction_of(plant, door, name):
-    if door == "storage":
-        return plant.storage(name).junction
-    return name if door == "junction" else None
+    return plant.junction_at(door, name) if door in ("junction", "storage", "inductor") else None
 
 
 def _compatible(plant, first: CaseSpec, kind, door, name) -> bool:
     """Whether (`kind`, `door`, `name`) may join the effect of `first` on `plant` (module doc)."""
     if kind == first.kind:
         return False
-    if (door, name) == (first.door, first.name) and door in ("input", "output", "storage"):
+    if (door, name) == (first.door, first.name) and door in ("input", "output", "storage", "inductor"):
         return False
     j1, j2 = _junction_of(plant, first.door, first.name), _junction_of(plant, door, name)
     if j1 is not None and j2 is not None and (j1 == j2 or j2 in plant.junction(j1).equivalent):

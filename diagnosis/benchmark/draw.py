@@ -32,9 +32,11 @@ __all__ = ["CaseSpec", "Realised", "draw_cases", "realise", "excitation", "EXCIT
 
 EXCITATIONS = ("levels", "prbs", "levels+sine")
 KINDS = tuple(KIND_PLACES)
+#: the kinds drawn until session 35, before ``inductor_saturation`` joined (``--kinds before-36``)
+KINDS_BEFORE_36 = tuple(k for k in KINDS if k != "inductor_saturation")
 #: the kinds drawn until session 34, before ``input_offset``, ``relaxation`` and ``input_gain`` joined
 #: (``--kinds before-35``)
-KINDS_BEFORE_35 = tuple(k for k in KINDS if k not in ("input_offset", "relaxation", "input_gain"))
+KINDS_BEFORE_35 = tuple(k for k in KINDS_BEFORE_36 if k not in ("input_offset", "relaxation", "input_gain"))
 #: the kinds drawn until session 33, before ``sensor_lag`` and ``radiation`` joined (``--kinds before-34``)
 KINDS_BEFORE_34 = tuple(k for k in KINDS_BEFORE_35 if k not in ("sensor_lag", "radiation"))
 #: the kinds drawn until session 31, before ``asymmetric_viscous_friction`` and ``quadratic_drag``
@@ -42,7 +44,8 @@ KINDS_BEFORE_34 = tuple(k for k in KINDS_BEFORE_35 if k not in ("sensor_lag", "r
 #: past case pin it)
 KINDS_BEFORE_32 = tuple(k for k in KINDS_BEFORE_34 if k not in ("asymmetric_viscous_friction", "quadratic_drag"))
 #: the named kind lists of ``--kinds``
-KIND_LISTS = {"before-32": KINDS_BEFORE_32, "before-34": KINDS_BEFORE_34, "before-35": KINDS_BEFORE_35}
+KIND_LISTS = {"before-32": KINDS_BEFORE_32, "before-34": KINDS_BEFORE_34, "before-35": KINDS_BEFORE_35,
+              "before-36": KINDS_BEFORE_36}
 #: Cases drawn on a plant whose nominal integrates its inputs, every this many.
 DRIFT_EVERY = 7
 #: Null cases, every this many (offset 3).
@@ -228,7 +231,7 @@ def _scales(nominal):
 def _shape(spec, plant, rec, rng, scales):
     """Shape constants drawn once per case (relative to the nominal motion)."""
     k, sh = spec.kind, {}
-    j = plant.storage(spec.name).junction if spec.door == "storage" else spec.name
+    j = plant.junction_at(spec.door, spec.name)
     v_rms = scales["rms"].get(j, 1.0) or 1.0
     hold = float(np.mean([i.hold[0] + i.hold[1] for i in plant.inputs])) / 2.0
     # its own stream (not `rng`): every other draw of the case stays what it was
@@ -296,7 +299,7 @@ def _initial_magnitude(spec, plant, rec, scales, sh, probe_gain):
     if k == "sensor_gain":
         y = rec.nominal[spec.name]
         return r * float(np.std(y)) / max(_rms(y), 1e-300)
-    j = plant.storage(spec.name).junction if spec.door == "storage" else spec.name
+    j = plant.junction_at(spec.door, spec.name)
     g = probe_gain()
     base = r / g      # a constant effort/flow of this size changes the output by about r
     if k in ("viscous_friction", "relaxation"):
@@ -317,6 +320,8 @@ def _initial_magnitude(spec, plant, rec, scales, sh, probe_gain):
         return base / (sh["c0"] + sum(scales["rms"][p] for p in plant.junction(j).pressures) - sh["p_ref"])
     if k == "nonlinear_stiffness":
         return base / max(scales["rms"][spec.name], 1e-300) ** 3
+    if k == "inductor_saturation":      # the core's current rate rises by m i^2: r at the RMS current
+        return r / max(scales["rms"][j], 1e-300) ** 2
     if k == "backlash":
         return 0.1 * scales["rms"][spec.name]
     return base
@@ -353,7 +358,7 @@ def _calibrate(rec: Realised, rng) -> None:
         return eff, out, name, c
 
     def probe_gain():
-        j = plant.storage(spec.name).junction if spec.door == "storage" else spec.name
+        j = plant.junction_at(spec.door, spec.name)
         size = 1.0
         for _ in range(8):
             probe = make_effect("constant_load", plant, "junction", j, size, scales, {"sign": 1.0})

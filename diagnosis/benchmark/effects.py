@@ -39,6 +39,9 @@ storage (a C element)         nonlinear_stiffness (cubic hardening, the
                               spring),
                               saturation (an end stop / overflow at the
                               content's range)
+inductor (an electrical I)    inductor_saturation (its differential inductance
+                              L / (1 + m i^2): the flux L atan(sqrt(m) i) /
+                              sqrt(m) saturates; not the catalogue's law)
 input                         saturation, transport_delay, valve_lag,
                               input_offset (the plant gets the command plus
                               an offset: a biased current or force sensor),
@@ -76,6 +79,7 @@ KIND_PLACES = {
     "asymmetric_viscous_friction": ("junction1_reversing",), "quadratic_drag": ("junction1_drag",),
     "sensor_lag": ("output",), "radiation": ("junction0_thermal",),
     "input_offset": ("input",), "relaxation": ("junction1_relax",), "input_gain": ("input",),
+    "inductor_saturation": ("inductor",),
 }
 
 
@@ -124,6 +128,8 @@ def places_for(plant: TruthPlant, kind: str) -> list[tuple[str, str]]:
                     and plant.junction(s.junction).domain in MECHANICAL]
         elif door == "storage_range":
             out += [("storage", s.name) for s in plant.storages if s.content_range is not None]
+        elif door == "inductor":
+            out += [("inductor", s.name) for s in plant.inductors]
         elif door == "input":
             out += [("input", i.name) for i in plant.inputs if i.high > i.low]
         elif door == "output":
@@ -154,21 +160,24 @@ class TruthEffect(NoEffect):
             self.law_is_effort = plant.junction(self.junction).kind == "0"
         elif door == "junction":
             self.junction = name
+        elif door == "inductor":
+            self.junction = plant.inductor(name).junction
 
     # -- where, as the diagnosis reports it ---------------------------------------------
     @property
     def place(self) -> str:
-        """The place as the report's ``attached_to`` says it (storage effects act at a junction)."""
-        if self.door in ("junction", "storage"):
+        """The place as the report's ``attached_to`` says it (storage and inductor effects act at a
+        junction)."""
+        if self.door in ("junction", "storage", "inductor"):
             return self.plant.junction(self.junction).place
         return f"{self.door} {self.name}"
 
     def accepted_places(self) -> set[str]:
         """The place, its indistinguishable equivalents, and the storage element's own name."""
         out = {self.place}
-        if self.door in ("junction", "storage"):
+        if self.door in ("junction", "storage", "inductor"):
             out |= {self.plant.junction(e).place for e in self.plant.junction(self.junction).equivalent}
-        if self.door == "storage":
+        if self.door in ("storage", "inductor"):
             out |= {f"storage {self.name}", f"element {self.name}"}
         return out
 
@@ -236,9 +245,11 @@ class TruthEffect(NoEffect):
         k, m, sh = self.kind, self.m, self.shape
         if k == "valve_lag":
             return {}, np.array([(u[self.name] - z[0]) / m])   # the actuator follows the command
-        if self.door not in ("junction", "storage"):     # a sensor's lag: its rate follows the outputs
+        if self.door not in ("junction", "storage", "inductor"):     # a sensor's lag: its rate follows the outputs
             return {}, np.zeros(self.n_states)
         j = self.junction
+        if k == "inductor_saturation":        # the current's rate rises by m i^2 (L_d = L / (1 + m i^2))
+            return {self.name: m * sig[j] ** 2}, np.zeros(0)
         if k == "hysteresis":
             v = sig[j]
             fc = m

@@ -147,6 +147,19 @@ class StorageSpec:
     sensed: tuple[str, ...] = ()
 
 
+@dataclass(frozen=True)
+class InductorSpec:
+    """An electrical I element of the nominal graph whose core may saturate.
+
+    ``junction`` is its 1-junction, whose flow (its current) the plant's state carries;
+    ``extra[name]`` is the relative rise of its inverse differential inductance there,
+    ``L / L_d(i) - 1``: the right-hand side multiplies that current's rate by ``1 + extra[name]``.
+    """
+
+    name: str
+    junction: str
+
+
 @dataclass
 class TruthPlant:
     """A plant as hand-written state equations, mirroring a nominal library model.
@@ -174,8 +187,8 @@ class TruthPlant:
         flows under the efforts added there.
     measure : callable ``(x, u) -> dict``
         The outputs, nominal-model names, SI.
-    junctions, storages : tuple
-        Where effects may act (:class:`JunctionSpec`, :class:`StorageSpec`).
+    junctions, storages, inductors : tuple
+        Where effects may act (:class:`JunctionSpec`, :class:`StorageSpec`, :class:`InductorSpec`).
     rate : float, Hz
         Sample rate of its recordings.
     duration : float, s
@@ -215,6 +228,7 @@ class TruthPlant:
     measure: Callable
     junctions: tuple[JunctionSpec, ...] = ()
     storages: tuple[StorageSpec, ...] = ()
+    inductors: tuple[InductorSpec, ...] = ()
     rate: float = 100.0
     duration: float = 20.0
     substeps: int = 4
@@ -231,6 +245,21 @@ class TruthPlant:
             if j.name == name:
                 return j
         raise UnknownTruthName(f"plant {self.name}: no junction {name!r}; it has {[j.name for j in self.junctions]}")
+
+    def inductor(self, name: str) -> InductorSpec:
+        for s in self.inductors:
+            if s.name == name:
+                return s
+        raise UnknownTruthName(f"plant {self.name}: no inductor {name!r}; it has {[s.name for s in self.inductors]}")
+
+    def junction_at(self, door: str, name: str) -> str:
+        """The junction an effect at (`door`, `name`) acts at: a storage's or an inductor's, else
+        `name` itself (a junction; an input's or output's name, which is none)."""
+        if door == "storage":
+            return self.storage(name).junction
+        if door == "inductor":
+            return self.inductor(name).junction
+        return name
 
     def storage(self, name: str) -> StorageSpec:
         for s in self.storages:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .plant import InputSpec, JunctionSpec, OutputSpec, StorageSpec, TruthPlant
+from .plant import InductorSpec, InputSpec, JunctionSpec, OutputSpec, StorageSpec, TruthPlant
 
 __all__ = ["mass_spring_damper", "dc_motor", "rlc", "coupled_tanks", "geared_inertias"]
 
@@ -65,12 +65,14 @@ def dc_motor() -> TruthPlant:
 
 
 def rlc() -> TruthPlant:
-    """``L i' = V - R i - q / C``, ``q' = i`` (R = 10 ohm, L = 0.1 H, C = 1 mF)."""
+    """``L i' = V - R i - q / C``, ``q' = i`` (R = 10 ohm, L = 0.1 H, C = 1 mF); a saturating
+    core divides ``L`` by ``1 + extra["L"]``."""
     Rv, L, Cv = 10.0, 0.1, 1e-3
 
     def rhs(x, u, extra):
         i, q = x
-        return np.array([(u["V"] - Rv * i - q / Cv + extra.get("i_loop", 0.0)) / L, i])
+        # a saturating core (extra["L"] = L / L_d(i) - 1) quickens the current's rate
+        return np.array([(u["V"] - Rv * i - q / Cv + extra.get("i_loop", 0.0)) / L * (1.0 + extra.get("L", 0.0)), i])
 
     return TruthPlant(
         name="rlc", model="rlc",
@@ -81,6 +83,7 @@ def rlc() -> TruthPlant:
         measure=lambda x, u: {"v_C": x[1] / Cv, "i": x[0]},
         junctions=(JunctionSpec("i_loop", "1", "electrical"),),
         storages=(StorageSpec("Cs", "i_loop", 1.0 / Cv, sensed=("v_C",)),),
+        inductors=(InductorSpec("L", "i_loop"),),
         rate=1000.0, duration=6.0, substeps=4,
         description="series RLC circuit")
 

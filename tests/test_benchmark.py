@@ -673,3 +673,18 @@ def test_an_input_offset_and_the_constant_load_its_source_makes_are_one_answer()
     assert s.kind_ok and s.place_ok
     answer["missing_physics"][0]["attached_to"] = "junction elsewhere"
     assert not score_case(rec, answer).kind_ok
+
+
+def test_a_prbs_of_few_long_bits_switches_at_least_once():
+    """The pneumatic cylinder's pressure holds 20 s bits over an 80 s record: one draw in 32 had
+    them all alike, a constant pressure and a load-cell force with no spread, against which no
+    effect could be sized (seed 3636, case 037: a generator error).  Every draw now switches."""
+    from diagnosis.benchmark.draw import excitation
+
+    plant = PLANTS["pneumatic-cylinder"]()
+    t = np.arange(int(plant.duration * plant.rate) + 1) / plant.rate
+    assert all(np.ptp(excitation(plant, t, np.random.default_rng(seed), "prbs")["p"]) > 0 for seed in range(200))
+    spec = draw_cases(40, 3636, PLANTS, KINDS_BEFORE_36)[37]
+    assert spec.label == "037-pneumatic-cylinder-relaxation@junction:piston"
+    rec = realise(spec, PLANTS[spec.plant]())
+    assert rec.change == pytest.approx(spec.target_change, rel=0.3)

@@ -134,6 +134,9 @@ def excitation(plant: TruthPlant, t: np.ndarray, rng, kind: str) -> dict:
             a, b = spec.low + 0.5 * (a - spec.low), spec.high - 0.5 * (spec.high - b)
             bit = spec.hold[0]
             bits = rng.integers(0, 2, size=int(t[-1] / bit) + 2)
+            seen = bits[:int(t[-1] / bit) + 1]
+            if np.all(seen == seen[0]):     # a few long bits all alike: no excitation; switch once
+                bits[seen.size // 2] ^= 1
             v = np.where(bits[(t / bit).astype(int)] == 1, b, a)
         else:
             v = np.empty_like(t)

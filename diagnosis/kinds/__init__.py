@@ -15,7 +15,7 @@ from . import (coulomb_friction, viscous_friction, stribeck_friction, pressure_d
                leak, heat_transfer, valve_lag, transport_delay, hysteresis, backlash, nonlinear_stiffness,
                saturation, sensor_offset, sensor_gain, constant_load, coulomb_viscous_friction,
                modulated_friction, asymmetric_viscous_friction, quadratic_drag, sensor_lag, radiation, input_offset,
-               input_gain, relaxation, inductor_saturation, nominal_value)
+               input_gain, relaxation, inductor_saturation, periodic_load, nominal_value)
 from .base import DOORS, REGISTRY, Kind, Proposal, Site, extends, kind_named, register
 
 __all__ = ["KINDS", "MODULES", "REGISTRY", "DOORS", "Kind", "Proposal", "Site", "extends", "kind_named",
@@ -26,7 +26,7 @@ MODULES = (coulomb_friction, viscous_friction, stribeck_friction, pressure_depen
            valve_lag, transport_delay, hysteresis, backlash, nonlinear_stiffness, saturation, sensor_offset,
            sensor_gain, constant_load, coulomb_viscous_friction, modulated_friction, asymmetric_viscous_friction,
            quadratic_drag, sensor_lag, radiation, input_offset, input_gain,
-           relaxation, inductor_saturation, nominal_value)
+           relaxation, inductor_saturation, periodic_load, nominal_value)
 
 #: The vocabulary, in the catalogue order (the registration order).
 KINDS = tuple(REGISTRY)

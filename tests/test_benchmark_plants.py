@@ -407,3 +407,32 @@ def test_a_saturating_core_in_the_truth_is_a_flux_linkage_that_levels_off():
     assert truth["i"] == pytest.approx(current(ref.y[0]), abs=1e-5)
     assert truth["v_C"] == pytest.approx(ref.y[1] / C, abs=1e-4)
     assert np.max(np.abs(truth["i"])) > 0.4              # past the knee
+
+
+@pytest.mark.parametrize("name, where", [("msd", "v_mass"), ("geared-inertias", "w1")])
+def test_a_periodic_load_in_the_truth_is_the_catalogues_on_the_library_graph(name, where):
+    """The truth's m sin(2 pi x/P + phi) of the travel (its own state) and the library graph with
+    the catalogue's periodic load at A = m cos(phi), B = m sin(phi): the outputs agree."""
+    from diagnosis.benchmark.effects import make_effect
+    from diagnosis.catalogue import candidates
+    from diagnosis.place import Place
+    from diagnosis.recording import Experiment
+
+    plant = PLANTS[name]()
+    t = np.arange(int(round(min(plant.duration, 30.0) * plant.rate)) + 1) / plant.rate
+    u = random_inputs(plant, t, seed=6)
+    base = simulate_truth(plant, t, u, signals=True)
+    x = np.concatenate([[0.0], np.cumsum(base["_signals"][where][:-1]) / plant.rate])
+    m, period, phase = 0.2 * np.std(base[plant.outputs[0].name]) + 0.05, float(np.ptp(x)) / 5.0, 0.7
+    graph = library.build(plant.model)
+    exp = Experiment(t, u, {o.name: base[o.name] for o in plant.outputs}, {}, "nominal")
+    (cand,) = [c for c in candidates(graph, Place("junction", where), experiment=exp) if c.kind == "periodic_load"]
+    values = dict(zip((p.name for p in cand.params), (m * np.cos(phase), m * np.sin(phase), period)))
+    truth = simulate_truth(plant, t, u, make_effect("periodic_load", plant, "junction", where, m, {},
+                                                    {"period": period, "phase": phase}))
+    res = simulate(cand.build(graph, values), (0.0, t[-1]), inputs={n: (t, v) for n, v in u.items()},
+                   output_interval=1.0 / plant.rate, x0=plant.nominal_x0, params=values, method="LSODA")
+    for o in plant.outputs:
+        change = np.std(truth[o.name] - base[o.name])
+        assert change > 0.02 * np.std(base[o.name])
+        assert np.max(np.abs(res[o.name] - truth[o.name])) < 0.02 * change + 1e-6 * np.std(base[o.name])

@@ -32,8 +32,9 @@ __all__ = ["CaseSpec", "Realised", "draw_cases", "realise", "excitation", "EXCIT
 
 EXCITATIONS = ("levels", "prbs", "levels+sine")
 KINDS = tuple(KIND_PLACES)
-#: the kinds drawn until session 35, before ``inductor_saturation`` joined (``--kinds before-36``)
-KINDS_BEFORE_36 = tuple(k for k in KINDS if k != "inductor_saturation")
+#: the kinds drawn until session 35, before ``inductor_saturation`` and ``periodic_load`` joined
+#: (``--kinds before-36``)
+KINDS_BEFORE_36 = tuple(k for k in KINDS if k not in ("inductor_saturation", "periodic_load"))
 #: the kinds drawn until session 34, before ``input_offset``, ``relaxation`` and ``input_gain`` joined
 #: (``--kinds before-35``)
 KINDS_BEFORE_35 = tuple(k for k in KINDS_BEFORE_36 if k not in ("input_offset", "relaxation", "input_gain"))
@@ -262,6 +263,16 @@ def _shape(spec, plant, rec, rng, scales):
         sh["beta"], sh["v_rms"] = float(rng.uniform(0.5, 2.0)), v_rms
     if k == "relaxation":      # a time constant the held levels show: a tenth of a hold to two holds
         sh["tau"] = float(np.exp(rng.uniform(np.log(0.1), np.log(2.0)))) * hold
+    if k == "periodic_load":   # 3-20 periods over the travel's range, each at least 8 steps long
+        x = np.concatenate([[0.0], np.cumsum(rec.nominal["_signals"][j][:-1]) / plant.rate])
+        span, step = float(np.ptp(x)), float(np.max(np.abs(np.diff(x))))
+        most = min(20.0, max(3.0, span / (8.0 * step))) if step > 0 else 20.0
+        sh["period"] = span / float(np.exp(rng.uniform(np.log(3.0), np.log(most))))
+        sh["phase"] = float(rng.uniform(0.0, 2.0 * np.pi))
+        # a shaft's load repeats a whole number of times per turn (cogging, an unbalance), where one fits
+        turns = [2.0 * np.pi / n for n in range(1, 65) if span / most <= 2.0 * np.pi / n <= span / 3.0]
+        if plant.junction(j).domain == "rotation" and turns:
+            sh["period"] = min(turns, key=lambda p: abs(math.log(p / sh["period"])))
     if k == "nonlinear_stiffness":
         sh["alpha"] = float(rng.uniform(0.0, 1.0))
         sh["q2"] = 3.0 * scales["rms"][spec.name] ** 2       # <q^4>/<q^2> of a Gaussian motion

@@ -26,7 +26,10 @@ junction (1: common flow)     viscous_friction, asymmetric_viscous_friction
                               level, through a first-order lag: an MR damper);
                               relaxation (an effort that follows the flow
                               through a lag: a cell's RC pair, a Maxwell
-                              element; electrical, mechanical, hydraulic)
+                              element; electrical, mechanical, hydraulic);
+                              periodic_load (m sin(2 pi x/P + phi) of the
+                              travel x since the start: cogging, an
+                              unbalance; mechanical, not at a twist)
 law (an effort in series     hysteresis (Dahl: a muscle's braid friction)
 with a constitutive law)
 junction (0: common effort)   leak (laminar, towards the ambient effort),
@@ -79,7 +82,7 @@ KIND_PLACES = {
     "asymmetric_viscous_friction": ("junction1_reversing",), "quadratic_drag": ("junction1_drag",),
     "sensor_lag": ("output",), "radiation": ("junction0_thermal",),
     "input_offset": ("input",), "relaxation": ("junction1_relax",), "input_gain": ("input",),
-    "inductor_saturation": ("inductor",),
+    "inductor_saturation": ("inductor",), "periodic_load": ("junction1_travel",),
 }
 
 
@@ -109,6 +112,9 @@ def places_for(plant: TruthPlant, kind: str) -> list[tuple[str, str]]:
                     and j.domain in MECHANICAL + ("electrical", "hydraulic")]
         elif door == "junction1_mech":
             out += [("junction", j.name) for j in plant.junctions if j.kind == "1" and j.domain in MECHANICAL]
+        elif door == "junction1_travel":        # a body's own travel (not a twist) a load repeats with
+            out += [("junction", j.name) for j in plant.junctions if j.kind == "1" and j.domain in MECHANICAL
+                    and not (j.algebraic or j.relative)]
         elif door == "junction1_dry":
             out += [("junction", j.name) for j in plant.junctions
                     if j.kind == "1" and j.domain in MECHANICAL + ("electrical",)]
@@ -149,7 +155,7 @@ class TruthEffect(NoEffect):
     def __init__(self, kind, plant, door, name, m, scales, shape):
         self.kind, self.plant, self.door, self.name = kind, plant, door, name
         self.m, self.scales, self.shape = float(m), scales, dict(shape)
-        stateful = ("hysteresis", "valve_lag", "modulated_friction", "sensor_lag", "relaxation")
+        stateful = ("hysteresis", "valve_lag", "modulated_friction", "sensor_lag", "relaxation", "periodic_load")
         self.n_states = 1 if kind in stateful else 0
         self.reads_outputs = kind == "sensor_lag"
         if door == "storage":
@@ -286,6 +292,8 @@ class TruthEffect(NoEffect):
         assert jk == "1"
         if k == "relaxation":                 # tau de/dt = m f - e: m settled per unit flow
             return {j: -z[0]}, np.array([(m * x - z[0]) / sh["tau"]])
+        if k == "periodic_load":              # amplitude m, period P of the travel z since the start
+            return {j: -m * math.sin(2.0 * math.pi * z[0] / sh["period"] + sh["phase"])}, np.array([x])
         eps = sh["eps"]
         if k == "coulomb_friction":
             return {j: -m * math.tanh(x / eps)}, np.zeros(0)

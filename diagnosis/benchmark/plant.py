@@ -105,6 +105,8 @@ class JunctionSpec:
     ``one_way`` (a 1-junction): its flow keeps one sign in every recording the plant makes (a
     tank's outflow to a lower one, a pump's pipe), where a law that depends on the direction of
     the flow is one law of that flow, which no recording can tell from it.
+    ``relative`` (a 1-junction): its flow is the rate of a deflection between two bodies (a shaft's
+    twist), whose integral is no position a load could repeat with.
     """
 
     name: str
@@ -117,6 +119,7 @@ class JunctionSpec:
     law: bool = False
     algebraic: bool = False
     one_way: bool = False
+    relative: bool = False
 
     @property
     def place(self) -> str:

@@ -47,7 +47,7 @@ def drivetrain() -> TruthPlant:
         states=("w_m", "q_shaft", "w_L"), x0=np.zeros(3), rhs=rhs, signals=signals,
         measure=lambda x, u: {"w_m": float(x[0]), "w_L": float(x[2]), "tau_s": shaft(x, {})},
         junctions=(JunctionSpec("w_motor", "1", rot), JunctionSpec("w_load", "1", rot),
-                   JunctionSpec("dw_shaft", "1", rot)),
+                   JunctionSpec("dw_shaft", "1", rot, relative=True)),
         storages=(StorageSpec("k_s", "dw_shaft", k_s, sensed=("tau_s",)),),
         rate=1000.0, duration=10.0, substeps=4,
         description="two-mass drivetrain: motor, gearbox, compliant shaft (13 Hz), load")

@@ -468,6 +468,8 @@ def _evidence_at(graph, p, experiment, x0, regime_variables, d_hat):
     measured = {o: np.asarray(experiment.outputs[o], float) for o in outputs}
     residual = {o: measured[o] - run.outputs[o] for o in outputs}
     values = {label: np.asarray(run.outputs[key], float) for key, label in labels.items()}
+    if d_hat.size == t.size:            # the estimate itself: a kind may read its grid off it
+        values["estimate"] = d_hat
     if not all(np.isfinite(v).all() for v in list(residual.values()) + list(values.values())):
         return None
     lin = LinearisedResponse(sim.model, run, sim.model.param_vector(None), [d], outputs)

@@ -45,15 +45,17 @@ def _diagnose(path):
 
 
 def test_the_trial_periods_repeat_twice_over_the_travel_and_are_resolved_per_sample():
+    """Twice over the range, and at least four samples a period at the fastest travel."""
     theta = np.linspace(0.0, 20.0, 201)                     # 0.1 rad per sample
     trial = periods(theta, rotation=True)
-    assert min(trial) >= 0.8 and max(trial) <= 10.0
+    assert min(trial) >= 0.4 and max(trial) <= 10.0
+
     def tried(p):
         return any(abs(q - p) < 1e-9 for q in trial)
-    assert tried(2 * np.pi) and tried(np.pi) and not tried(2 * np.pi / 8)     # 0.785 rad < 8 steps
-    # a travel of 0.5 m in steps of 2.5 mm: its range over 2...22.6 (over 32, 15.6 mm, is under 8 steps)
+    assert tried(2 * np.pi) and tried(2 * np.pi / 8) and not tried(2 * np.pi / 16)    # 0.39 rad < 4 steps
+    # a travel of 0.5 m in steps of 2.5 mm: its range over 2...32
     assert periods(np.linspace(0.0, 0.5, 201), rotation=False) == pytest.approx(
-        sorted(0.5 / c for c in (2.0, 2.8, 4.0, 5.7, 8.0, 11.3, 16.0, 22.6)))
+        sorted(0.5 / c for c in (2.0, 2.8, 4.0, 5.7, 8.0, 11.3, 16.0, 22.6, 32.0)))
     assert periods(np.zeros(50), rotation=False) == []
 
 
@@ -103,3 +105,17 @@ def test_an_unbalance_and_a_cogging_torque_are_periodic_loads_with_their_period(
 def test_a_turntable_without_a_load_is_answered_none(tmp_path):
     data = _diagnose(_recording(tmp_path / "table.csv", 0.0, 1, 3))
     assert [e["kind"] for e in data["missing_physics"]] == ["none"]
+
+
+def test_the_features_read_the_period_off_the_estimate_on_a_fine_grid():
+    """A period between two of the coarse grid's (a sinusoid at the nearer one dephases within a
+    few periods of travel) is found within the fine grid's step of 0.4 %."""
+    from diagnosis.kinds.periodic_load import best_periods, fine_periods
+
+    theta = np.linspace(0.0, 3.0, 3001) ** 1.5                  # an accelerating travel, 5.2 m
+    trial = periods(theta, rotation=False)
+    truth = 0.37                                                # 14 periods; the grid has 0.325, 0.459
+    assert min(abs(np.log(np.array(trial) / truth))) > 0.1
+    estimate = 0.8 * np.sin(2 * np.pi * theta / truth + 1.0) + 0.3 + np.random.default_rng(0).normal(0, 0.2, 3001)
+    best = best_periods(theta, estimate, fine_periods(theta, trial))
+    assert len(best) == 3 and min(abs(np.log(np.array(best) / truth))) < 0.004

@@ -43,7 +43,9 @@ class FeatureSignals:
     t : ndarray, shape (n,)
         Times, s.
     values : dict str -> ndarray
-        ``flow``, ``effort``, ``pressure:<expr>``, ``signal:<expr>``, ``content:<C name>``.
+        ``flow``, ``effort``, ``pressure:<expr>``, ``signal:<expr>``, ``content:<C name>``,
+        ``momentum:<I name>``, and ``estimate`` (the location's estimated extra effort or flow
+        at the junction, where there is one).
     one : bool
         A 1-junction (else a 0-junction).
     domain : str

@@ -12,11 +12,13 @@ no knowing).  Where it lives: a motor's cogging torque (a period of 2 pi over th
 poles), an unbalanced rotor or an arm's gravity torque (2 pi), a screw's lead error or a linear
 motor's pole pitch (a period of its travel).  A load that varies with position over less than
 two periods is a spring or a constant load, not this: only periods the record's travel covers
-twice are tried (:func:`periods`), and only where the travel moves by less than an eighth of a
+twice are tried (:func:`periods`), and only where the travel moves by at most a quarter of a
 period per sample.
 
-The features: :math:`\\sin` and :math:`\\cos` of :math:`2\\pi\\theta/P` for each trial period; the
-fit starts at the chosen period with the two coefficients as the amplitudes.
+The features: :math:`\\sin` and :math:`\\cos` of :math:`2\\pi\\theta/P` for each trial period, or,
+where the location estimated the junction's extra effort, for the few periods of a fine grid whose
+sinusoid fits that estimate best (:func:`best_periods`); the fit starts at the chosen period with the
+two coefficients as the amplitudes.
 """
 from __future__ import annotations
 
@@ -33,6 +35,8 @@ from .friction_common import displacement_unit, namer
 
 #: the trial periods of a rotation: a revolution over these counts (an unbalance, cogging)
 TURN_DIVISORS = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64)
+#: the fewest samples per period at the fastest travel: a sinusoid of the travel sampled coarser aliases
+STEPS_PER_PERIOD = 4.0
 #: the trial periods of any travel: its range over these counts (a screw's lead, a pole pitch)
 RANGE_DIVISORS = (2.0, 2.8, 4.0, 5.7, 8.0, 11.3, 16.0, 22.6, 32.0)
 
@@ -46,13 +50,40 @@ def travel(flow, dt: float) -> np.ndarray:
 def periods(theta, rotation: bool) -> list[float]:
     """The trial periods for the travel `theta`: its range over :data:`RANGE_DIVISORS` (and, on a
     rotation, 2 pi over :data:`TURN_DIVISORS`), those the range covers twice and the largest
-    step per sample resolves by eight."""
+    step per sample resolves by :data:`STEPS_PER_PERIOD`."""
     theta = np.asarray(theta, float)
     if theta.size < 3 or not np.all(np.isfinite(theta)):
         return []
     span, step = float(np.ptp(theta)), float(np.max(np.abs(np.diff(theta))))
     trial = [span / c for c in RANGE_DIVISORS] + ([2 * math.pi / n for n in TURN_DIVISORS] if rotation else [])
-    return sorted({round(p, 12) for p in trial if 0 < 2 * p <= span and p >= 8 * step})
+    return sorted({round(p, 12) for p in trial if 0 < 2 * p <= span and p >= STEPS_PER_PERIOD * step})
+
+
+#: the fine grid's step (a ratio of periods) and the number of its best periods the features try
+FINE_STEP, PEAKS = 1.004, 3
+
+
+def fine_periods(theta, trial) -> np.ndarray:
+    """Periods from the shortest to the longest of `trial`, :data:`FINE_STEP` apart, with the
+    trial periods themselves (a turn over a whole number)."""
+    low, high = min(trial), max(trial)
+    grid = low * FINE_STEP ** np.arange(int(np.log(high / low) / np.log(FINE_STEP)) + 1)
+    return np.unique(np.concatenate([grid, trial]))
+
+
+def best_periods(theta, estimate, grid, peaks: int = PEAKS, rows: int = 4000) -> list[float]:
+    """The `peaks` periods of `grid` whose sinusoid in `theta` (with a constant) leaves the least
+    of `estimate` by least squares, each a local best, on at most `rows` samples."""
+    take = np.arange(0, theta.size, max(1, theta.size // rows))
+    x, d = theta[take], estimate[take] - estimate[take].mean()
+    left = np.empty(grid.size)
+    for i, p in enumerate(grid):
+        basis = np.stack([np.sin(2 * np.pi * x / p), np.cos(2 * np.pi * x / p), np.ones_like(x)], axis=1)
+        coef, *_ = np.linalg.lstsq(basis, d, rcond=None)
+        left[i] = float(np.sum((d - basis @ coef) ** 2))
+    local = [i for i in range(grid.size) if (i == 0 or left[i] <= left[i - 1]) and
+             (i == grid.size - 1 or left[i] <= left[i + 1])]
+    return sorted(float(grid[i]) for i in sorted(local, key=lambda i: left[i])[:peaks])
 
 
 @register
@@ -63,11 +94,18 @@ class PeriodicLoad(Kind):
     feature_doors, feature_names, feature_price = "1", ("sin(2 pi theta/P)", "cos(2 pi theta/P)"), 3
 
     def features(self, s):
+        """sin and cos of the travel for the trial periods; with the location's estimate, the
+        :data:`PEAKS` periods of a fine grid whose sinusoid fits the estimate best (a period off
+        by a step of the coarse grid dephases within a few periods of travel)."""
         theta = travel(s.v, s.dt)
-        return [FeatureGroup(None, f"P = {p:.3g}", list(self.feature_names),
+        trial = periods(theta, s.domain == "rotation")
+        estimate = s.values.get("estimate")
+        if trial and estimate is not None and np.ptp(estimate) > 0:
+            trial = best_periods(theta, np.asarray(estimate, float), fine_periods(theta, trial))
+        return [FeatureGroup(None, f"P = {p:.4g}", list(self.feature_names),
                              np.stack([np.sin(2 * np.pi * theta / p), np.cos(2 * np.pi * theta / p)], axis=1),
                              grid=(p,))
-                for p in periods(theta, s.domain == "rotation")]
+                for p in trial]
 
     def feature_start(self, cand, evidence):
         """The amplitudes at the two coefficients, the period at the grid's."""

@@ -117,5 +117,5 @@ def test_the_features_read_the_period_off_the_estimate_on_a_fine_grid():
     truth = 0.37                                                # 14 periods; the grid has 0.325, 0.459
     assert min(abs(np.log(np.array(trial) / truth))) > 0.1
     estimate = 0.8 * np.sin(2 * np.pi * theta / truth + 1.0) + 0.3 + np.random.default_rng(0).normal(0, 0.2, 3001)
-    best = best_periods(theta, estimate, fine_periods(theta, trial))
+    best = best_periods(theta, estimate, fine_periods(trial))
     assert len(best) == 3 and min(abs(np.log(np.array(best) / truth))) < 0.004

@@ -63,7 +63,7 @@ def periods(theta, rotation: bool) -> list[float]:
 FINE_STEP, PEAKS = 1.004, 3
 
 
-def fine_periods(theta, trial) -> np.ndarray:
+def fine_periods(trial) -> np.ndarray:
     """Periods from the shortest to the longest of `trial`, :data:`FINE_STEP` apart, with the
     trial periods themselves (a turn over a whole number)."""
     low, high = min(trial), max(trial)
@@ -101,7 +101,7 @@ class PeriodicLoad(Kind):
         trial = periods(theta, s.domain == "rotation")
         estimate = s.values.get("estimate")
         if trial and estimate is not None and np.ptp(estimate) > 0:
-            trial = best_periods(theta, np.asarray(estimate, float), fine_periods(theta, trial))
+            trial = best_periods(theta, np.asarray(estimate, float), fine_periods(trial))
         return [FeatureGroup(None, f"P = {p:.4g}", list(self.feature_names),
                              np.stack([np.sin(2 * np.pi * theta / p), np.cos(2 * np.pi * theta / p)], axis=1),
                              grid=(p,))

@@ -558,7 +558,9 @@ def prune_candidates(cands: list, evidence: dict) -> tuple[list, list]:
     the junction's values beside it (:meth:`FeatureEvidence.best_with_values`) is kept too, to be
     refitted beside them (:func:`diagnosis.pairs.value_pairs`): a carriage's hardening spring
     validated at -990 % alone, its linear term standing in for a mass 3 % light, and at the noise
-    with the mass beside it (detuned benchmark, seed 7474, case 035).
+    with the mass beside it (detuned benchmark, seed 7474, case 035).  A kind that
+    :attr:`~diagnosis.kinds.base.Kind.needs_evidence` is fitted only where its features are
+    significant and among the :data:`PRUNE_KEEP` best.
     """
     keep, dropped = [], []
     for cand in cands:
@@ -567,6 +569,10 @@ def prune_candidates(cands: list, evidence: dict) -> tuple[list, list]:
                          and (e.place.kind, e.place.name) == (place.kind, place.name)), None)
         ev = place_ev.for_candidate(cand) if place_ev is not None else None
         best = place_ev.best() if place_ev is not None else None
+        if getattr(REGISTRY.get(getattr(cand, "kind", None)), "needs_evidence", False) and not (
+                ev is not None and ev.significant and ev in place_ev.kinds[:PRUNE_KEEP]):
+            dropped.append(cand)        # a law flexible enough to stand in for others: only on its evidence
+            continue
         if ev is None or best is None or best.excess_share < PRUNE_FROM or ev in place_ev.kinds[:PRUNE_KEEP]:
             keep.append(cand)
             continue

@@ -145,6 +145,10 @@ class Kind:
     #: dynamics (a lag) is located like any place (graph location's output correction lags too) and
     #: trades against every dynamic effect on that output, so it is fitted where it is ranked
     unranked_sensor: ClassVar[bool] = True
+    #: fitted only where its features are significant and rank among the best at the place
+    #: (:func:`diagnosis.features.prune_candidates`): a law flexible enough to stand in for others
+    #: (a load periodic in the travel for a mass's error along a travel one way)
+    needs_evidence: ClassVar[bool] = False
 
     def admits(self, door: str, domain: str) -> bool:
         """Whether this kind may attach at a place of `door` whose junction is of `domain`: the door

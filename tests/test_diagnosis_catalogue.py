@@ -84,8 +84,9 @@ def pneumatic_tank():
 
 def test_kinds_are_the_issue_vocabulary_in_order():
     # issue 6, section 2c, verbatim order; then issue 11's constant load and friction laws (a
-    # damping that depends on the direction last), a sensor's lag, radiation, an input's offset and gain, a relaxing branch, and
-    # a storage element's nominal value refitted alone
+    # damping that depends on the direction last), a sensor's lag, radiation, an input's offset and
+    # gain, a relaxing branch, a saturating inductor, a load periodic in the travel, and a storage
+    # element's nominal value refitted alone
     assert KINDS == ("coulomb_friction", "viscous_friction", "stribeck_friction", "pressure_dependent_friction",
                      "leak", "heat_transfer", "valve_lag", "transport_delay", "hysteresis", "backlash",
                      "nonlinear_stiffness", "saturation", "sensor_offset", "sensor_gain", "constant_load",

@@ -583,7 +583,8 @@ def _features(graph, scores, places, train, x0, rv, cands, say, label):
     from .features import feature_evidence, prune_candidates, with_feature_starts
     junctions = [p for p in places if p.kind in ("junction", "law")]
     if not junctions or not scores:       # no location (a diverging nominal): nothing to regress
-        return {}, cands, []
+        kept, pruned = prune_candidates(cands, {})      # only the kinds that need evidence go
+        return {}, kept, [str(c) for c in pruned]
     say(label, ", ".join(map(str, junctions)))
     evidence = feature_evidence(graph, junctions, train, x0=x0, regime_variables=rv,
                                 estimates={s.place: s.estimate for s in scores})

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..errors import BenchmarkError
 from .draw import KINDS, CaseSpec, Realised, realise
-from .effects import places_for
+from .effects import AT_JUNCTION, places_for
 from .simulate import NoEffect, simulate_truth
 
 __all__ = ["CompoundEffect", "second_effect", "realise_compound", "compound_label", "visibility", "FRICTIONS"]
@@ -112,7 +112,7 @@ class CompoundEffect(NoEffect):
 
 
 def _junction_of(plant, door, name):
-    return plant.junction_at(door, name) if door in ("junction", "storage", "inductor") else None
+    return plant.junction_at(door, name) if door in AT_JUNCTION else None
 
 
 def _compatible(plant, first: CaseSpec, kind, door, name) -> bool:

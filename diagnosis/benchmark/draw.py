@@ -67,7 +67,7 @@ class CaseSpec:
     seed: int
     plant: str
     kind: str                       # "none" for a null case
-    door: str = ""                  # junction / storage / input / output
+    door: str = ""                  # junction / storage / inductor / input / output
     name: str = ""
     target_change: float = 0.0     # rms(diff) / std(y) aimed at
     ratio: float = 0.0             # effect-to-noise aimed at
@@ -314,6 +314,8 @@ def _initial_magnitude(spec, plant, rec, scales, sh, probe_gain):
         y = rec.nominal[spec.name]
         return r * float(np.std(y)) / max(_rms(y), 1e-300)
     j = plant.junction_at(spec.door, spec.name)
+    if k == "inductor_saturation":      # the core's current rate rises by m i^2: r at the RMS current
+        return r / max(scales["rms"][j], 1e-300) ** 2
     g = probe_gain()
     base = r / g      # a constant effort/flow of this size changes the output by about r
     if k in ("viscous_friction", "relaxation"):
@@ -334,8 +336,6 @@ def _initial_magnitude(spec, plant, rec, scales, sh, probe_gain):
         return base / (sh["c0"] + sum(scales["rms"][p] for p in plant.junction(j).pressures) - sh["p_ref"])
     if k == "nonlinear_stiffness":
         return base / max(scales["rms"][spec.name], 1e-300) ** 3
-    if k == "inductor_saturation":      # the core's current rate rises by m i^2: r at the RMS current
-        return r / max(scales["rms"][j], 1e-300) ** 2
     if k == "backlash":
         return 0.1 * scales["rms"][spec.name]
     return base

@@ -64,10 +64,12 @@ from ..errors import BenchmarkError
 from .plant import TruthPlant
 from .simulate import NoEffect
 
-__all__ = ["KIND_PLACES", "TruthEffect", "make_effect", "places_for"]
+__all__ = ["KIND_PLACES", "AT_JUNCTION", "TruthEffect", "make_effect", "places_for"]
 
 
 MECHANICAL = ("translation", "rotation")
+#: the doors whose effects act at a junction (a storage's or an inductor's: TruthPlant.junction_at)
+AT_JUNCTION = ("junction", "storage", "inductor")
 
 #: Where each kind makes physical sense: stiction, Dahl hysteresis and play are mechanical;
 #: a sign-law drop is a Coulomb friction or an electrical brush drop; a resistance anywhere.
@@ -164,24 +166,22 @@ class TruthEffect(NoEffect):
             # a storage's effort on a 0-junction is the junction's: a changed law is its own
             # (``extra[<storage>]``, read by the plant's right-hand side), not a flow added there
             self.law_is_effort = plant.junction(self.junction).kind == "0"
-        elif door == "junction":
-            self.junction = name
-        elif door == "inductor":
-            self.junction = plant.inductor(name).junction
+        elif door in AT_JUNCTION:
+            self.junction = plant.junction_at(door, name)
 
     # -- where, as the diagnosis reports it ---------------------------------------------
     @property
     def place(self) -> str:
         """The place as the report's ``attached_to`` says it (storage and inductor effects act at a
         junction)."""
-        if self.door in ("junction", "storage", "inductor"):
+        if self.door in AT_JUNCTION:
             return self.plant.junction(self.junction).place
         return f"{self.door} {self.name}"
 
     def accepted_places(self) -> set[str]:
         """The place, its indistinguishable equivalents, and the storage element's own name."""
         out = {self.place}
-        if self.door in ("junction", "storage", "inductor"):
+        if self.door in AT_JUNCTION:
             out |= {self.plant.junction(e).place for e in self.plant.junction(self.junction).equivalent}
         if self.door in ("storage", "inductor"):
             out |= {f"storage {self.name}", f"element {self.name}"}
@@ -251,7 +251,7 @@ class TruthEffect(NoEffect):
         k, m, sh = self.kind, self.m, self.shape
         if k == "valve_lag":
             return {}, np.array([(u[self.name] - z[0]) / m])   # the actuator follows the command
-        if self.door not in ("junction", "storage", "inductor"):     # a sensor's lag: its rate follows the outputs
+        if self.door not in AT_JUNCTION:     # a sensor's lag: its rate follows the outputs
             return {}, np.zeros(self.n_states)
         j = self.junction
         if k == "inductor_saturation":        # the current's rate rises by m i^2 (L_d = L / (1 + m i^2))

@@ -29,17 +29,13 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from ..catalogue_common import ParamSpec, fresh_name, junction_elements
+from ..catalogue_common import ParamSpec, fresh_name
 from .base import Kind, Proposal, register
 from .feature_signals import FeatureGroup, rms
+from .storage_common import inductors
 
 #: the exponents n the features try (odd: a core's curve is odd in the flux)
 FEATURE_EXPONENTS = (3, 5, 7, 9)
-
-
-def inductors(site) -> list:
-    """The electrical I elements bonded to the site's junction, in bond order."""
-    return [e for e, _ in junction_elements(site.graph, site.name) if e.kind == "I" and e.domain == "electrical"]
 
 
 @register

@@ -1,4 +1,5 @@
-"""What the kinds acting on a C element share: the C's displacement scale, unit and stiffness."""
+"""What the kinds acting on a storage element share: the C's displacement scale, unit and
+stiffness; the C and the electrical I elements at a junction."""
 from __future__ import annotations
 
 import numpy as np
@@ -7,12 +8,18 @@ from bondgraph.params import DOMAINS
 
 from ..catalogue_common import junction_elements
 
-__all__ = ["capacitors", "displacement_scale", "stiffness_scale", "units_of"]
+__all__ = ["capacitors", "inductors", "displacement_scale", "stiffness_scale", "units_of"]
 
 
 def capacitors(site) -> list:
     """The C elements bonded to the site's junction, in bond order."""
     return [element for element, _ in junction_elements(site.graph, site.name) if element.kind == "C"]
+
+
+def inductors(site) -> list:
+    """The electrical I elements bonded to the site's junction, in bond order."""
+    return [element for element, _ in junction_elements(site.graph, site.name)
+            if element.kind == "I" and element.domain == "electrical"]
 
 
 def displacement_scale(site, element) -> float:

@@ -42,6 +42,11 @@ effect with the nominal restarted from the truth's state every tenth of the reco
    accumulated drift, not a wrong response.  (A restart absorbs a sensor's offset or gain too, which is no drift and
    persists from the training part into the held-out part: a carriage whose position sensor
    reads 10 % high keeps the open-loop judge.)
+3. or its mode grows e-fold within the held-out part and its open-loop prediction there is
+   chaotic (:func:`chaotic_spread`): started :data:`CHAOS_NUDGE` of each state's range away, the
+   nominal's held-out outputs end more than one noise standard deviation apart, so a candidate's
+   change of the model moves its open-loop error by chance.  Under such a judge the training
+   part does not answer either (:mod:`diagnosis.training_judge`).
 
 Otherwise open-loop stays the judge (a stable plant, or an integrating one whose nominal does
 not drift on this recording, such as a carriage whose velocity sensor reads off).
@@ -61,7 +66,8 @@ from .restarts import SegmentPlan, input_driven_states, restart_states
 
 __all__ = ["SegmentPlan", "Judged", "Judge", "plan_segments", "choose_judge", "drifting_mode", "grows_within",
            "input_driven_states", "SEGMENTS", "UNSTABLE_HORIZON", "MIN_SEGMENT_SAMPLES", "ESTIMATION_SHARE",
-           "MIN_ESTIMATION_SAMPLES", "MAX_ESTIMATION_SAMPLES", "DRIFT_RATIO", "SLOW_MODE", "FLOOR_MARGIN"]
+           "MIN_ESTIMATION_SAMPLES", "MAX_ESTIMATION_SAMPLES", "DRIFT_RATIO", "SLOW_MODE", "FLOOR_MARGIN",
+           "CHAOS_NUDGE", "chaotic_spread"]
 
 #: segments the held-out part is cut into (fewer when it is short)
 SEGMENTS = 5
@@ -76,6 +82,8 @@ MIN_ESTIMATION_SAMPLES, MAX_ESTIMATION_SAMPLES = 10, 200
 DRIFT_RATIO = 2.0
 #: a mode whose time constant exceeds this many held-out spans does not decay
 SLOW_MODE = 10.0
+#: relative start-state nudge (of each state's range over the run) that tells a chaotic nominal (:func:`chaotic_spread`)
+CHAOS_NUDGE = 1e-6
 #: the segment error's noise floor is known only roughly (a noise estimate that quantisation
 #: can fool, a linearised propagation of the restarts' state noise): an output counts as
 #: unexplained only beyond this multiple of it
@@ -283,6 +291,34 @@ def grows_within(mode, span: float) -> bool:
     return mode is not None and mode.real * span > 1.0
 
 
+def chaotic_spread(sim, run, n_held: int, noise: dict) -> float:
+    """How far apart, on the last `n_held` samples, the outputs of `sim` end when its `run` is
+    started :data:`CHAOS_NUDGE` of each state's range away: the largest rms difference over the
+    outputs, in noise standard deviations (``inf`` when the nudged run fails).  Above 1 the
+    open-loop prediction is chaotic: a candidate's tiny change of the model (a constant load of
+    1.7e-8 N on a double-well Duffing oscillator's nominal, the right model) reshuffles it, and
+    its held-out error then falls or rises by chance."""
+    states = np.asarray(run.states, float)
+    if not states.size or not np.isfinite(states).all():
+        return float("inf")
+    span = np.ptp(states, axis=0)
+    nudge = CHAOS_NUDGE * np.where(span > 0, span, np.maximum(np.abs(states[0]), 1.0))
+    try:
+        y = sim.run(None, states[0] + nudge).outputs
+    except BondcosimError:
+        return float("inf")
+    worst = 0.0
+    for o, ref in run.outputs.items():
+        sigma = noise.get(o, 0.0)
+        if sigma <= 0:
+            continue
+        d = np.asarray(y[o][-n_held:], float) - np.asarray(ref[-n_held:], float)
+        if not np.isfinite(d).all():
+            return float("inf")
+        worst = max(worst, float(np.sqrt(np.mean(d ** 2))) / sigma)
+    return worst
+
+
 def _replayed_floor(judge, sim, prior, seed: int = 0) -> dict:
     """The segment error's floor for a nominal with an unstable mode, replayed: the held-out part
     made again by the nominal itself (each segment simulated whole from its restart state, plus
@@ -411,6 +447,16 @@ def choose_judge(sim, exp, held, res, diverged: str, floor: dict, x0=None):
         if segments.unstable:
             replayed = _replayed_floor(segments, sim, res.run.states[-n_held:])
             segments.floor = {o: max(v, replayed[o]) for o, v in judged.floor.items()}
+        return segments, judged
+    spread = chaotic_spread(sim, res.run, n_held, res.noise) if grows_within(mode, span) else 0.0
+    if spread > 1.0:
+        segments.mode = mode
+        segments.reason = (f"the nominal model has an unstable mode (eigenvalue {_eig(mode)}: an error grows e-fold "
+                           f"every {1 / mode.real:.3g} s) and its open-loop prediction of the held-out part is "
+                           f"chaotic: started {CHAOS_NUDGE:g} of each state's range away, it ends {spread:.3g} "
+                           f"noise standard deviations apart (rms), so no open-loop fit can be told from chance")
+        replayed = _replayed_floor(segments, sim, res.run.states[-n_held:])
+        segments.floor = {o: max(v, replayed[o]) for o, v in judged.floor.items()}
         return segments, judged
     judge = Judge("open-loop", f"the nominal model has a mode that integrates what it leaves out (eigenvalue "
                   f"{_eig(mode)}), but restarting it from the data does not remove most of its "

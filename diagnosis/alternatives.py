@@ -24,8 +24,13 @@ fits of other kinds fitted the recording as well:
   :data:`~diagnosis.holdout_resolution.Z_RESOLVED`; a :math:`z` that cannot be computed, such as
   for identical predictions, resolves nothing).
 
-One per kind (its lowest held-out error that passes), at most :data:`MAX_ALTERNATIVES`, lowest held-out error
-first.  Each carries the largest difference of its held-out prediction from the winner's in noise
+One per kind (its lowest held-out error that passes), at most :data:`MAX_ALTERNATIVES`, lowest held-out
+error first, but a richer law whose kind nests a listed one's (or the winner's) at the same place, its
+prediction within :data:`~diagnosis.fit.COLLAPSED` noise standard deviations of that one's, after the
+others: the plainer law with extra terms fitted to nothing is listed first when the list is full (a
+carriage's Coulomb friction on motion that never reversed, answered as a constant load, was crowded
+out of the list by the Stribeck and Coulomb-plus-viscous laws fitted to its prediction: seed 3641,
+case 025).  Each carries the largest difference of its held-out prediction from the winner's in noise
 standard deviations: a recording that excites that difference beyond the noise would tell them apart.
 """
 from __future__ import annotations
@@ -37,7 +42,7 @@ import numpy as np
 from .fit import (COLLAPSED, MIN_GAIN, MIN_SHARE, TIE, acceptance, needs_explaining, unpriced_error, usable_fits,
                   within_tie)
 from .holdout_resolution import Z_RESOLVED, largest_difference, resolution
-from .kinds.base import holds
+from .kinds.base import REGISTRY, holds
 
 __all__ = ["Alternative", "indistinguishable", "MAX_ALTERNATIVES"]
 
@@ -113,9 +118,9 @@ def indistinguishable(winner, fits, nominal_holdout: dict, *, noise: dict | None
     significant = needs_explaining(nominal_holdout, floor)
     if winner is None or not significant:
         return []
-    found = {}
+    found, kept = {}, {}
     for fit in sorted(usable_fits(fits, list(nominal_holdout)), key=lambda f: unpriced_error(f, significant)):
-        if fit.kind == winner.kind or fit.kind in found or len(found) >= limit:
+        if fit.kind == winner.kind or fit.kind in found:
             continue
         if not (_accepted(nominal_holdout, fit, floor) and (within_tie(fit, winner, nominal_holdout, floor)
                                                             or _as_close_unpriced(fit, winner, significant))):
@@ -125,11 +130,24 @@ def indistinguishable(winner, fits, nominal_holdout: dict, *, noise: dict | None
             continue
         z = _resolution_either_way(measured, winner, fit, significant)
         if not z >= Z_RESOLVED:
+            kept[fit.kind] = fit
             found[fit.kind] = Alternative(fit.kind, _place_of(fit), dict(fit.holdout_nrmse), z,
                                           largest_difference(measured, _prediction(winner), _prediction(fit),
                                                              significant, floor),
                                           fit.n_params)
-    return list(found.values())
+    richer = {k for k, fit in kept.items() if any(_nests_collapsed(fit, other, measured, significant, floor)
+                                                   for other in (winner, *kept.values()))}
+    return sorted(found.values(), key=lambda a: a.kind in richer)[:limit]     # stable: error order kept
+
+
+def _nests_collapsed(fit, other, measured, significant, floor) -> bool:
+    """Whether `fit`'s kind nests `other`'s (:attr:`~diagnosis.kinds.base.Kind.nests`) at the same
+    place and its held-out prediction stays within :data:`~diagnosis.fit.COLLAPSED` noise standard
+    deviations of `other`'s: the plainer law with extra terms fitted to nothing."""
+    if fit is other or fit.candidate is None or other.candidate is None or _place_of(fit) != _place_of(other):
+        return False
+    return other.kind in getattr(REGISTRY.get(fit.kind), "nests", {}) and largest_difference(measured, _prediction(other), _prediction(fit), significant,
+                                         floor) < COLLAPSED
 
 
 def _as_close_unpriced(fit, winner, significant) -> bool:

@@ -194,3 +194,21 @@ def test_the_report_names_the_reading_it_cannot_tell_apart(tmp_path):
     assert sentence.startswith("Not told apart by this recording: ")
     assert (f"constant_load at junction v_mass (held-out NRMSE x {alt['holdout_nrmse']['x']:.3g} vs "
             f"{data['fit']['improved']['x']:.3g}; z = {alt['z']:.1f}; ") in sentence
+
+
+def test_a_plainer_law_is_listed_before_the_richer_ones_fitted_to_its_prediction(rng):
+    """A carriage's Coulomb friction on motion that never reversed, answered as a constant load: the
+    Stribeck and Coulomb-plus-viscous laws, which nest a Coulomb friction, fitted to its prediction
+    with a slightly lower held-out error and crowded it out of the three listed (seed 3641, case 025).
+    The plainer law now comes first; the richer ones keep the places left."""
+    truth, held, floor, fit = _sine_fits(rng)
+    winner = fit("constant_load", 1, truth)
+    stribeck, both = fit("stribeck_friction", 3, truth + 0.0010), fit("coulomb_viscous_friction", 2, truth + 0.0012)
+    offset, coulomb = fit("input_offset", 1, truth + 0.0011), fit("coulomb_friction", 1, truth + 0.0013)
+    fits = [winner, stribeck, both, offset, coulomb]
+    assert sorted(fits[1:], key=lambda f: f.holdout_nrmse["x"])[-1] is coulomb       # the worst of the four
+    found = indistinguishable(winner, fits, {"x": 0.5}, noise=floor, measured=held)
+    assert [a.kind for a in found] == ["input_offset", "coulomb_friction", "stribeck_friction"]
+    # with room in the list the richer law is listed too, after the plainer one it nests
+    found = indistinguishable(winner, [winner, stribeck, coulomb], {"x": 0.5}, noise=floor, measured=held)
+    assert [a.kind for a in found] == ["coulomb_friction", "stribeck_friction"]

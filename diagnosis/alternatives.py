@@ -42,9 +42,9 @@ import numpy as np
 from .fit import (COLLAPSED, MIN_GAIN, MIN_SHARE, TIE, acceptance, needs_explaining, unpriced_error, usable_fits,
                   within_tie)
 from .holdout_resolution import Z_RESOLVED, largest_difference, resolution
-from .kinds.base import REGISTRY, holds
+from .kinds.base import REGISTRY, Kind, holds
 
-__all__ = ["Alternative", "indistinguishable", "MAX_ALTERNATIVES"]
+__all__ = ["Alternative", "indistinguishable", "unexcited", "MAX_ALTERNATIVES"]
 
 #: most alternatives reported per round
 MAX_ALTERNATIVES = 3
@@ -72,6 +72,9 @@ class Alternative:
         deviation (the floor's), on the outputs that need explaining; NaN without predictions.
     n_params : int
         Its number of priced parameters.
+    unexcited : str
+        Why the recording never excites what sets this kind apart from the winner's, for a kind not
+        fitted for that reason (:func:`unexcited`; its numbers are then the winner's); else "".
     """
 
     kind: str
@@ -80,14 +83,16 @@ class Alternative:
     z: float
     difference: float
     n_params: int
+    unexcited: str = ""
 
     def to_json(self) -> dict:
-        """``{"kind", "place", "holdout_nrmse": {output: nrmse}, "z", "difference", "n_params"}``;
-        NaN as ``None``."""
+        """``{"kind", "place", "holdout_nrmse": {output: nrmse}, "z", "difference", "n_params"}``,
+        and ``"unexcited"`` where set; NaN as ``None``."""
         finite = lambda x: float(x) if np.isfinite(x) else None   # noqa: E731
-        return {"kind": self.kind, "place": self.place,
-                "holdout_nrmse": {o: finite(v) for o, v in self.holdout_nrmse.items()},
-                "z": finite(self.z), "difference": finite(self.difference), "n_params": int(self.n_params)}
+        out = {"kind": self.kind, "place": self.place,
+               "holdout_nrmse": {o: finite(v) for o, v in self.holdout_nrmse.items()},
+               "z": finite(self.z), "difference": finite(self.difference), "n_params": int(self.n_params)}
+        return out | ({"unexcited": self.unexcited} if self.unexcited else {})
 
 
 def indistinguishable(winner, fits, nominal_holdout: dict, *, noise: dict | None = None,
@@ -138,6 +143,42 @@ def indistinguishable(winner, fits, nominal_holdout: dict, *, noise: dict | None
     richer = {k for k, fit in kept.items() if any(_nests_collapsed(fit, other, measured, significant, floor)
                                                    for other in (winner, *kept.values()))}
     return sorted(found.values(), key=lambda a: a.kind in richer)[:limit]     # stable: error order kept
+
+
+def unexcited(graph, winner, experiment, x0=None) -> list[Alternative]:
+    """The richer kinds of `winner`'s at its junction that the recording never excites there
+    (:meth:`Kind.unexcited <diagnosis.kinds.base.Kind.unexcited>`), and so were not fitted: on this
+    record each is the winner's law, and a recording that excites it would tell them apart.  A heat
+    link's direction-dependent conductance where the heat flowed one way for all but a few per cent
+    of the record was answered as a plain conductance, with no word that the other direction was
+    never seen (seed 3737, case 022).  Each listed with the winner's numbers (z NaN, difference 0)
+    and the reason.
+
+    Parameters
+    ----------
+    graph : BondGraph
+        The model the winner was fitted on.
+    winner : CandidateFit or None
+    experiment : Experiment
+        The part whose nominal run gives the junction's values (the fits' part).
+    x0 : dict, optional
+        That run's start state.
+    """
+    cand = getattr(winner, "candidate", None)
+    if cand is None or hasattr(cand, "members") or cand.place.kind != "junction":
+        return []
+    richer = [k for k in REGISTRY.values() if winner.kind in k.nests and type(k).unexcited is not Kind.unexcited]
+    if not richer:
+        return []
+    from .catalogue_scales import junction_scales
+    _, values = junction_scales(graph, cand.place.name, experiment, x0=x0)
+    found = []
+    for k in richer:
+        reason = k.unexcited(cand.place.name, values) if values else ""
+        if reason:
+            found.append(Alternative(k.name, _place_of(winner), dict(winner.holdout_nrmse), float("nan"), 0.0,
+                                     max(winner.n_params, k.feature_params), reason))
+    return found
 
 
 def _nests_collapsed(fit, other, measured, significant, floor) -> bool:

@@ -48,6 +48,7 @@ import numpy as np
 from plants import load as load_model
 
 from . import pairs
+from .alternatives import unexcited
 from .errors import DiagnosisError
 from .initial_state import start_inconsistent
 from .place_choice import (MIN_PLACE_SHARE, actuator_places, companions, further_places, located_places, on_storage,
@@ -506,6 +507,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         return (built, *_holdout_nrmse(OutputSimulator(built, exp), None, x_start, judge), x_start, described)
 
     def round_one(chosen, alternatives):
+        alternatives = alternatives + unexcited(graph, chosen, cand_part, start_x0)
         return Round(chosen, fits, dict(nominal), dict(improved), seconds=_time.perf_counter() - say.start,
                      diverged=diverged, window=[float(fit_part.t[0]), float(fit_part.t[-1])], floor=floor,
                      start=fitted_from(judge, fit_part, start), restarted=restarted_scores,
@@ -757,8 +759,8 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
     say(f"{label}: choosing")
     chosen, alternatives = _choose(reference, fits, floor, evidence, res, exp, train, held, judge.kind != "open-loop",
                                    sim, unstable=judge.unstable)
-    out = Round(chosen, fits, dict(reference), dict(reference), scores=scores,
-                features=list(evidence.values()), pruned=pruned, indistinguishable=alternatives)
+    out = Round(chosen, fits, dict(reference), dict(reference), scores=scores, features=list(evidence.values()),
+                pruned=pruned, indistinguishable=alternatives + unexcited(graph, chosen, train, x0))
     if chosen is not None:
         names = {p.name for p in chosen.candidate.params}
         better = chosen.candidate.build(graph, {k: v for k, v in chosen.values.items() if k in names})

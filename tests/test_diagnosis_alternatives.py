@@ -12,7 +12,7 @@ import pytest
 
 from plants.library.textbook import mass_spring_damper
 from bondgraph import R
-from diagnosis.alternatives import MAX_ALTERNATIVES, Alternative, indistinguishable
+from diagnosis.alternatives import MAX_ALTERNATIVES, Alternative, indistinguishable, unexcited
 from diagnosis.catalogue import candidates
 from diagnosis.diagnose import diagnose
 from diagnosis.fit import CandidateFit, choose, fit_candidate, noise_floor
@@ -212,3 +212,28 @@ def test_a_plainer_law_is_listed_before_the_richer_ones_fitted_to_its_prediction
     # with room in the list the richer law is listed too, after the plainer one it nests
     found = indistinguishable(winner, [winner, stribeck, coulomb], {"x": 0.5}, noise=floor, measured=held)
     assert [a.kind for a in found] == ["coulomb_friction", "stribeck_friction"]
+
+
+def test_a_direction_dependent_law_the_record_never_excites_is_listed_beside_the_plain_one():
+    """A heat link's direction-dependent conductance where the heat flowed one way was answered as
+    a plain conductance with no word on the other direction (seed 3737, case 022): the asymmetric
+    kind is not proposed on such a record, so no fit could list it.  On the ramp the mass's velocity
+    never reverses: the asymmetric friction is listed beside a viscous answer, unfitted, with the
+    share of the record on each side; on the reversing record, and beside another kind, it is not."""
+    nominal = mass_spring_damper(b=B)
+    place = Place("junction", "v_mass")
+    for force, listed in ((ONE_WAY, True), (REVERSING, False)):
+        exp = _recording(force)
+        viscous = next(c for c in candidates(nominal, place, experiment=exp) if c.kind == "viscous_friction")
+        winner = CandidateFit(viscous, {"b_visc_v_mass": 0.1}, {"x": 0.01}, {"x": 0.02, "v": 0.03}, 1, True, "")
+        found = unexcited(nominal, winner, exp)
+        assert bool(found) is listed
+        if listed:
+            (a,) = found
+            assert (a.kind, a.place, a.holdout_nrmse, a.n_params) == (
+                "asymmetric_viscous_friction", "junction v_mass", winner.holdout_nrmse, 2)
+            assert "positive in 100% and negative in 0%" in a.unexcited and np.isnan(a.z) and a.difference == 0
+            assert a.to_json()["unexcited"] == a.unexcited
+    load = next(c for c in candidates(nominal, place, experiment=exp) if c.kind == "constant_load")
+    assert unexcited(nominal, CandidateFit(load, {}, {}, {"x": 0.02}, 1, True, ""), _recording(ONE_WAY)) == []
+    assert unexcited(nominal, None, exp) == []

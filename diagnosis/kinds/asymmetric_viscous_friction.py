@@ -64,6 +64,17 @@ class AsymmetricViscousFriction(Kind):
                        for f, b in ((1.0, 0.0), (0.0, 1.0)) if g <= coefficient.upper)
         return [Proposal((forward, backward), starts=starts)]
 
+    def unexcited(self, junction, values):
+        """Where the flow keeps one side of 0 (:func:`goes_both_ways`): the other side's
+        coefficient is not excited, and a viscous friction is this law on the record."""
+        flow = next((v for k, v in values.items() if k.startswith("f_")), None)
+        if flow is None or goes_both_ways(flow):
+            return ""
+        flow = np.asarray(flow, dtype=float)
+        return (f"the flow at {junction} is positive in {np.mean(flow > 0):.0%} and negative in "
+                f"{np.mean(flow < 0):.0%} of the record (a direction-dependent law needs {BOTH_WAYS:.0%} "
+                f"on each side)")
+
     def build(self, graph, cand, values):
         forward, backward = (p.name for p in cand.params)
         return friction_r(graph, cand, f"{forward}*Max(f, 0) + {backward}*Min(f, 0)")

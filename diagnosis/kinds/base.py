@@ -181,6 +181,15 @@ class Kind:
         """Fitted `values` with what the training data cannot tell released (unchanged here)."""
         return values
 
+    def unexcited(self, junction: str, values: dict) -> str:
+        """Why the recording never excites what sets this kind apart from a simpler kind it nests
+        (:attr:`nests`), at `junction` (the nominal values there,
+        :func:`~diagnosis.catalogue_scales.junction_scales`), in words; "" when it does (here
+        always).  A kind that is not proposed on such a recording names the reason, and the report
+        lists it beside the simpler answer as a reading not told apart
+        (:func:`diagnosis.alternatives.unexcited`)."""
+        return ""
+
     def start_from(self, cand, simpler, values: dict) -> dict | None:
         """A start for `cand` where a fit of the `simpler` candidate it extends (same place, a
         kind in :attr:`nests`) ended with `values`: the mapped parameters take the simpler fit's

@@ -152,7 +152,8 @@ def unexcited(graph, winner, experiment, x0=None) -> list[Alternative]:
     link's direction-dependent conductance where the heat flowed one way for all but a few per cent
     of the record was answered as a plain conductance, with no word that the other direction was
     never seen (seed 3737, case 022).  Each listed with the winner's numbers (z NaN, difference 0)
-    and the reason.
+    and the reason, after the fitted alternatives and beside their limit; none for a winner the
+    training part judged (which the held-out part cannot judge at all).
 
     Parameters
     ----------
@@ -165,7 +166,8 @@ def unexcited(graph, winner, experiment, x0=None) -> list[Alternative]:
         That run's start state.
     """
     cand = getattr(winner, "candidate", None)
-    if cand is None or hasattr(cand, "members") or cand.place.kind != "junction":
+    if (cand is None or hasattr(cand, "members") or cand.place.kind != "junction"
+            or winner.extra.get("judge") == "training"):
         return []
     richer = [k for k in REGISTRY.values() if winner.kind in k.nests and type(k).unexcited is not Kind.unexcited]
     if not richer:
@@ -187,8 +189,8 @@ def _nests_collapsed(fit, other, measured, significant, floor) -> bool:
     deviations of `other`'s: the plainer law with extra terms fitted to nothing."""
     if fit is other or fit.candidate is None or other.candidate is None or _place_of(fit) != _place_of(other):
         return False
-    return other.kind in getattr(REGISTRY.get(fit.kind), "nests", {}) and largest_difference(measured, _prediction(other), _prediction(fit), significant,
-                                         floor) < COLLAPSED
+    nested = other.kind in getattr(REGISTRY.get(fit.kind), "nests", {})
+    return nested and largest_difference(measured, _prediction(other), _prediction(fit), significant, floor) < COLLAPSED
 
 
 def _as_close_unpriced(fit, winner, significant) -> bool:

@@ -86,9 +86,9 @@ def _indistinguishable_text(winner, alternatives) -> list[str]:
         gap = (f"; the held-out predictions differ by at most {a.difference:.2g} noise standard deviations"
                if np.isfinite(a.difference) else "")
         return f"{a.kind}{where} (held-out NRMSE {errors}; {z}{gap})"
+    fitted = any(not a.unexcited for a in alternatives)
     why = (" The answer above has the lower priced held-out error or won the choice rule's ties (fewer parameters, "
-           "the plainer place, the training error, the catalogue's order)." if any(not a.unexcited for a in alternatives)
-           else "")
+           "the plainer place, the training error, the catalogue's order)." if fitted else "")
     return [f"Not told apart by this recording: {'; '.join(one(a) for a in alternatives)}.{why}"]
 
 

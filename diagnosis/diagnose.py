@@ -610,8 +610,8 @@ def _choose(reference, fits, floor, evidence, res, exp, train, held, not_open_lo
     was answered with a backlash of 0.35 um) lets the training part answer among the fits whose
     segment predictions are the reference's: a drifting carriage's position sensor that clips at a
     level only the training part reaches (seed 3535, case 014, answered "none").  With `unstable`
-    (the judge's nominal mode grows e-fold within the held-out part), the floor is not lowered to the best fit's held-out error
-    (:func:`~diagnosis.fit.floor_within_reach`): across two e-foldings a fit's tiny change of the
+    (the judge's nominal mode grows e-fold within the held-out part), the floor is not lowered to
+    the best fit's held-out error (:func:`~diagnosis.fit.floor_within_reach`): across two e-foldings a fit's tiny change of the
     model reshuffles the restarts' noise, and on a chaotic Duffing oscillator without any effect a
     constant load of 0.0005 N lowered the segment error by 12 %, under the replayed floor.
 

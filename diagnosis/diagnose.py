@@ -611,9 +611,10 @@ def _choose(reference, fits, floor, evidence, res, exp, train, held, not_open_lo
     segment predictions are the reference's: a drifting carriage's position sensor that clips at a
     level only the training part reaches (seed 3535, case 014, answered "none").  With `unstable`
     (the judge's nominal mode grows e-fold within the held-out part), the floor is not lowered to
-    the best fit's held-out error (:func:`~diagnosis.fit.floor_within_reach`): across two e-foldings a fit's tiny change of the
-    model reshuffles the restarts' noise, and on a chaotic Duffing oscillator without any effect a
-    constant load of 0.0005 N lowered the segment error by 12 %, under the replayed floor.
+    the best fit's held-out error (:func:`~diagnosis.fit.floor_within_reach`): across two
+    e-foldings a fit's tiny change of the model reshuffles the restarts' noise, and on a chaotic
+    Duffing oscillator without any effect a constant load of 0.0005 N lowered the segment error by
+    12 %, under the replayed floor.
 
     Returns ``(chosen, alternatives)``: the fits of other kinds the held-out part cannot tell
     apart from a held-out choice (:func:`diagnosis.alternatives.indistinguishable`; none for an

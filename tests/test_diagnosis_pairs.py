@@ -66,6 +66,24 @@ def test_the_best_effects_are_paired_with_their_own_places_storage_value():
     assert effect_count(pair_candidates(fits)[0]) == 2
 
 
+def test_a_junction_effect_is_also_paired_with_a_value_whose_cost_alone_ties_the_best():
+    """A mass 2.8 % heavy and a spring both given up at their nominal values after four evaluations
+    (training costs 0.0198 and 0.0197): the spring alone was paired with the viscous friction
+    concealed beside the mass, and a relaxation answered (detuned seed 3739, case 005).  A value
+    within VALUE_TIE (5 %) of the place's best is paired too; a damper 29 % dearer is not."""
+    def given_up(name, cost, value):
+        fit = _fit("nominal_value", "junction v", [name], np.inf, {name: value}, success=False)
+        fit.extra.update(train_cost=cost, abandoned=True)
+        return fit
+    fits = [_fit("viscous_friction", "junction v", ["b_visc"], 0.056),
+            given_up("m", 0.01983, 1.028), given_up("k", 0.01968, 4.0),
+            _fit("nominal_value", "junction v", ["b"], 0.0255, {"b": 0.4})]
+    got = value_pairs(fits, n=1)
+    assert [[m.params[0].name for m in p.members] for p in got] == [["b_visc", "k"], ["b_visc", "m"]]
+    fits[1].extra["train_cost"] = 0.0210                  # 6.7 % dearer than the spring: not paired
+    assert [[m.params[0].name for m in p.members] for p in value_pairs(fits, n=1)] == [["b_visc", "k"]]
+
+
 def test_pairs_are_wanted_only_where_the_residual_is_clearly_beyond_the_noise():
     assert wanted({"x": 0.0403, "v": 0.103}, {"x": 0.0389, "v": 0.0084})
     assert not wanted({"x": 0.0403, "v": 0.015}, {"x": 0.0389, "v": 0.0084})

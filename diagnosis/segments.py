@@ -298,6 +298,7 @@ def chaotic_spread(sim, run, n_held: int, noise: dict) -> float:
     open-loop prediction is chaotic: a candidate's tiny change of the model (a constant load of
     1.7e-8 N on a double-well Duffing oscillator's nominal, the right model) reshuffles it, and
     its held-out error then falls or rises by chance."""
+    from .training_judge import holdout_change
     states = np.asarray(run.states, float)
     if not states.size or not np.isfinite(states).all():
         return float("inf")
@@ -307,16 +308,17 @@ def chaotic_spread(sim, run, n_held: int, noise: dict) -> float:
         y = sim.run(None, states[0] + nudge).outputs
     except BondcosimError:
         return float("inf")
-    worst = 0.0
-    for o, ref in run.outputs.items():
-        sigma = noise.get(o, 0.0)
-        if sigma <= 0:
-            continue
-        d = np.asarray(y[o][-n_held:], float) - np.asarray(ref[-n_held:], float)
-        if not np.isfinite(d).all():
-            return float("inf")
-        worst = max(worst, float(np.sqrt(np.mean(d ** 2))) / sigma)
-    return worst
+    sensed = [o for o in run.outputs if noise.get(o, 0.0) > 0]
+    return holdout_change({o: y[o][-n_held:] for o in sensed}, {o: run.outputs[o][-n_held:] for o in sensed}, noise)
+
+
+def _segment_floor(judge, sim, run, judged) -> dict:
+    """The segment judge's noise floor: `judged`'s (linearised), and for a nominal with an unstable
+    mode no lower than the replayed one (:func:`_replayed_floor`)."""
+    if not judge.unstable:
+        return judged.floor
+    replayed = _replayed_floor(judge, sim, run.states[-judge.held.t.size:])
+    return {o: max(v, replayed[o]) for o, v in judged.floor.items()}
 
 
 def _replayed_floor(judge, sim, prior, seed: int = 0) -> dict:
@@ -443,10 +445,7 @@ def choose_judge(sim, exp, held, res, diverged: str, floor: dict, x0=None):
                            + ", ".join(f"{o} open-loop {judged.open_loop[o]:.3g} ({beyond[o]:.3g} beyond an "
                                        f"output offset and gain) against {judged.nrmse[o]:.3g} restarted "
                                        f"every {plan.seconds:.3g} s" for o in drift))
-        segments.floor = judged.floor
-        if segments.unstable:
-            replayed = _replayed_floor(segments, sim, res.run.states[-n_held:])
-            segments.floor = {o: max(v, replayed[o]) for o, v in judged.floor.items()}
+        segments.floor = _segment_floor(segments, sim, res.run, judged)
         return segments, judged
     spread = chaotic_spread(sim, res.run, n_held, res.noise) if grows_within(mode, span) else 0.0
     if spread > 1.0:
@@ -455,8 +454,7 @@ def choose_judge(sim, exp, held, res, diverged: str, floor: dict, x0=None):
                            f"every {1 / mode.real:.3g} s) and its open-loop prediction of the held-out part is "
                            f"chaotic: started {CHAOS_NUDGE:g} of each state's range away, it ends {spread:.3g} "
                            f"noise standard deviations apart (rms), so no open-loop fit can be told from chance")
-        replayed = _replayed_floor(segments, sim, res.run.states[-n_held:])
-        segments.floor = {o: max(v, replayed[o]) for o, v in judged.floor.items()}
+        segments.floor = _segment_floor(segments, sim, res.run, judged)
         return segments, judged
     judge = Judge("open-loop", f"the nominal model has a mode that integrates what it leaves out (eigenvalue "
                   f"{_eig(mode)}), but restarting it from the data does not remove most of its "

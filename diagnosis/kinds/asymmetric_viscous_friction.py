@@ -34,6 +34,11 @@ def goes_both_ways(flow) -> bool:
     return flow.size > 0 and min(np.mean(flow > 0), np.mean(flow < 0)) >= BOTH_WAYS
 
 
+def _flow(values):
+    """The junction's flow among its nominal values (the first ``f_<bond>``), or None."""
+    return next((v for k, v in values.items() if k.startswith("f_")), None)
+
+
 @register
 class AsymmetricViscousFriction(Kind):
     name = "asymmetric_viscous_friction"
@@ -49,7 +54,7 @@ class AsymmetricViscousFriction(Kind):
         return [FeatureGroup(None, "", list(self.feature_names), columns)]
 
     def propose(self, site):
-        flow = next((v for k, v in site.values.items() if k.startswith("f_")), None)
+        flow = _flow(site.values)
         if flow is not None and not goes_both_ways(flow):
             return []
         coefficient, name = viscous(site), namer(site)
@@ -67,7 +72,7 @@ class AsymmetricViscousFriction(Kind):
     def unexcited(self, junction, values):
         """Where the flow keeps one side of 0 (:func:`goes_both_ways`): the other side's
         coefficient is not excited, and a viscous friction is this law on the record."""
-        flow = next((v for k, v in values.items() if k.startswith("f_")), None)
+        flow = _flow(values)
         if flow is None or goes_both_ways(flow):
             return ""
         flow = np.asarray(flow, dtype=float)

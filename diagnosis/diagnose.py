@@ -486,7 +486,10 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     def with_pairs():
         nonlocal fitted_pairs
         fitted_pairs = True
-        pair_fits, _ = fit_in_turn(pairs.pair_candidates(fits), fit_one, say, "fitting pairs", best=best)
+        # the kinds the features select together first (pairs.selected_pairs), then the best singles'
+        selected = pairs.selected_pairs(fits, evidence.values())
+        pair_fits, _ = fit_in_turn(selected + pairs.pair_candidates(fits, besides=selected), fit_one, say,
+                                   "fitting pairs", best=best)
         fits.extend(pair_fits)
         return choose_round_one() if pair_fits else None
 

@@ -7,7 +7,7 @@ from diagnosis.benchmark.plants import PLANTS, PLANTS_BEFORE_34
 from diagnosis.benchmark.run import run_case
 from diagnosis.catalogue import Candidate, ParamSpec
 from diagnosis.fit import CandidateFit
-from diagnosis.pairs import effect_count, pair_candidates, value_pairs, wanted
+from diagnosis.pairs import effect_count, pair_candidates, selected_pairs, value_pairs, wanted
 from diagnosis.place import Place
 
 
@@ -157,3 +157,32 @@ def test_the_effect_the_values_evidence_asks_for_is_paired_too_however_it_fits_a
     assert without == ["coulomb_friction at junction v and nominal_value at junction v"]
     assert [str(p) for p in value_pairs(fits, n=1, evidence=evidence)] == without + [
         "viscous_friction at junction v and nominal_value at junction v"]
+
+
+def test_the_two_kinds_the_features_select_together_are_paired_wherever_they_rank_alone():
+    """Where the feature regression looked two kinds ahead (FeatureEvidence.looked_ahead), the
+    place's best fit of each selected kind joins one pair, started where it ended (a given-up fit
+    with its own starts), though neither is among the singles pair_candidates takes."""
+    from diagnosis.features import FeatureEvidence, KindEvidence
+    place = Place("junction", "v")
+    fits = [_fit("asymmetric_viscous_friction", "junction v", ["bf", "bb"], 0.010),
+            _fit("viscous_friction", "junction v", ["b"], 0.090, {"b": 0.11}),
+            _fit("viscous_friction", "junction v", ["b"], 0.095, {"b": 0.3}),           # the worse of two
+            _fit("constant_load", "junction v", ["F0"], np.inf, {"F0": 0.5}, success=False),   # given up
+            _fit("coulomb_friction", "junction w", ["Fc"], 0.020)]
+    kinds = [KindEvidence(k, None, "", s, 1 - s, {}, True) for k, s in
+             [("asymmetric_viscous_friction", 0.96), ("viscous_friction", 0.5), ("constant_load", 0.03)]]
+    ev = FeatureEvidence(place, kinds, ["viscous_friction", "constant_load"], 0.99, "N", looked_ahead=True)
+    got = selected_pairs(fits, [ev])
+    assert [str(p) for p in got] == ["viscous_friction at junction v and constant_load at junction v"]
+    assert got[0].members[0].starts[0] == {"b": 0.11}
+    assert got[0].members[1] is fits[3].candidate
+    assert effect_count(got[0]) == 2
+    # without the look-ahead the rounds take the kinds one at a time: no pair
+    ev.looked_ahead = False
+    assert selected_pairs(fits, [ev]) == []
+    # and the pair is not formed again among the best singles fitted beside it
+    fits[3] = _fit("constant_load", "junction v", ["F0"], 0.05)
+    pair = {"viscous_friction at junction v", "constant_load at junction v"}
+    assert pair in [set(map(str, p.members)) for p in pair_candidates(fits)]
+    assert pair not in [set(map(str, p.members)) for p in pair_candidates(fits, besides=got)]

@@ -483,13 +483,13 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
             chosen, alternatives = choose_round_one()
     fitted_pairs = False
 
-    def with_pairs():
+    def with_pairs(singles=True):
         nonlocal fitted_pairs
         fitted_pairs = True
         # the kinds the features select together first (pairs.selected_pairs), then the best singles'
         selected = pairs.selected_pairs(fits, evidence.values())
-        pair_fits, _ = fit_in_turn(selected + pairs.pair_candidates(fits, besides=selected), fit_one, say,
-                                   "fitting pairs", best=best)
+        more = pairs.pair_candidates(fits, besides=selected) if singles else []
+        pair_fits, _ = fit_in_turn(selected + more, fit_one, say, "fitting pairs", best=best)
         fits.extend(pair_fits)
         return choose_round_one() if pair_fits else None
 
@@ -531,15 +531,15 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                 break
             x0 = found.chosen.extra.get("x0") or x0
             improved_graph, improved, y_imp, improved_judged = found.graph, found.improved, found.y, found.judged
-        # a wrong first answer stalls the rounds: nothing more is found on its model while the
-        # residual stays far above the noise; round 1's fits in pairs may answer it instead.  A
-        # round 2 whose graph location failed found nothing because it did not look
-        stalled = (len(rounds) == 2 and rounds[1].chosen is None and rounds[1].located
-                   and pairs.effect_count(chosen.candidate) == 1
-                   and int(max_effects) >= 2 and not fitted_pairs and pairs.wanted(improved, floor))
-        paired = with_pairs() if stalled else None
+        # a wrong first answer stalls the rounds (pairs.stall); round 1's fits in pairs may answer it
+        # instead.  A round 2 whose graph location failed found nothing because it did not look
+        stall = (pairs.stall(improved, floor, evidence.values())
+                 if (len(rounds) == 2 and rounds[1].chosen is None and rounds[1].located and not fitted_pairs
+                     and pairs.effect_count(chosen.candidate) == 1 and int(max_effects) >= 2) else None)
+        paired = with_pairs(singles=stall.far) if stall else None
         if paired is not None and isinstance(paired[0].candidate, pairs.CandidatePair):
             paired[0].extra["stalled"] = str(chosen.candidate)
+            paired[0].extra["stalled_why"] = stall.why
             chosen, alternatives = paired
             say("improved model", f"round 1 answered again, with {chosen.candidate}")
             improved_graph, improved, y_imp, improved_judged, x0, start = improved_model(chosen)

@@ -33,7 +33,10 @@ regression at a place found two kinds that together explain clearly more than an
 look-ahead, :func:`diagnosis.features.regress_kinds`), one kind that stands in for both answers
 round 1 and leaves the second next to nothing, and the two need not be among the best singles by
 training cost (an asymmetric damping for a viscous friction and a constant torque offset, which
-alone explained 3 % of the estimate; compound seed 3738, case 025).  Not in round 1 at once: on
+alone explained 3 % of the estimate; compound seed 3738, case 025).  Such a look-ahead also makes
+round 2's finding nothing a stall where the residual is under :data:`TRIGGER` times its floor: a
+stand-in that leaves 1.7 times the floor there is still wrong (a drivetrain's Coulomb + viscous
+friction and constant load, as on the issue's ball-screw axis).  Not in round 1 at once: on
 the pneumatic cylinder's real recording the pressure-dependent friction and a constant load so
 fitted took the answer from the friction and the load cell's gain error that the rounds find,
 with a pressure slope of the friction 25 % off the by-hand fit's (the gain's offset, which grows
@@ -65,7 +68,8 @@ from .kinds.base import extends
 from .twins import CandidateGroup
 
 __all__ = ["CandidatePair", "TRIGGER", "SINGLES", "VALUED", "FINISHED", "ANYWHERE", "wanted", "pair_candidates",
-           "selected_pairs", "value_pairs", "finishing", "effect_count", "VALUE_TIE", "targets", "claims", "clashes"]
+           "Stall", "stall", "selected_pairs", "value_pairs", "finishing", "effect_count", "VALUE_TIE", "targets",
+           "claims", "clashes"]
 
 #: pairs are fitted when some output's held-out NRMSE is at least this many times its floor
 TRIGGER = 2.0
@@ -132,6 +136,48 @@ def wanted(nominal: dict, floor: dict) -> bool:
     :data:`TRIGGER` times the noise floor (`floor`) on some output: a residual no single
     candidate explained that is clearly more than the noise."""
     return any(v >= TRIGGER * floor.get(o, 0.0) and v > 0 for o, v in nominal.items())
+
+
+@dataclass(frozen=True)
+class Stall:
+    """Why round 2's finding nothing on round 1's single answer stalls the rounds (:func:`stall`).
+
+    Attributes
+    ----------
+    far : bool
+        Some output's held-out NRMSE stays at :data:`TRIGGER` times its floor or more: every pair
+        of the best singles is fitted, not only the features' (:func:`selected_pairs`).
+    why : str
+        The reason, in words, for the report.
+    """
+
+    far: bool
+    why: str
+
+
+def stall(improved: dict, floor: dict, evidence) -> Stall | None:
+    """Whether round 2's finding nothing on round 1's single answer (held-out NRMSE `improved` per
+    output; `floor` the noise floors) means that answer was wrong: some output stays at
+    :data:`TRIGGER` times its floor (:func:`wanted`), or round 1's feature regression at some place
+    (`evidence`, its :class:`~diagnosis.features.FeatureEvidence`) named two kinds together by
+    looking ahead, which a single answer cannot be (a drivetrain's Coulomb + viscous friction and
+    constant load answered by an asymmetric damping at 1.7 times the floor).  None: not stalled.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as NS
+    >>> stall({"v": 0.3}, {"v": 0.1}, []).why
+    'the residual stayed far above the noise'
+    >>> stall({"v": 0.17}, {"v": 0.1}, []) is None
+    True
+    >>> ev = NS(looked_ahead=True, selected=["viscous_friction", "constant_load"], place="junction w2")
+    >>> stall({"v": 0.17}, {"v": 0.1}, [ev]).why
+    "round 1's features had named two kinds together: viscous_friction + constant_load at junction w2"
+    """
+    if wanted(improved, floor):
+        return Stall(True, "the residual stayed far above the noise")
+    named = [f"{' + '.join(ev.selected)} at {ev.place}" for ev in evidence if ev.looked_ahead]
+    return Stall(False, "round 1's features had named two kinds together: " + "; ".join(named)) if named else None
 
 
 def pair_candidates(fits, n: int = SINGLES, besides=()) -> list[CandidatePair]:

@@ -193,16 +193,14 @@ def test_the_two_kinds_the_features_select_together_are_paired_wherever_they_ran
 
 def test_a_stand_in_for_two_kinds_the_features_named_together_is_replaced_by_them(tmp_path):
     """The issue's ball-screw shape on the geared pair: Coulomb + viscous friction and a constant
-    load at its output shaft (a case made for the look-ahead, not drawn).  An asymmetric damping
+    load at its output shaft (diagnosis.benchmark.ball_screw, seed 11, case 2).  An asymmetric damping
     stands in for the two, and the starting code answered it with a Coulomb + viscous friction at the
     other shaft.  The features select the constant load and the friction together
     (features._look_ahead), round 2 finds nothing on the damping's model, and the features' pair,
     fitted first among the stalled rounds' pairs, takes both speeds to their floor."""
-    from diagnosis.benchmark.draw import CaseSpec
-    first = CaseSpec(2, 932366628, "geared-inertias", "coulomb_viscous_friction", "junction", "w2",
-                     0.17784750545081568, 13.802705037017061, "prbs")
-    second = CaseSpec(2, 932366635, "geared-inertias", "constant_load", "junction", "w2",
-                      0.11882720394028233, 4.121822898333609, "prbs")
+    from diagnosis.benchmark.ball_screw import cases
+    first, second = cases(10, 11)[2]
+    assert (first.plant, first.excitation, second.kind) == ("geared-inertias", "prbs", "constant_load")
     r = run_case(first, PLANTS, tmp_path, second=second)
     assert sorted(r["answers"]) == ["constant_load @ junction w2", "coulomb_viscous_friction @ junction w2"]
     assert r["first_found"] and r["also_found"]
@@ -219,16 +217,14 @@ LONG = pytest.mark.skipif(os.environ.get("BONDCOSIM_DIAGNOSIS_CASES", "") != "al
 @LONG
 def test_two_kinds_the_features_named_together_replace_a_stand_in_below_the_trigger(tmp_path):
     """The issue's ball-screw shape on the benchmark's drivetrain: Coulomb + viscous friction and a
-    constant load at the load shaft (a case made for the look-ahead, not drawn).  An asymmetric
+    constant load at the load shaft (diagnosis.benchmark.ball_screw, seed 11, case 9).  An asymmetric
     damping stands in for the two (velocity held-out NRMSE 0.29 -> 0.10, 1.7 times its floor: under
     pairs.TRIGGER), and round 2 finds nothing on it.  Round 1's features had selected the constant
     load and the friction together (features._look_ahead), so the stalled rounds fit the pair, which
     takes each output to its floor and recovers the friction and the load (66 s: a long case)."""
-    from diagnosis.benchmark.draw import CaseSpec
-    first = CaseSpec(9, 671467996, "drivetrain", "coulomb_viscous_friction", "junction", "w_load",
-                     0.1348301651856113, 3.118878595091977, "levels+sine")
-    second = CaseSpec(9, 671467996 + 7, "drivetrain", "constant_load", "junction", "w_load",
-                      0.08995592352624525, 29.754806495336723, "levels+sine")
+    from diagnosis.benchmark.ball_screw import cases
+    first, second = cases(10, 11)[9]
+    assert (first.plant, first.name, second.kind) == ("drivetrain", "w_load", "constant_load")
     r = run_case(first, PLANTS, tmp_path, second=second)
     assert sorted(r["answers"]) == ["constant_load @ junction w_load", "coulomb_viscous_friction @ junction w_load"]
     assert r["first_found"] and r["also_found"]

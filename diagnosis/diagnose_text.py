@@ -273,9 +273,8 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
         heading = "Wrong nominal value" if all(e["kind"] == "nominal_value" for e in first) else "Missing physics"
         lines.append(f"{heading}: {_named(first)}. {'; '.join(e['explanation'] for e in first)}")
         if isinstance(chosen.candidate, CandidatePair) and chosen.extra.get("stalled"):
-            why = chosen.extra.get("stalled_why", "the residual stayed far above the noise")
             lines.append(f"Round 1 first answered {chosen.extra['stalled']}, on whose model nothing more was found "
-                         f"while {why}; these two, fitted together (diagnosis.pairs), explain it instead.")
+                         f"while {chosen.extra['stalled_why']}; these two, fitted together (diagnosis.pairs), explain it instead.")
         elif isinstance(chosen.candidate, CandidatePair) and effect_count(chosen.candidate) == 1:
             lines.append("The effect was fitted with the nominal value beside it (diagnosis.pairs.value_pairs).")
         elif isinstance(chosen.candidate, CandidatePair):

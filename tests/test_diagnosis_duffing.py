@@ -6,18 +6,14 @@ and its candidates are fitted by multiple shooting (diagnosis.shooting).  Truth:
 RK4 (``tests/msd_truth.py``)."""
 from pathlib import Path
 
-import os
-
 import numpy as np
 import pytest
 
 from diagnosis.diagnose import diagnose
+from long_cases import LONG
 from msd_truth import rk4_states
 
 DUFFING = Path(__file__).parent / "data" / "models" / "duffing.py"
-#: a diagnosis of a minute or more: run with BONDCOSIM_DIAGNOSIS_CASES=all, as the long end-to-end cases
-LONG = pytest.mark.skipif(os.environ.get("BONDCOSIM_DIAGNOSIS_CASES", "") != "all",
-                          reason="long diagnosis: BONDCOSIM_DIAGNOSIS_CASES=all runs it")
 
 
 def _duffing(tmp_path, friction, seed, span):

@@ -1,8 +1,5 @@
 """Two effects fitted together where no single one explains the recording (diagnosis.pairs)."""
-import os
-
 import numpy as np
-import pytest
 
 from diagnosis.benchmark.compound import second_effect
 from diagnosis.benchmark.draw import KINDS_BEFORE_32, draw_cases
@@ -12,6 +9,7 @@ from diagnosis.catalogue import Candidate, ParamSpec
 from diagnosis.fit import CandidateFit
 from diagnosis.pairs import effect_count, pair_candidates, selected_pairs, value_pairs, wanted
 from diagnosis.place import Place
+from long_cases import LONG
 
 
 def _fit(kind, place, names, train_cost, values=None, success=True):
@@ -191,6 +189,16 @@ def test_the_two_kinds_the_features_select_together_are_paired_wherever_they_ran
     assert pair not in [set(map(str, p.members)) for p in pair_candidates(fits, besides=got)]
 
 
+def _ball_screw(tmp_path, index):
+    """``(friction spec, scored case, truth effects by kind)`` of case `index` of
+    :mod:`diagnosis.benchmark.ball_screw` on seed 11 (its friction, then its constant load)."""
+    from diagnosis.benchmark.ball_screw import cases
+    first, second = cases(10, 11)[index]
+    assert (first.kind, second.kind, second.name) == ("coulomb_viscous_friction", "constant_load", first.name)
+    r = run_case(first, PLANTS, tmp_path, second=second)
+    return first, r, {e["kind"]: e for e in [r["effect"], *r["effect"]["also"]]}
+
+
 def test_a_stand_in_for_two_kinds_the_features_named_together_is_replaced_by_them(tmp_path):
     """The issue's ball-screw shape on the geared pair: Coulomb + viscous friction and a constant
     load at its output shaft (diagnosis.benchmark.ball_screw, seed 11, case 2).  An asymmetric damping
@@ -198,20 +206,12 @@ def test_a_stand_in_for_two_kinds_the_features_named_together_is_replaced_by_the
     other shaft.  The features select the constant load and the friction together
     (features._look_ahead), round 2 finds nothing on the damping's model, and the features' pair,
     fitted first among the stalled rounds' pairs, takes both speeds to their floor."""
-    from diagnosis.benchmark.ball_screw import cases
-    first, second = cases(10, 11)[2]
-    assert (first.plant, first.excitation, second.kind) == ("geared-inertias", "prbs", "constant_load")
-    r = run_case(first, PLANTS, tmp_path, second=second)
+    first, r, truth = _ball_screw(tmp_path, 2)
+    assert (first.plant, first.excitation) == ("geared-inertias", "prbs")
     assert sorted(r["answers"]) == ["constant_load @ junction w2", "coulomb_viscous_friction @ junction w2"]
     assert r["first_found"] and r["also_found"]
-    truth = {e["kind"]: e for e in [r["effect"], *r["effect"]["also"]]}
     assert np.isclose(r["parameters"]["F0_w2"], truth["constant_load"]["magnitude"], rtol=0.05)
     assert r["improvement"] > 0.85
-
-
-#: a diagnosis of a minute or more: run with BONDCOSIM_DIAGNOSIS_CASES=all, as the long end-to-end cases
-LONG = pytest.mark.skipif(os.environ.get("BONDCOSIM_DIAGNOSIS_CASES", "") != "all",
-                          reason="long diagnosis: BONDCOSIM_DIAGNOSIS_CASES=all runs it")
 
 
 @LONG
@@ -222,12 +222,9 @@ def test_two_kinds_the_features_named_together_replace_a_stand_in_below_the_trig
     pairs.TRIGGER), and round 2 finds nothing on it.  Round 1's features had selected the constant
     load and the friction together (features._look_ahead), so the stalled rounds fit the pair, which
     takes each output to its floor and recovers the friction and the load (66 s: a long case)."""
-    from diagnosis.benchmark.ball_screw import cases
-    first, second = cases(10, 11)[9]
-    assert (first.plant, first.name, second.kind) == ("drivetrain", "w_load", "constant_load")
-    r = run_case(first, PLANTS, tmp_path, second=second)
+    first, r, truth = _ball_screw(tmp_path, 9)
+    assert (first.plant, first.name) == ("drivetrain", "w_load")
     assert sorted(r["answers"]) == ["constant_load @ junction w_load", "coulomb_viscous_friction @ junction w_load"]
     assert r["first_found"] and r["also_found"]
-    truth = {e["kind"]: e for e in [r["effect"], *r["effect"]["also"]]}
     assert np.isclose(-r["parameters"]["F0_w_load"], truth["constant_load"]["magnitude"], rtol=0.1)
     assert r["improvement"] > 0.75

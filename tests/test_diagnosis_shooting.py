@@ -8,7 +8,6 @@ that merely integrates, as a force-driven carriage, keeps its open-loop fits.)  
 oscillator: ``tests/test_diagnosis_duffing.py``."""
 from pathlib import Path
 
-import os
 
 import numpy as np
 import pytest
@@ -17,12 +16,10 @@ from diagnosis.diagnose import diagnose
 from diagnosis.recording import Experiment
 from diagnosis.segments import Judge, plan_segments
 from diagnosis.shooting import fitted_from, training_plan
+from long_cases import LONG
 from msd_truth import rk4_states
 
 MODEL = Path(__file__).parent / "data" / "models" / "pendulum.py"
-#: a diagnosis of a minute or more: run with BONDCOSIM_DIAGNOSIS_CASES=all, as the long end-to-end cases
-LONG = pytest.mark.skipif(os.environ.get("BONDCOSIM_DIAGNOSIS_CASES", "") != "all",
-                          reason="long diagnosis: BONDCOSIM_DIAGNOSIS_CASES=all runs it")
 J, B, MGL = 0.05, 0.02, 0.49                     # kg m^2, N m s/rad, N m
 FS, SPAN, SUB, AMP, NOISE = 100.0, 24.0, 10, 0.6, 0.002     # Hz, s, RK4 steps per sample, N m, rad
 

@@ -208,9 +208,14 @@ def test_a_stand_in_for_two_kinds_the_features_named_together_is_replaced_by_the
     fitted first among the stalled rounds' pairs, takes both speeds to their floor."""
     first, r, truth = _ball_screw(tmp_path, 2)
     assert (first.plant, first.excitation) == ("geared-inertias", "prbs")
-    assert sorted(r["answers"]) == ["constant_load @ junction w2", "coulomb_viscous_friction @ junction w2"]
+    # either shaft of the rigid gear, one place to any recording (the benchmark scores both); which
+    # one the fits end at differs between machines
+    shaft = r["answers"][0].rsplit(" ", 1)[1]
+    assert sorted(r["answers"]) == [f"constant_load @ junction {shaft}", f"coulomb_viscous_friction @ junction {shaft}"]
     assert r["first_found"] and r["also_found"]
-    assert np.isclose(r["parameters"]["F0_w2"], truth["constant_load"]["magnitude"], rtol=0.05)
+    n = 0.2                 # the library's gear: w2 = n w1, so a torque at w1 is n times its load at w2
+    load = r["parameters"]["F0_w2"] if shaft == "w2" else r["parameters"]["F0_w1"] / n
+    assert np.isclose(load, truth["constant_load"]["magnitude"], rtol=0.05)
     assert r["improvement"] > 0.85
 
 

@@ -255,9 +255,10 @@ def _signals(graph, junction: str, regime_variables) -> dict:
     if graph.elements[junction].kind == "1":
         out.update({f"pressure:{expr}": expr for expr in pressure_variables(graph).values()})
         out.update({f"signal:{expr}": expr for expr in modulating_signals(graph, junction, regime_variables).values()})
-    for element, _ in junction_elements(graph, junction):
+    for element, bond in junction_elements(graph, junction):
         if element.kind == "C" and element.state:
             out[f"content:{element.name}"] = element.state
+            out[f"c_effort:{element.name}"] = f"e_{bond.name}"
         elif element.kind == "I" and element.state:
             out[f"momentum:{element.name}"] = element.state
     return out

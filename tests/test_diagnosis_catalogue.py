@@ -106,6 +106,10 @@ def test_places_offer_the_kinds_that_make_sense():
     assert at(msd, Place("input", "F")) == ["valve_lag", "transport_delay", "saturation", "input_offset",
                                             "input_gain"]
     assert at(msd, Place("output", "x")) == ["saturation", "sensor_offset", "sensor_gain", "sensor_lag"]
+    # a play in front of the carriage's zero-stiffness position meter changes no force: no backlash
+    # there (nor its feature column, tests/test_diagnosis_features.py); a hidden spring is a place
+    carriage = at(library.build("carriage"), Place("junction", "v_cart"))
+    assert "backlash" not in carriage and "nonlinear_stiffness" in carriage
     cyl = hydraulic_cylinder()
     assert "pressure_dependent_friction" in at(cyl, Place("junction", "rod"))
     assert at(cyl, Place("junction", "chamber")) == ["leak", "nonlinear_stiffness", "constant_load",

@@ -345,3 +345,31 @@ def test_a_near_tie_credits_the_winners_kind_with_its_best_place():
     assert choose({"x": 0.5}, [cubic, cubic_there, stop], evidence=evidence_lookup(evidence)) is cubic
     # without the same kind at the coupling, the end stop's evidence there decides as before
     assert choose({"x": 0.5}, [cubic, stop], evidence=evidence_lookup(evidence)) is stop
+
+
+def test_no_backlash_column_in_front_of_a_law_that_carries_nothing():
+    """A carriage (20 kg, force-driven, its position a zero-stiffness C) with a viscous friction of
+    2 N s/m, integrated here (exact for a force held per sample): a play in front of the position
+    meter changes no force, so its column (a force of the clipped position) is not offered to stand
+    in for other physics; the viscous friction ranks first (or the Coulomb + viscous law, which
+    nests it) and is recovered."""
+    from diagnosis.graph_location import locate_on_graph
+    from plants import library
+    m, b, h = 20.0, 2.0, 0.01
+    t = np.arange(0.0, 20.0, h)
+    force = 3.0 * np.sign(np.sin(2 * np.pi * 0.2 * t)) + np.sin(2 * np.pi * 0.45 * t)
+    a = np.exp(-b * h / m)
+    v, x = np.zeros(t.size), np.zeros(t.size)
+    for k in range(t.size - 1):     # m v' = F - b v over a sample, exactly
+        steady = force[k] / b
+        v[k + 1] = steady + (v[k] - steady) * a
+        x[k + 1] = x[k] + steady * h + (v[k] - steady) * (1 - a) * m / b
+    rng = np.random.default_rng(6)
+    exp = Experiment(t, {"F": force}, {"x": x + rng.normal(0, 1e-3, t.size), "v": v + rng.normal(0, 1e-3, t.size)},
+                     {"F": "N", "x": "m", "v": "m/s"}, "truth")
+    graph, place = library.build("carriage"), Place("junction", "v_cart")
+    scores = locate_on_graph(graph, exp, places=[place])
+    ev = feature_evidence(graph, [place], exp, estimates={s.place: s.estimate for s in scores})[place]
+    assert "backlash" not in {k.kind for k in ev.kinds}
+    assert ev.kinds[0].kind in ("viscous_friction", "coulomb_viscous_friction")    # the second nests the first
+    assert _by_kind(ev)["viscous_friction"].coefficients["v"] == pytest.approx(b, rel=0.05)

@@ -9,7 +9,7 @@ import sympy as sp
 from ..catalogue_common import ParamSpec, fresh_name
 from .base import Kind, Proposal, register
 from .feature_signals import FeatureGroup, rms
-from .storage_common import capacitors, displacement_scale, units_of
+from .storage_common import capacitors, carries_effort, displacement_scale, units_of
 
 
 #: the half-widths of the play the features try, as fractions of the C content's RMS
@@ -24,14 +24,20 @@ class Backlash(Kind):
     feature_doors, feature_names, feature_price = "1", ("clip(q, -b, b)",), 1
 
     def features(self, s):
-        """Per moving C content q: the part inside a play of half-width b on a grid of its RMS."""
+        """Per moving C content q of a C whose law carries an effort: the part inside a play of
+        half-width b on a grid of its RMS.  A play in front of a C that carries nothing (a
+        carriage's zero-stiffness position meter) changes nothing; its column, a force of the
+        clipped position with a free coefficient, would stand in for other physics."""
+        carrying = s.labelled("c_effort")
         return [FeatureGroup(c, f"b = {f * rms(q):.3g}", ["clip(q, -b, b)"],
                              np.clip(q, -f * rms(q), f * rms(q))[:, None])
-                for c, q in s.labelled("content").items() for f in FEATURE_GRID]
+                for c, q in s.labelled("content").items() if c in carrying for f in FEATURE_GRID]
 
     def propose(self, site):
         out = []
         for element in capacitors(site):
+            if not carries_effort(element):
+                continue            # a play in front of a law that is zero changes nothing
             c, X = element.name, displacement_scale(site, element)
             b = fresh_name(site.taken, f"b_play_{c}")
             # the cost is flat where the play is too small to act and kinked where it engages:

@@ -44,7 +44,7 @@ class FeatureSignals:
         Times, s.
     values : dict str -> ndarray
         ``flow``, ``effort``, ``pressure:<expr>``, ``signal:<expr>``, ``content:<C name>``,
-        ``momentum:<I name>``, and ``estimate`` (the location's estimated extra effort or flow
+        ``c_effort:<C name>`` (the effort the C's law puts on its bond), ``momentum:<I name>``, and ``estimate`` (the location's estimated extra effort or flow
         at the junction, where there is one).
     one : bool
         A 1-junction (else a 0-junction).

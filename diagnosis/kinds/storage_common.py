@@ -3,17 +3,30 @@ stiffness; the C and the electrical I elements at a junction."""
 from __future__ import annotations
 
 import numpy as np
+import sympy as sp
 
 from bondgraph.params import DOMAINS
 
 from ..catalogue_common import junction_elements
 
-__all__ = ["capacitors", "inductors", "displacement_scale", "stiffness_scale", "units_of"]
+__all__ = ["capacitors", "carries_effort", "inductors", "displacement_scale", "stiffness_scale", "units_of"]
 
 
 def capacitors(site) -> list:
     """The C elements bonded to the site's junction, in bond order."""
     return [element for element, _ in junction_elements(site.graph, site.name) if element.kind == "C"]
+
+
+def carries_effort(element) -> bool:
+    """Whether a C's law is not identically zero (a carriage's position meter, ``law="0"``,
+    carries nothing: a play or a dead band in front of it changes no effort)."""
+    law = getattr(element, "law", None)
+    if getattr(element, "value", None) is not None or law is None:
+        return True
+    try:
+        return sp.sympify(str(law)) != 0
+    except (sp.SympifyError, TypeError):
+        return True
 
 
 def inductors(site) -> list:

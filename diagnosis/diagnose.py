@@ -573,6 +573,25 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
             rounds[-1].joint = joint
             if joint.kept:
                 improved_graph, improved, y_imp, improved_judged = joint.graph, joint.improved, joint.y, joint.judged
+        if int(max_effects) >= 2 and all(r.located for r in rounds[1:]):
+            # the features' pair of kinds against the rounds' answer (pairs.rival_pairs, pairs.rival);
+            # not where a further round's graph location failed: that round did not look
+            effects = [r.chosen for r in rounds if r.chosen is not None]
+            rivals = pairs.rival_pairs(fits, evidence.values(), [e.candidate for e in effects])
+            if rivals:
+                rival_fits, _ = fit_in_turn(rivals, fit_one, say, "fitting the features' pairs", best=best)
+                fits.extend(rival_fits)
+                joint = rounds[-1].joint
+                n_answer = (joint.fit.n_params if joint is not None and joint.kept
+                            else sum(e.n_params for e in effects))
+                won = pairs.rival(rival_fits, improved, n_answer, nominal, floor)
+                if won is not None:
+                    won.extra["over_rounds"] = {"answer": " and ".join(str(e.candidate) for e in effects),
+                                                "holdout_nrmse": dict(improved)}
+                    chosen, alternatives = won, []
+                    say("improved model", f"round 1 answered again, with {chosen.candidate}")
+                    improved_graph, improved, y_imp, improved_judged, x0, start = improved_model(chosen)
+                    rounds = [round_one(chosen, alternatives)]
 
     from .diagnose_text import assemble
     return assemble(graph=graph, rec=rec, exp=exp, held=held, res=res, nominal=nominal,

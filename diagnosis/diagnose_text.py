@@ -275,6 +275,13 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
         if isinstance(chosen.candidate, CandidatePair) and chosen.extra.get("stalled"):
             lines.append(f"Round 1 first answered {chosen.extra['stalled']}, on whose model nothing more was found "
                          f"while {chosen.extra['stalled_why']}; these two, fitted together (diagnosis.pairs), explain it instead.")
+        elif isinstance(chosen.candidate, CandidatePair) and chosen.extra.get("over_rounds"):
+            over = chosen.extra["over_rounds"]
+            held = ", ".join(f"{o} {v:.3g} -> {chosen.holdout_nrmse[o]:.3g}" for o, v in over["holdout_nrmse"].items()
+                             if o in chosen.holdout_nrmse)
+            lines.append(f"The rounds, one effect at a time, first answered {over['answer']}; round 1's feature "
+                         f"regression had selected these two together, and fitted together they predict the "
+                         f"held-out part better (held-out NRMSE {held}; diagnosis.pairs.rival).")
         elif isinstance(chosen.candidate, CandidatePair) and effect_count(chosen.candidate) == 1:
             lines.append("The effect was fitted with the nominal value beside it (diagnosis.pairs.value_pairs).")
         elif isinstance(chosen.candidate, CandidatePair):

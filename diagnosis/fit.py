@@ -32,7 +32,7 @@ from .shooting import FIRST_PASS, PASSES, SETTLED, Shooting
 
 __all__ = ["CandidateFit", "fit_candidate", "choose", "noise_floor", "needs_explaining", "usable_fits",
            "single_fits_by_holdout", "harms", "HARM", "HARM_EXCESS",
-           "acceptance", "within_tie", "unpriced_error", "PARAMETER_PRICE", "MIN_SHARE", "MIN_GAIN", "TIE"]
+           "acceptance", "within_tie", "priced_score", "unpriced_error", "PARAMETER_PRICE", "MIN_SHARE", "MIN_GAIN", "TIE"]
 
 #: relative reduction of the held-out excess error each extra parameter must buy
 PARAMETER_PRICE = 0.10
@@ -680,6 +680,21 @@ def floor_within_reach(floor: dict, fits, names) -> dict:
 def excess_error(nrmse: dict, floor: dict, names) -> float:
     """Held-out error beyond the noise floor: sum over outputs of max(NRMSE^2 - floor^2, 0)."""
     return float(sum(max(nrmse[o] ** 2 - floor.get(o, 0.0) ** 2, 0.0) for o in names))
+
+
+def priced_score(holdout: dict, n_params: int, nominal_holdout: dict, noise: dict | None = None) -> float:
+    """Rule 2's score :math:`S` of :func:`choose` for a model whose held-out NRMSE per output is
+    `holdout` and which fits `n_params` parameters, against the reference `nominal_holdout` (noise
+    floor `noise`): one number for a candidate fit and for a model the rounds built
+    (:func:`diagnosis.pairs.rival`).  NaN where no output needs explaining.
+
+    >>> priced_score({"x": 0.1}, 1, {"x": 0.5}) < priced_score({"x": 0.1}, 2, {"x": 0.5})
+    True
+    """
+    floor, names, significant, e0 = _reference(nominal_holdout, noise)
+    if not significant:
+        return float("nan")
+    return (excess_error(holdout, floor, names) + 1e-4 * e0) * (1 + PARAMETER_PRICE) ** n_params
 
 
 def choose(nominal_holdout: dict, fits, *, noise: dict | None = None, evidence=None, measured: dict | None = None):

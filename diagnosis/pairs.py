@@ -42,6 +42,12 @@ fitted took the answer from the friction and the load cell's gain error that the
 with a pressure slope of the friction 25 % off the by-hand fit's (the gain's offset, which grows
 with the pressure, taken up by the friction).
 
+**Rival pairs** (:func:`rival_pairs`, :func:`rival`): a stand-in need not stall the rounds.  Where
+round 2 finds a second stand-in on the first one's model (an asymmetric damping, then a Stribeck
+friction, for a geared pair's Coulomb + viscous friction and constant load), the features' pair was
+never fitted; so after the rounds it is, and it replaces their answer where it predicts the
+held-out part clearly better than their joint refit.
+
 This is forward selection with a two-step look-ahead where the one-step search stalls (the
 "nesting" problem of sequential selection; Pudil, Novovicova and Kittler, *Pattern Recognition
 Letters* 15, 1994, on floating search).
@@ -69,7 +75,7 @@ from .twins import CandidateGroup
 
 __all__ = ["CandidatePair", "TRIGGER", "SINGLES", "VALUED", "FINISHED", "ANYWHERE", "wanted", "pair_candidates",
            "Stall", "stall", "selected_pairs", "value_pairs", "finishing", "effect_count", "VALUE_TIE", "targets",
-           "claims", "clashes"]
+           "claims", "clashes", "rival_pairs", "rival"]
 
 #: pairs are fitted when some output's held-out NRMSE is at least this many times its floor
 TRIGGER = 2.0
@@ -208,10 +214,11 @@ def pair_candidates(fits, n: int = SINGLES, besides=()) -> list[CandidatePair]:
     return [p for _, p in sorted(pairs, key=lambda cp: cp[0])]
 
 
-def selected_pairs(fits, evidence) -> list[CandidatePair]:
+def selected_pairs(fits, evidence, looked_ahead: bool = True) -> list[CandidatePair]:
     """At each place whose feature regression selected a pair of kinds by looking two kinds ahead
     (``FeatureEvidence.looked_ahead``, :func:`diagnosis.features.regress_kinds`; `evidence` the
-    places' :class:`~diagnosis.features.FeatureEvidence`), the pair of that place's fits of the two
+    places' :class:`~diagnosis.features.FeatureEvidence`; with `looked_ahead` False, any two kinds
+    it selected), the pair of that place's fits of the two
     kinds: per kind the fit with the lowest training cost, started where it ended (a fit given up
     keeps its own starts).  A kind that stands in for the two fits better alone than either does
     and answers round 1; on its model the second kind is left with next to nothing, and the rounds
@@ -221,7 +228,7 @@ def selected_pairs(fits, evidence) -> list[CandidatePair]:
     singles = [f for f in fits if f.candidate is not None and not hasattr(f.candidate, "members")]
     out = []
     for ev in evidence:
-        if not ev.looked_ahead or len(ev.selected) != 2:
+        if (looked_ahead and not ev.looked_ahead) or len(ev.selected) != 2:
             continue
         members = []
         for label in ev.selected:
@@ -232,6 +239,78 @@ def selected_pairs(fits, evidence) -> list[CandidatePair]:
         if len(members) == 2 and not clashes(members[0], claims([members[1]])):
             out.append(CandidatePair(tuple(members)))
     return out
+
+
+def rival_pairs(fits, evidence, answered) -> list[CandidatePair]:
+    """The pairs of kinds round 1's feature regression selected together at a place
+    (:func:`selected_pairs`, by looking ahead or one kind after the other; `evidence` round 1's
+    :class:`~diagnosis.features.FeatureEvidence`) that the rounds' answer does not name (`answered`,
+    the candidates of its effects: not both kinds among theirs) and that are not among `fits`
+    already; one per pair of kinds, at the first place that selected it.
+
+    The rounds add one effect at a time, and each round's best single candidate may stand in for
+    two: where round 2 then finds something on that model the rounds never stall
+    (:func:`stall`), and the features' pair is never fitted.  On a geared pair's Coulomb + viscous
+    friction and constant load, round 1's features selected the two, the rounds answered an
+    asymmetric damping and a Stribeck friction at 1.6 times the floor (issue's ball-screw shape,
+    ``python -m diagnosis.benchmark.ball_screw``, seed 11, case 007).  Such a pair is fitted
+    after the rounds and replaces their answer where it predicts the held-out part clearly better
+    (:func:`rival`)."""
+    kinds = {m.kind for a in answered for m in getattr(a, "members", (a,))}
+    fitted = {frozenset(map(str, f.candidate.members)) for f in fits if isinstance(f.candidate, CandidateGroup)}
+    out, seen = [], set()
+    for pair in selected_pairs(fits, evidence, looked_ahead=False):
+        named = frozenset(m.kind for m in pair.members)
+        if named <= kinds or named in seen or frozenset(map(str, pair.members)) in fitted:
+            continue
+        seen.add(named)
+        out.append(pair)
+    return out
+
+
+def rival(fits, answer: dict, answer_params: int, nominal: dict, floor: dict):
+    """The fit of `fits` (the :func:`rival_pairs`' fits) whose priced held-out score
+    (:func:`diagnosis.fit.priced_score`, rule 2 of :func:`diagnosis.fit.choose`, against the
+    `nominal` held-out NRMSE) is lowest and below the rounds' answer's (held-out NRMSE `answer`,
+    `answer_params` fitted parameters, its joint refit's where kept) beyond :data:`diagnosis.fit.TIE`,
+    and whose held-out NRMSEs themselves, priced alike, are below the answer's beyond the tie
+    :func:`~diagnosis.fit.choose` allows them (near the floor the excess magnifies differences the
+    held-out part does not resolve), or is tied with it and fits fewer parameters (the plainer
+    answer, as among tied fits in :func:`~diagnosis.fit.choose`); None where none is.  Both are
+    models of the recording fitted on its training part, judged alike; a tie keeps the rounds'
+    answer unless the pair is simpler.  On the pneumatic cylinder's real recording the features' pair
+    (pressure-dependent friction and a constant load, held-out NRMSE 0.053) stays behind the
+    rounds' friction and load-cell gain refitted jointly (0.039).
+
+    >>> from types import SimpleNamespace as NS
+    >>> pair = NS(success=True, holdout_nrmse={"v": 0.11}, n_params=4)
+    >>> rival([pair], {"v": 0.2}, 4, {"v": 0.5}, {"v": 0.1}) is pair
+    True
+    >>> rival([pair], {"v": 0.112}, 4, {"v": 0.5}, {"v": 0.1}) is None
+    True
+    >>> rival([pair], {"v": 0.112}, 5, {"v": 0.5}, {"v": 0.1}) is pair      # tied, and simpler
+    True
+    """
+    from .fit import PARAMETER_PRICE, TIE, needs_explaining, priced_score
+    significant = needs_explaining(nominal, floor)
+
+    def raw(held, k):         # the held-out errors themselves, priced: near the floor the excess magnifies
+        return sum(held[o] ** 2 for o in significant) * (1 + PARAMETER_PRICE) ** k
+
+    bar, raw_bar = priced_score(answer, answer_params, nominal, floor), raw(answer, answer_params)
+    best = None
+    for f in fits:
+        held = f.holdout_nrmse or {}
+        if not (f.success and held and all(np.isfinite(v) for v in held.values())):
+            continue
+        score, raw_score = priced_score(held, f.n_params, nominal, floor), raw(held, f.n_params)
+        better = score * (1 + TIE) < bar and raw_score * (1 + TIE) ** 2 < raw_bar
+        # tied (neither lower beyond the tie), the simpler model is the plainer answer, as in choose
+        simpler = (f.n_params < answer_params and score <= bar * (1 + TIE)
+                   and raw_score <= raw_bar * (1 + TIE) ** 2)
+        if (better or simpler) and (best is None or score < best[0]):
+            best = (score, f)
+    return None if best is None else best[1]
 
 
 def _started(fit):

@@ -233,3 +233,21 @@ def test_two_kinds_the_features_named_together_replace_a_stand_in_below_the_trig
     assert r["first_found"] and r["also_found"]
     assert np.isclose(-r["parameters"]["F0_w_load"], truth["constant_load"]["magnitude"], rtol=0.1)
     assert r["improvement"] > 0.75
+
+
+def test_the_features_pair_replaces_the_rounds_stand_ins(tmp_path):
+    """The issue's ball-screw shape on the geared pair again (diagnosis.benchmark.ball_screw, seed 11,
+    case 7): round 1's features select the constant load and the Coulomb + viscous friction together,
+    but the rounds answer an asymmetric damping and then a Stribeck friction (held-out speeds 1.6
+    times their floor), and never stall, so the pair was never fitted.  Fitted after the rounds
+    (pairs.rival_pairs), it predicts the held-out part better than their answer refitted jointly
+    (pairs.rival) and replaces it."""
+    first, r, truth = _ball_screw(tmp_path, 7)
+    assert (first.plant, first.name) == ("geared-inertias", "w2")
+    shaft = r["answers"][0].rsplit(" ", 1)[1]
+    assert sorted(r["answers"]) == [f"constant_load @ junction {shaft}", f"coulomb_viscous_friction @ junction {shaft}"]
+    assert r["first_found"] and r["also_found"]
+    n = 0.2                 # w2 = n w1: a torque at w1 is n times its load at w2
+    load = r["parameters"]["F0_w2"] if shaft == "w2" else r["parameters"]["F0_w1"] / n
+    assert np.isclose(load, truth["constant_load"]["magnitude"], rtol=0.1)
+    assert r["improvement"] > 0.75

@@ -586,8 +586,9 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                             else sum(e.n_params for e in effects))
                 won = pairs.rival(rival_fits, improved, n_answer, nominal, floor)
                 if won is not None:
+                    won, why = won
                     won.extra["over_rounds"] = {"answer": " and ".join(str(e.candidate) for e in effects),
-                                                "holdout_nrmse": dict(improved)}
+                                                "holdout_nrmse": dict(improved), "why": why}
                     chosen, alternatives = won, []
                     say("improved model", f"round 1 answered again, with {chosen.candidate}")
                     improved_graph, improved, y_imp, improved_judged, x0, start = improved_model(chosen)

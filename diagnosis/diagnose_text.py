@@ -281,7 +281,7 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
                              if o in chosen.holdout_nrmse)
             lines.append(f"The rounds, one effect at a time, first answered {over['answer']}; round 1's feature "
                          f"regression had selected these two together, and fitted together they predict the "
-                         f"held-out part better (held-out NRMSE {held}; diagnosis.pairs.rival).")
+                         f"held-out part {over['why']} (held-out NRMSE {held}; diagnosis.pairs.rival).")
         elif isinstance(chosen.candidate, CandidatePair) and effect_count(chosen.candidate) == 1:
             lines.append("The effect was fitted with the nominal value beside it (diagnosis.pairs.value_pairs).")
         elif isinstance(chosen.candidate, CandidatePair):

@@ -71,6 +71,42 @@ def test_a_friction_and_a_constant_load_are_selected_together():
     assert ev.looked_ahead
     assert sorted(ev.selected) == ["constant_load", "coulomb_viscous_friction"]
     assert ev.selected_share > 0.9998
+    # fitted together, each kind's coefficients are the truth's; fitted alone, the friction's level
+    # took in part of the load (0.37 N for 0.3) and the load part of the friction (0.28 N for 0.2)
+    together = {k.kind: k.coefficients for k in ev.together}
+    assert [k.kind for k in ev.together] == ev.selected
+    assert together["coulomb_viscous_friction"]["sign(v)"] == pytest.approx(0.3, rel=0.08)
+    assert together["coulomb_viscous_friction"]["v"] == pytest.approx(0.3, rel=0.08)
+    assert abs(together["constant_load"]["1"]) == pytest.approx(0.2, rel=0.05)
+    alone = _by_kind(ev)
+    assert abs(alone["constant_load"].coefficients["1"]) > 0.25
+    assert alone["coulomb_viscous_friction"].coefficients["sign(v)"] > 0.35
+
+
+def test_a_bound_the_located_estimate_lies_beyond_admits_it():
+    """A constant load's bounds are ten times the junction's nominal efforts; a significant feature
+    coefficient beyond them widens the bound to twice it (features.admitting), and a bound at zero
+    (a friction's level, which takes energy) stays where it is."""
+    from diagnosis.catalogue import candidates
+    from diagnosis.features import ADMIT, KindEvidence, admitting
+    from plants import library
+    graph = library.build("mass-spring-damper")
+    cands = {c.kind: c for c in candidates(graph, PLACE)}
+    load, friction = cands["constant_load"], cands["coulomb_viscous_friction"]
+
+    def evidence(coefficients, significant=True):
+        return KindEvidence("k", None, "", 0.9, 0.1, coefficients, significant)
+
+    lo = load.params[0].lower
+    wide = admitting(load, evidence({"1": 3 * lo}))
+    assert wide.params[0].lower == pytest.approx(ADMIT * 3 * lo) and wide.params[0].upper == load.params[0].upper
+    assert admitting(load, evidence({"1": 3 * lo}, significant=False)) is load
+    assert admitting(load, evidence({"1": 0.5 * lo})) is load          # within the bounds
+    # a negative level beyond a friction's zero bound does not open it; a large one widens its top
+    assert friction.params[0].lower == 0.0
+    assert admitting(friction, evidence({"sign(v)": -1.0, "v": 0.1})).params[0].lower == 0.0
+    top = friction.params[0].upper
+    assert admitting(friction, evidence({"sign(v)": 5 * top, "v": 0.1})).params[0].upper == pytest.approx(10 * top)
 
 
 def test_with_the_junctions_values_beside_the_right_kind_leaves_only_the_noise():

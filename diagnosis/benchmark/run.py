@@ -52,7 +52,7 @@ class Score:
     first_visible: float = float("nan")
     also_visible: float = float("nan")
     answers: list = field(default_factory=list)
-    parameters: dict = field(default_factory=dict)
+    parameters: dict = field(default_factory=dict)        # every answered effect's fitted values
     # a detuned nominal (--detune, detune.py): what was detuned, and whether a nominal_value answer
     # refitted that parameter (None without detuning)
     detuned: dict = field(default_factory=dict)
@@ -131,7 +131,7 @@ def score_case(rec: Realised, report, detuned: dict | None = None) -> Score:
     s.judge = str(data.get("fit", {}).get("judge", ""))
     s.answer_kind = found[0]["kind"] if found else "none"
     s.answer_place = found[0]["attached_to"] if found else ""
-    s.parameters = found[0].get("parameters", {}) if found else {}
+    s.parameters = {k: v for e in found for k, v in e.get("parameters", {}).items()}
     s.indistinguishable = [a["kind"] for a in found[0].get("indistinguishable", [])] if found else []
     if eff is None:
         s.kind_ok = s.place_ok = s.kind_or_indistinguishable_ok = not found

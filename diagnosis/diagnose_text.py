@@ -277,8 +277,8 @@ def _text(rec, exp, held, res, nominal, improved, windows, scores, fits, chosen,
                          f"while {chosen.extra['stalled_why']}; these two, fitted together (diagnosis.pairs), explain it instead.")
         elif isinstance(chosen.candidate, CandidatePair) and chosen.extra.get("over_rounds"):
             over = chosen.extra["over_rounds"]
-            held = ", ".join(f"{o} {v:.3g} -> {chosen.holdout_nrmse[o]:.3g}" for o, v in over["holdout_nrmse"].items()
-                             if o in chosen.holdout_nrmse)
+            held = ", ".join(f"{o} {v:.3g} -> {chosen.holdout_nrmse[o]:.3g}"
+                             for o, v in over["holdout_nrmse"].items() if o in chosen.holdout_nrmse)
             lines.append(f"The rounds, one effect at a time, first answered {over['answer']}; round 1's feature "
                          f"regression had selected these two together, and fitted together they predict the "
                          f"held-out part {over['why']} (held-out NRMSE {held}; diagnosis.pairs.rival).")

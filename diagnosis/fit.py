@@ -31,8 +31,8 @@ from .holdout_resolution import Z_RESOLVED, held_out_prediction, largest_differe
 from .shooting import FIRST_PASS, PASSES, SETTLED, Shooting
 
 __all__ = ["CandidateFit", "fit_candidate", "choose", "noise_floor", "needs_explaining", "usable_fits",
-           "single_fits_by_holdout", "harms", "HARM", "HARM_EXCESS",
-           "acceptance", "within_tie", "priced_score", "unpriced_error", "PARAMETER_PRICE", "MIN_SHARE", "MIN_GAIN", "TIE"]
+           "single_fits_by_holdout", "harms", "HARM", "HARM_EXCESS", "acceptance", "within_tie",
+           "priced_score", "unpriced_error", "PARAMETER_PRICE", "MIN_SHARE", "MIN_GAIN", "TIE"]
 
 #: relative reduction of the held-out excess error each extra parameter must buy
 PARAMETER_PRICE = 0.10

@@ -261,7 +261,7 @@ def test_the_features_pair_starts_where_the_two_explain_the_estimate_together(tm
     motor and a friction modulated by the voltage.  The features' pair now starts at the two kinds'
     coefficients fitted together (FeatureEvidence.together), with the load's bound widened to admit
     its coefficient (features.admitting), and recovers the truth; tied with the rounds' answer on
-    the held-out part, it is the simpler model (pairs.rival; 40-60 s: a long case)."""
+    the held-out part, it is the simpler model (pairs.rival; 60-80 s: a long case)."""
     first, r, truth = _ball_screw(tmp_path, 8, seed=12)
     assert (first.plant, first.name) == ("dc-motor", "w_load")
     assert sorted(r["answers"]) == ["constant_load @ junction w_load", "coulomb_viscous_friction @ junction w_load"]

@@ -82,7 +82,8 @@ from .errors import BondcosimError
 from .law_places import at_junction
 
 __all__ = ["KIND_FEATURES", "SIGN_FRACTION", "FEATURE_PRICE", "MAX_SELECTED", "KindEvidence", "FeatureEvidence",
-           "evidence_lookup", "prune_candidates", "with_feature_starts", "admitting", "ADMIT", "prefer_by_evidence",
+           "evidence_lookup", "prune_candidates", "with_feature_starts", "with_feature_start",
+           "admitting", "ADMIT", "prefer_by_evidence",
            "feature_evidence", "regress_kinds", "left_with", "dahl_state"]
 
 #: kind -> (junction kinds it applies at, the feature columns in words, the parameters it is
@@ -606,22 +607,19 @@ def _evidence_at(graph, p, experiment, x0, regime_variables, d_hat):
     prices = {k: REGISTRY[k[0]].feature_price for k in keys}
     ranked, selection = regress_kinds(responses, r, w, parameters=prices)
     with_values = left_with(responses, S_all[:, :, edges[-1]:], r, w) if beside else {}
+
+    def evidence(key, beta):        # the catalogue's sign: an element that takes effort or flow
+        share, score, _, sig, excess, drop = ranked[key]
+        return KindEvidence(*key, float(share), float(score), {nm: -float(c) for nm, c in zip(responses[key][0], beta)},
+                            sig, excess, float(drop), grids[key], with_values.get(key, float("nan")))
+
     best = {}
-    for (kind, variant, detail), (share, score, beta, sig, excess, drop) in ranked.items():
-        if (kind, variant) not in best or score < best[(kind, variant)].score:
-            names = responses[(kind, variant, detail)][0]
-            best[(kind, variant)] = KindEvidence(kind, variant, detail, float(share), float(score),
-                                                 {nm: -float(c) for nm, c in zip(names, beta)}, sig,
-                                                 excess, float(drop), grids[(kind, variant, detail)],
-                                                 with_values.get((kind, variant, detail), float("nan")))
+    for key, (_, score, beta, *_rest) in ranked.items():
+        if key[:2] not in best or score < best[key[:2]].score:
+            best[key[:2]] = evidence(key, beta)
     kinds = sorted(best.values(), key=lambda k: k.score)
     chosen = [f"{k[0]} ({k[1]})" if k[1] else k[0] for k in selection.keys]
-    together = []
-    for key, beta in selection.coefficients.items():
-        share, score, _, sig, excess, drop = ranked[key]
-        names = responses[key][0]
-        together.append(KindEvidence(*key, float(share), float(score), {nm: -float(c) for nm, c in zip(names, beta)},
-                                     sig, excess, float(drop), grids[key], with_values.get(key, float("nan"))))
+    together = [evidence(key, beta) for key, beta in selection.coefficients.items()]
     return FeatureEvidence(p, kinds, chosen, float(selection.share), junction_unit(graph, p.name),
                            selection.looked_ahead, together)
 
@@ -714,13 +712,19 @@ def with_feature_starts(cands: list, evidence: dict) -> list:
     def started(cand):
         kind = getattr(cand, "definition", None)            # a group of twins has none
         ev = lookup(cand) if kind is not None else None
-        if ev is None:
-            return cand
-        cand = admitting(cand, ev)
-        start = kind.feature_start(cand, ev)
-        return cand.with_starts([start]) if start else cand
+        return cand if ev is None else with_feature_start(cand, ev)
 
     return [started(c) for c in cands]
+
+
+def with_feature_start(cand, evidence, first: bool = False):
+    """`cand` with its bounds admitting `evidence`'s coefficients (:func:`admitting`) and one more
+    start there (``Kind.feature_start``): after its own starts, or before them (`first`)."""
+    cand = admitting(cand, evidence)
+    start = cand.definition.feature_start(cand, evidence)
+    if not start:
+        return cand
+    return replace(cand, starts=(start,) + tuple(cand.starts)) if first else cand.with_starts([start])
 
 
 #: a bound a significant feature coefficient lies beyond is moved to this many times it

@@ -326,10 +326,8 @@ def _beside(cand, evidence):
     ball-screw seed 12, case 008)."""
     if evidence is None:
         return cand
-    from .features import admitting
-    cand = admitting(cand, evidence)
-    start = cand.definition.feature_start(cand, evidence)
-    return replace(cand, starts=(start,) + tuple(cand.starts)) if start else cand
+    from .features import with_feature_start
+    return with_feature_start(cand, evidence, first=True)
 
 
 def _started(fit):

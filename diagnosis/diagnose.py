@@ -433,7 +433,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     # the feature regression runs along the nominal run: none where it diverges, nor where its mode is
     # unstable (the run has left the plant's motion within seconds): every candidate is fitted
     evidence, cands, pruned = _features(graph, [] if diverged or judge.unstable else scores, place_list, train, x0,
-                                        rv, cands, say, "feature regression")
+                                        rv, cands, say, "feature regression", restart=_restart(judge))
     fit_part, fit_x0 = _fit_window(train, res.run, x0)
     fit_part = _before_divergence(fit_part, diverged)
 
@@ -602,9 +602,16 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                     judged=(nominal_judged, improved_judged), notes=spike_notes(exp, glitches))
 
 
-def _features(graph, scores, places, train, x0, rv, cands, say, label):
-    """The feature regression at the junction places (:mod:`diagnosis.features`) and the
-    candidates it leaves to fit: ``(evidence by place, candidates kept, candidates pruned)``."""
+def _restart(judge) -> int | None:
+    """Under the segment judge, its segments' length in samples: the feature regression restarts
+    there too (:mod:`diagnosis.feature_restarts`); None under the open-loop judge."""
+    return judge.plan.length if judge.kind == "segments" and judge.plan is not None else None
+
+
+def _features(graph, scores, places, train, x0, rv, cands, say, label, restart=None):
+    """The feature regression at the junction places (:mod:`diagnosis.features`; `restart`, the
+    segment length it restarts at, :func:`_restart`) and the candidates it leaves to fit:
+    ``(evidence by place, candidates kept, candidates pruned)``."""
     from .features import feature_evidence, prune_candidates, with_feature_starts
     junctions = [p for p in places if p.kind in ("junction", "law")]
     if not junctions or not scores:       # no location (a diverging nominal): nothing to regress
@@ -612,7 +619,7 @@ def _features(graph, scores, places, train, x0, rv, cands, say, label):
         return {}, kept, [str(c) for c in pruned]
     say(label, ", ".join(map(str, junctions)))
     evidence = feature_evidence(graph, junctions, train, x0=x0, regime_variables=rv,
-                                estimates={s.place: s.estimate for s in scores})
+                                estimates={s.place: s.estimate for s in scores}, restart=restart)
     kept, pruned = prune_candidates(cands, evidence)
     return evidence, with_feature_starts(kept, evidence), [str(c) for c in pruned]
 
@@ -769,7 +776,7 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
              if (c.kind, c.place) not in done and not pairs.clashes(c, claimed)
              and (s not in springs or on_storage(graph, c)) and (s not in sensors or c.definition.unranked_sensor)]
     evidence, cands, pruned = _features(graph, scores, [s.place for s in places], train, x0, rv, cands, say,
-                                        f"{label}: feature regression")
+                                        f"{label}: feature regression", restart=_restart(judge))
     fit_part, fit_x0 = _fit_window(train, res.run, x0)
 
     def fit_one(cand, abandon_above):

@@ -23,7 +23,9 @@ rows and judged on the last 30 % (a time split): the *validated share* of kind k
 penalised validation error :math:`\\mathrm{SSE}_{val}(k) (1 + \\rho)^{m_k}`
 (:data:`FEATURE_PRICE` per parameter, :math:`m_k` the kind's parameters in
 :data:`KIND_FEATURES`); a forward selection over kind groups (at most
-:data:`MAX_SELECTED`) says which kinds together explain the estimate.
+:data:`MAX_SELECTED`) says which kinds together explain the estimate.  Under the segment judge (a
+drifting nominal) every segment's start state is fitted too and the kinds are validated across
+the segments (:mod:`diagnosis.feature_restarts`).
 
 The features per kind are each kind's own (:meth:`diagnosis.kinds.base.Kind.features`, from the
 junction's :class:`~diagnosis.kinds.feature_signals.FeatureSignals`; :data:`KIND_FEATURES`
@@ -79,6 +81,7 @@ from .kinds.modulated_friction import modulating_signals
 from .kinds.nominal_value import value_columns
 from .catalogue_scales import pressure_variables
 from .errors import BondcosimError
+from .feature_restarts import restarted
 from .law_places import at_junction
 
 __all__ = ["KIND_FEATURES", "SIGN_FRACTION", "FEATURE_PRICE", "MAX_SELECTED", "KindEvidence", "FeatureEvidence",
@@ -284,7 +287,7 @@ def _kind_variants(kind, signals: FeatureSignals) -> list:
 
 
 def regress_kinds(responses: dict, r, w, *, price: float = FEATURE_PRICE, validation: float = VALIDATION,
-                  parameters=None):
+                  parameters=None, lost: int = 0, folds=None):
     """Rank kind groups by validated least squares of the residual on their responses.
 
     Parameters
@@ -300,6 +303,13 @@ def regress_kinds(responses: dict, r, w, *, price: float = FEATURE_PRICE, valida
         Relative price per parameter; share of the rows (the last ones) held out.
     parameters : dict key -> int, optional
         Parameters each group is priced by (default: its number of columns).
+    lost : int
+        Degrees of freedom the validation rows have lost (a restarted regression's start states,
+        :mod:`diagnosis.feature_restarts`): the noise left there is that many variances less.
+    folds : ndarray of int, shape (rows,), optional
+        Each row's validation fold: every fold f >= 0 is validated on the coefficients fitted on
+        the other rows, and the validation SSE sums over the folds (rows of fold -1 are only
+        fitted on).  Default: the time split, the last `validation` share of the rows one fold.
 
     Returns
     -------
@@ -312,15 +322,16 @@ def regress_kinds(responses: dict, r, w, *, price: float = FEATURE_PRICE, valida
         their joint validated share.
     """
     rows, ny = r.shape
-    sw, b, b_fit, b_val, split = _weighted_split(r, w, validation)
+    sw, b, folds = _weighted_split(r, w, validation, folds)
+    b_val = b[folds >= 0].reshape(-1)
     sse0 = float(b_val @ b_val)
     if not sse0 > 0:
         return {}, Selection([], 0.0)
 
     def fit(S):
-        return _validated_sse(S, sw, b_fit, b_val, split)
+        return _validated_sse(S, sw, b, folds)
 
-    noise = float(b_val.size)
+    noise = float(b_val.size - lost)
     excess0 = max(sse0 - noise, MIN_DROP_PER_COLUMN)
     out = {}
     for key, (_, S) in responses.items():
@@ -449,33 +460,39 @@ def _look_ahead(out, responses, fit, sse0, noise, price, parameters, current, ss
     return None
 
 
-def _weighted_split(r, w, validation: float):
-    """``(sw, b, b_fit, b_val, split)``: the square-root weights of `w`, the weighted residual `r`
-    (rows, ny), and its first `split` rows and the rest (the last `validation` share), flattened."""
-    split = int(round((1.0 - validation) * r.shape[0]))
+def _weighted_split(r, w, validation: float, folds=None):
+    """``(sw, b, folds)``: the square-root weights of `w`, the weighted residual `r` (rows, ny), and
+    each row's validation fold (:func:`regress_kinds`; default the time split: the first rows -1,
+    the last `validation` share 0)."""
+    if folds is None:
+        folds = np.where(np.arange(r.shape[0]) < int(round((1.0 - validation) * r.shape[0])), -1, 0)
     sw = np.sqrt(np.asarray(w, float))
-    b = r * sw[None, :]
-    return sw, b, b[:split].reshape(-1), b[split:].reshape(-1), split
+    return sw, r * sw[None, :], np.asarray(folds, int)
 
 
-def _validated_sse(S, sw, b_fit, b_val, split: int) -> tuple[float, int]:
-    """``(validation SSE, rank)`` of the least-squares fit of the weighted residual (`b_fit`, the
-    first `split` rows; `b_val`, the rest) on the responses `S` (rows, ny, m), weights `sw`."""
+def _validated_sse(S, sw, b, folds) -> tuple[float, int]:
+    """``(validation SSE, rank)`` of the least-squares fits of the weighted residual `b` (rows, ny) on
+    the responses `S` (rows, ny, m), weights `sw`: each fold's rows predicted by the coefficients
+    fitted on the other rows, the squared errors summed over the folds (the least rank of the fits)."""
     A = S * sw[None, :, None]
-    A_fit, A_val = A[:split].reshape(-1, S.shape[2]), A[split:].reshape(-1, S.shape[2])
-    scale = np.sqrt(np.sum(A_fit ** 2, axis=0))
-    scale[~(scale > 0)] = 1.0
-    coef, _, rank, _ = np.linalg.lstsq(A_fit / scale, b_fit, rcond=1e-10)
-    err = b_val - (A_val / scale) @ coef
-    return float(err @ err), int(rank)
+    sse, rank = 0.0, S.shape[2]
+    for f in np.unique(folds[folds >= 0]):
+        on = folds != f
+        A_fit, A_val = A[on].reshape(-1, S.shape[2]), A[~on].reshape(-1, S.shape[2])
+        scale = np.sqrt(np.sum(A_fit ** 2, axis=0))
+        scale[~(scale > 0)] = 1.0
+        coef, _, k, _ = np.linalg.lstsq(A_fit / scale, b[on].reshape(-1), rcond=1e-10)
+        err = b[~on].reshape(-1) - (A_val / scale) @ coef
+        sse, rank = sse + float(err @ err), min(rank, int(k))
+    return sse, rank
 
 
-def left_with(responses: dict, beside, r, w, *, validation: float = VALIDATION) -> dict:
+def left_with(responses: dict, beside, r, w, *, validation: float = VALIDATION, lost: int = 0, folds=None) -> dict:
     """What each group of `responses` (key -> (names, S)) leaves of the weighted residual `r`
     (rows, ny; weights `w`, 1/sigma^2) with the columns `beside` (rows, ny, m) fitted alongside:
     the validation rows' mean squared weighted error (the same time split as
-    :func:`regress_kinds`), in noise variances (about 1 where only the noise is left); NaN for a
-    group whose responses are not finite.
+    :func:`regress_kinds`), in noise variances (about 1 where only the noise is left; `lost` and
+    `folds` as for :func:`regress_kinds`); NaN for a group whose responses are not finite.
 
     Examples
     --------
@@ -489,16 +506,18 @@ def left_with(responses: dict, beside, r, w, *, validation: float = VALIDATION) 
     {'a': 1.0}
     """
     rows = r.shape[0]
-    sw, _, b_fit, b_val, split = _weighted_split(r, w, validation)
+    sw, b, folds = _weighted_split(r, w, validation, folds)
+    n_val = int(np.count_nonzero(folds >= 0)) * r.shape[1]
     out = {}
     for key, (_, S) in responses.items():
-        ok = np.isfinite(S).all() and S.shape[0] == rows and b_val.size
-        out[key] = (_validated_sse(np.concatenate([S, beside], axis=2), sw, b_fit, b_val, split)[0] / b_val.size
+        ok = np.isfinite(S).all() and S.shape[0] == rows and n_val
+        out[key] = (_validated_sse(np.concatenate([S, beside], axis=2), sw, b, folds)[0] / max(n_val - lost, 1)
                     if ok else float("nan"))
     return out
 
 
-def feature_evidence(graph, places, experiment, *, x0=None, regime_variables=None, estimates=None) -> dict:
+def feature_evidence(graph, places, experiment, *, x0=None, regime_variables=None, estimates=None,
+                     restart: int | None = None) -> dict:
     """The feature regression (module docstring) at each junction place of `places`.
 
     The features and the linearised responses are taken along the *corrected* run: the
@@ -524,6 +543,9 @@ def feature_evidence(graph, places, experiment, *, x0=None, regime_variables=Non
     estimates : dict Place -> ndarray, optional
         The location's estimated extra effort / flow per junction at the experiment's
         times (``PlaceScore.estimate``; NaN outside its window counts as 0).
+    restart : int, optional
+        Under the segment judge (a drifting nominal), its segments' length in samples: the
+        regression fits every segment's start state too (:mod:`diagnosis.feature_restarts`).
 
     Returns
     -------
@@ -537,7 +559,7 @@ def feature_evidence(graph, places, experiment, *, x0=None, regime_variables=Non
         d_hat = next((e for q, e in (estimates or {}).items() if (q.kind, q.name) == (p.kind, p.name)), None)
         try:
             at_graph, at = at_junction(graph, p)     # a law: the junction that splits its bond
-            ev = _evidence_at(at_graph, at, experiment, x0, regime_variables, d_hat)
+            ev = _evidence_at(at_graph, at, experiment, x0, regime_variables, d_hat, restart)
         except (BondcosimError, FloatingPointError, np.linalg.LinAlgError, ValueError):
             ev = None
         if ev is not None:
@@ -546,7 +568,7 @@ def feature_evidence(graph, places, experiment, *, x0=None, regime_variables=Non
     return out
 
 
-def _evidence_at(graph, p, experiment, x0, regime_variables, d_hat):
+def _evidence_at(graph, p, experiment, x0, regime_variables, d_hat, restart=None):
     """:func:`feature_evidence` at one junction place (None when a run is not finite)."""
     from bondgraph.io_json import graph_from_dict
 
@@ -602,11 +624,14 @@ def _evidence_at(graph, p, experiment, x0, regime_variables, d_hat):
     F_all = np.concatenate([d_hat[:, None]] + [groups[k][1] for k in keys] + beside, axis=1)
     S_all = lin.response(np.zeros(F_all.shape[1], dtype=int), F_all, rows)
     r = np.stack([residual[o][rows] for o in outputs], axis=1) + S_all[:, :, 0]   # linearised nominal residual
+    lost, folds = 0, None
+    if restart:          # a drifting nominal: each segment's own start state is a free nuisance
+        r, S_all, lost, folds = restarted(lin, rows, restart, r, S_all, np.sqrt(w))
     edges = 1 + np.cumsum([0] + [groups[k][1].shape[1] for k in keys])
     responses = {k: (groups[k][0], S_all[:, :, a:b]) for k, a, b in zip(keys, edges[:-1], edges[1:])}
     prices = {k: REGISTRY[k[0]].feature_price for k in keys}
-    ranked, selection = regress_kinds(responses, r, w, parameters=prices)
-    with_values = left_with(responses, S_all[:, :, edges[-1]:], r, w) if beside else {}
+    ranked, selection = regress_kinds(responses, r, w, parameters=prices, lost=lost, folds=folds)
+    with_values = left_with(responses, S_all[:, :, edges[-1]:], r, w, lost=lost, folds=folds) if beside else {}
 
     def evidence(key, beta):        # the catalogue's sign: an element that takes effort or flow
         share, score, _, sig, excess, drop = ranked[key]

@@ -264,9 +264,14 @@ def test_the_features_pair_starts_where_the_two_explain_the_estimate_together(tm
     the held-out part, it is the simpler model (pairs.rival; 60-80 s: a long case)."""
     first, r, truth = _ball_screw(tmp_path, 8, seed=12)
     assert (first.plant, first.name) == ("dc-motor", "w_load")
-    assert sorted(r["answers"]) == ["constant_load @ junction w_load", "coulomb_viscous_friction @ junction w_load"]
+    # either shaft of the rigid gearbox, one place to any recording (the benchmark scores both); this
+    # machine's fits end at the motor (numpy 2.4.6; and at 925f97c too, before session 42)
+    shaft = r["answers"][0].rsplit(" ", 1)[1]
+    assert sorted(r["answers"]) == [f"constant_load @ junction {shaft}", f"coulomb_viscous_friction @ junction {shaft}"]
+    assert r["first_found"] and r["also_found"]
+    n = 1.0 if shaft == "w_load" else 0.1   # w_L = n w_m: a load torque is n times itself at the motor
     p, friction = r["parameters"], truth["coulomb_viscous_friction"]
-    assert np.isclose(-p["F0_w_load"], truth["constant_load"]["magnitude"], rtol=0.02)
-    assert np.isclose(p["Fc_w_load"], friction["magnitude"], rtol=0.05)
+    assert np.isclose(-p[f"F0_{shaft}"] / n, truth["constant_load"]["magnitude"], rtol=0.02)
+    assert np.isclose(p[f"Fc_{shaft}"] / n, friction["magnitude"], rtol=0.05)
     b = friction["magnitude"] * friction["shape"]["beta"] / friction["shape"]["v_rms"]
-    assert np.isclose(p["b_visc_w_load"], b, rtol=0.05)
+    assert np.isclose(p[f"b_visc_{shaft}"] / n ** 2, b, rtol=0.05)

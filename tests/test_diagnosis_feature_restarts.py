@@ -1,6 +1,6 @@
 """The restarted feature regression (diagnosis.feature_restarts): every segment's start state a
 nuisance, on a double integrator whose transitions are known in closed form, and on a force-driven
-carriage (m v' = F - d(v), x' = v) integrated here by its own RK4, not bondgraph's."""
+carriage (m v' = F - d(v), x' = v) integrated by the tests' own RK4 (msd_truth.rk4_states), not bondgraph's."""
 from types import SimpleNamespace
 
 import numpy as np
@@ -10,6 +10,7 @@ from diagnosis.feature_restarts import FOLDS, free_responses, restarted
 from diagnosis.features import feature_evidence, regress_kinds
 from diagnosis.place import Place
 from diagnosis.recording import Experiment
+from msd_truth import rk4_states
 
 
 def _double_integrator(n, h):
@@ -75,21 +76,11 @@ def _carriage(seed, fc=1.0, b=4.0, load=1.5, m=20.0, fs=200.0, span=7.0, eps=0.0
     t = np.arange(0.0, span, 1.0 / fs)
     levels = rng.uniform(-10.0, 10.0, int(np.ceil(span / 0.7)))
     force = levels[(t // 0.7).astype(int)] + 4.0 * np.sin(2 * np.pi * 0.4 * t) + 3.0
-    xv = np.zeros((t.size, 2))
 
-    def f(s, F):
+    def rate(s, F):
         return np.array([s[1], (F - fc * np.tanh(s[1] / eps) - b * s[1] - load) / m])
 
-    dt = 1.0 / fs / 10
-    for k in range(t.size - 1):
-        s = xv[k].copy()
-        for _ in range(10):
-            k1 = f(s, force[k])
-            k2 = f(s + dt / 2 * k1, force[k])
-            k3 = f(s + dt / 2 * k2, force[k])
-            k4 = f(s + dt * k3, force[k])
-            s = s + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        xv[k + 1] = s
+    xv = rk4_states(rate, t, force, substeps=10)
     return Experiment(t, {"F": force}, {"x": xv[:, 0] + rng.normal(0, 1e-2, t.size),
                                         "v": xv[:, 1] + rng.normal(0, 2e-3, t.size)},
                       {"F": "N", "x": "m", "v": "m/s"}, "truth")

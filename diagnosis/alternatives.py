@@ -75,6 +75,10 @@ class Alternative:
     unexcited : str
         Why the recording never excites what sets this kind apart from the winner's, for a kind not
         fitted for that reason (:func:`unexcited`; its numbers are then the winner's); else "".
+    structural : str
+        Which of the answer's values a one-parameter twin reads as, for a reading not fitted because
+        it is the answer's model rescaled (:func:`diagnosis.equivalent_readings.swapped_readings`;
+        its numbers are then NaN); else "".
     """
 
     kind: str
@@ -84,15 +88,17 @@ class Alternative:
     difference: float
     n_params: int
     unexcited: str = ""
+    structural: str = ""
 
     def to_json(self) -> dict:
         """``{"kind", "place", "holdout_nrmse": {output: nrmse}, "z", "difference", "n_params"}``,
-        and ``"unexcited"`` where set; NaN as ``None``."""
+        and ``"unexcited"`` and ``"structural"`` where set; NaN as ``None``."""
         finite = lambda x: float(x) if np.isfinite(x) else None   # noqa: E731
         out = {"kind": self.kind, "place": self.place,
                "holdout_nrmse": {o: finite(v) for o, v in self.holdout_nrmse.items()},
                "z": finite(self.z), "difference": finite(self.difference), "n_params": int(self.n_params)}
-        return out | ({"unexcited": self.unexcited} if self.unexcited else {})
+        return (out | ({"unexcited": self.unexcited} if self.unexcited else {})
+                | ({"structural": self.structural} if self.structural else {}))
 
 
 def indistinguishable(winner, fits, nominal_holdout: dict, *, noise: dict | None = None,

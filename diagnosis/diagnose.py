@@ -37,7 +37,11 @@
    the order they were found (each round explains most of what is left);
 7. with two or more effects, a joint refit of all their parameters (and the
    ``uncertain`` ones) on the training part, started from the round-by-round
-   values and kept when the held-out excess error does not grow.
+   values and kept when the held-out excess error does not grow;
+8. for an answer that holds a scaling (an element's value, an input's or a sensor's gain), the
+   one-parameter scalings that are the same model rescaled on the fits' window, each listed beside
+   the effect it reads as (:func:`diagnosis.equivalent_readings.swapped_readings`: a force-driven
+   mass's value is its actuator's gain).
 """
 from __future__ import annotations
 
@@ -594,6 +598,8 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
                     improved_graph, improved, y_imp, improved_judged, x0, start = improved_model(chosen)
                     rounds = [round_one(chosen, alternatives)]
 
+    if chosen is not None and chosen.candidate is not None:
+        _add_swapped_readings(rounds, improved_graph, train, x0, res.noise)
     from .diagnose_text import assemble
     return assemble(graph=graph, rec=rec, exp=exp, held=held, res=res, nominal=nominal,
                     improved=improved, y_imp=y_imp, windows=windows, rv=rv, scores=scores,
@@ -800,6 +806,18 @@ def _further_round(graph, exp, train, held, judge, x0, reference, floor, rounds,
         out.graph = better
     return out
 
+
+def _add_swapped_readings(rounds, graph, train, x0, noise) -> None:
+    """Each round's answer with the one-parameter twins it reads as on the fits' window
+    (:func:`diagnosis.equivalent_readings.swapped_readings`), after its fitted alternatives."""
+    from .equivalent_readings import swapped_readings
+    answered = [r for r in rounds if r.chosen is not None and r.chosen.candidate is not None]
+    part, part_x0 = _fit_window(train, None, x0)
+    found = swapped_readings(graph, [r.chosen.candidate for r in answered], part, part_x0, noise)
+    for i, twins in found.items():
+        r = answered[i]
+        listed = {(a.kind, a.place) for a in r.indistinguishable or ()}
+        r.indistinguishable = list(r.indistinguishable or ()) + [a for a in twins if (a.kind, a.place) not in listed]
 
 
 def _joint_refit(graph, effects, exp, train, held, judge, x0, reference, floor, uncertain):

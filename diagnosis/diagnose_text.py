@@ -80,13 +80,15 @@ def _indistinguishable_text(winner, alternatives) -> list[str]:
         where = f" at {a.place}" if a.place else " (the nominal parameters refitted alone)"
         if a.unexcited:
             return f"{a.kind}{where} (not fitted: {a.unexcited}; on this record it is the answer's law)"
+        if a.structural:
+            return f"{a.kind}{where} (not fitted: {a.structural})"
         errors = ", ".join(f"{o} {v:.3g} vs {winner.holdout_nrmse[o]:.3g}" for o, v in a.holdout_nrmse.items()
                            if o in winner.holdout_nrmse)
         z = f"z = {a.z:.1f}" if np.isfinite(a.z) else "z not computable"
         gap = (f"; the held-out predictions differ by at most {a.difference:.2g} noise standard deviations"
                if np.isfinite(a.difference) else "")
         return f"{a.kind}{where} (held-out NRMSE {errors}; {z}{gap})"
-    fitted = any(not a.unexcited for a in alternatives)
+    fitted = any(not (a.unexcited or a.structural) for a in alternatives)
     why = (" The answer above has the lower priced held-out error or won the choice rule's ties (fewer parameters, "
            "the plainer place, the training error, the catalogue's order)." if fitted else "")
     return [f"Not told apart by this recording: {'; '.join(one(a) for a in alternatives)}.{why}"]

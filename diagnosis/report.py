@@ -7,7 +7,8 @@ Schema of :meth:`DiagnosisReport.to_json` (issue 6, section 2e)::
                           "explanation": str, "judged_on": "held-out" | "training" | "open-loop",
                           "indistinguishable": [{"kind": str, "place": str,
                                                  "holdout_nrmse": {output: nrmse}, "z": float,
-                                                 "difference": float, "n_params": int}]}],
+                                                 "difference": float, "n_params": int,
+                                                 "unexcited": str, "structural": str}]}],
      "fit": {"holdout": [t0, t1], "nominal": {output: nrmse}, "improved": {output: nrmse},
              "window": [t0, t1], "start": str,
              "judge": "open-loop" | "segments", "judge_reason": str,
@@ -29,6 +30,10 @@ else ``"held-out"``;
 round that the held-out part cannot tell apart from it (:mod:`diagnosis.alternatives`): their held-out
 NRMSE, ``z`` of the lower error over the other's (below 3; ``null`` where it cannot be computed) and
 ``difference``, the largest difference of the two held-out predictions in noise standard deviations;
+``unexcited`` (where present) says why a richer law was not fitted (the recording never excites it);
+``structural`` (where present) says how a one-parameter scaling not fitted reads as the effect, rescaled
+(:mod:`diagnosis.equivalent_readings`: its ``holdout_nrmse`` is empty, ``z`` null, and ``difference``
+the largest difference of the swapped model's outputs from the answer's on the fit window);
 ``[]`` when there are none;
 ``fit.window`` is the part of the training samples the candidates were fitted on
 and ``fit.start`` the state their simulations started from.  ``fit.judge`` says how the

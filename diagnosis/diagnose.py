@@ -491,7 +491,7 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
         nonlocal fitted_pairs
         fitted_pairs = True
         # the kinds the features select together first (pairs.selected_pairs), then the best singles'
-        selected = pairs.selected_pairs(fits, evidence.values())
+        selected = pairs.selected_pairs(fits, evidence.values(), looked_ahead=False)
         more = pairs.pair_candidates(fits, besides=selected) if singles else []
         pair_fits, _ = fit_in_turn(selected + more, fit_one, say, "fitting pairs", best=best)
         fits.extend(pair_fits)

@@ -287,7 +287,7 @@ def _kind_variants(kind, signals: FeatureSignals) -> list:
 
 
 def regress_kinds(responses: dict, r, w, *, price: float = FEATURE_PRICE, validation: float = VALIDATION,
-                  parameters=None, lost: int = 0, folds=None):
+                  parameters=None, lost: int = 0, folds=None, signs=None):
     """Rank kind groups by validated least squares of the residual on their responses.
 
     Parameters
@@ -310,6 +310,12 @@ def regress_kinds(responses: dict, r, w, *, price: float = FEATURE_PRICE, valida
         Each row's validation fold: every fold f >= 0 is validated on the coefficients fitted on
         the other rows, and the validation SSE sums over the folds (rows of fold -1 are only
         fitted on).  Default: the time split, the last `validation` share of the rows one fold.
+    signs : dict key -> tuple of int, optional
+        The law's sign of each group's leading coefficients (``Kind.feature_signs``: +1 where the
+        catalogue-sign coefficient cannot be negative, a friction level or a damping that takes
+        energy).  A group whose coefficients on all rows break it is not significant, and no
+        selection (forward or looked ahead) keeps a group whose coefficients fitted with the others'
+        break it (:func:`_breaks_sign`).
 
     Returns
     -------
@@ -342,7 +348,8 @@ def regress_kinds(responses: dict, r, w, *, price: float = FEATURE_PRICE, valida
         beta = np.linalg.lstsq(A_all, b.reshape(-1), rcond=1e-10)[0]
         share = 1.0 - sse / sse0
         k = (parameters or {}).get(key, S.shape[2])
-        significant = share >= MIN_SHARE and sse0 - sse >= MIN_DROP_PER_COLUMN * max(rank, 1)
+        significant = (share >= MIN_SHARE and sse0 - sse >= MIN_DROP_PER_COLUMN * max(rank, 1)
+                       and not _breaks_sign({key: beta}, signs))
         excess = min((sse0 - sse) / excess0, 1.0)
         out[key] = (share, sse / sse0 * (1.0 + price) ** k, beta, bool(significant), float(excess), sse0 - sse)
     # forward selection: a kind is added while it lowers the penalised score, drops the SSE by at
@@ -358,6 +365,8 @@ def regress_kinds(responses: dict, r, w, *, price: float = FEATURE_PRICE, valida
             if key in selected or not out[key][3] or any(k[0] == key[0] for k in selected):
                 continue
             S = np.concatenate(cols + [responses[key][1]], axis=2)
+            if _breaks_sign(_joint_coefficients(responses, selected + [key], sw, b, alone=True), signs):
+                continue
             sse, _ = fit(S)
             k = sum((parameters or {}).get(g, responses[g][1].shape[2]) for g in selected + [key])
             trial.append((sse / sse0 * (1.0 + price) ** k, sse, key))
@@ -371,22 +380,42 @@ def regress_kinds(responses: dict, r, w, *, price: float = FEATURE_PRICE, valida
         selected.append(key)
         cols.append(responses[key][1])
         current, sse_now = score, sse
-    pair = _look_ahead(out, responses, fit, sse0, noise, price, parameters, current, sse_now)
+    def lawful(keys):
+        return not _breaks_sign(_joint_coefficients(responses, list(keys), sw, b), signs)
+
+    pair = _look_ahead(out, responses, fit, sse0, noise, price, parameters, current, sse_now, lawful)
     if pair is not None:
         selected, sse_now = list(pair[0]), pair[1]
     return out, Selection(selected, 1.0 - sse_now / sse0, pair is not None,
                           _joint_coefficients(responses, selected, sw, b))
 
 
-def _joint_coefficients(responses, keys, sw, b) -> dict:
+def _joint_coefficients(responses, keys, sw, b, alone: bool = False) -> dict:
     """The coefficients of the groups `keys` fitted together on all rows (the responses' sign), per
-    group: where two kinds are selected, each one's coefficients beside the other's, not alone."""
-    if len(keys) < 2:
+    group: where two kinds are selected, each one's coefficients beside the other's, not alone
+    (one group: none, unless `alone`)."""
+    if len(keys) < (1 if alone else 2):
         return {}
     S = np.concatenate([responses[k][1] for k in keys], axis=2)
     beta = np.linalg.lstsq((S * sw[None, :, None]).reshape(-1, S.shape[2]), b.reshape(-1), rcond=1e-10)[0]
     cuts = np.cumsum([0] + [responses[k][1].shape[2] for k in keys])
     return {k: beta[cuts[i]:cuts[i + 1]] for i, k in enumerate(keys)}
+
+
+def _breaks_sign(coefficients: dict, signs) -> bool:
+    """Whether a group's coefficients (key -> responses'-sign array, as fitted) break its law's
+    sign (`signs`, key -> ``Kind.feature_signs``): a catalogue-sign coefficient (the responses'
+    negated) below 0 where the sign is +1.  A Coulomb friction's level fitted at -1.59 N stood in
+    for a constant load pushing a carriage along its one-way motion (``sign(v)`` is 1 there) and
+    was selected beside a hardening spring; the fit of that pair, its level bound at 0, was given up,
+    and the answer was ``none`` (carriage compound benchmark, seed 4302, case 014)."""
+    if not signs:
+        return False
+    for key, beta in coefficients.items():
+        for sign, c in zip(signs.get(key, ()), np.ravel(beta)):
+            if sign > 0 and -c < 0:
+                return True
+    return False
 
 
 @dataclass(frozen=True)
@@ -408,7 +437,7 @@ def _one_law(a: str, b: str) -> bool:
     return any({a, b} <= set(kind.nests) | {name} for name, kind in REGISTRY.items())
 
 
-def _look_ahead(out, responses, fit, sse0, noise, price, parameters, current, sse_now):
+def _look_ahead(out, responses, fit, sse0, noise, price, parameters, current, sse_now, lawful=None):
     """The best pair of kinds fitted together, where it beats the forward selection; else None.
 
     The forward selection adds the kind that explains most alone, and a kind that stands in for
@@ -418,7 +447,8 @@ def _look_ahead(out, responses, fit, sse0, noise, price, parameters, current, ss
     noise together, were pruned before any fit (compound benchmark, seed 3738, case 025).  So every
     pair of kinds (each kind's best-scored group; not two that are one law,
     :func:`_one_law`) is fitted together too.  The best pair replaces the selection where its
-    penalised score is lower, it drops the validation SSE below the selection's by
+    penalised score is lower (a pair that is not ``lawful``, its coefficients fitted together
+    breaking a member's sign, is not tried), it drops the validation SSE below the selection's by
     :data:`MIN_DROP_PER_COLUMN` noise variances per column and by 30 % of what the selection leaves
     above the noise, and each member earns its place beside the other by the same two rules (the
     forward selection's, one kind ahead).  It must also explain :data:`LOOK_AHEAD` of the starting
@@ -442,7 +472,7 @@ def _look_ahead(out, responses, fit, sse0, noise, price, parameters, current, ss
     priced = {key: (parameters or {}).get(key, cols[key]) for key in cols}
     trials = []
     for a, b in combinations(best.values(), 2):
-        if _one_law(a[0], b[0]):
+        if _one_law(a[0], b[0]) or (lawful is not None and not lawful((a, b))):
             continue
         sse, _ = fit(np.concatenate([responses[a][1], responses[b][1]], axis=2))
         trials.append((sse / sse0 * (1.0 + price) ** (priced[a] + priced[b]), sse, (a, b)))
@@ -630,7 +660,8 @@ def _evidence_at(graph, p, experiment, x0, regime_variables, d_hat, restart=None
     edges = 1 + np.cumsum([0] + [groups[k][1].shape[1] for k in keys])
     responses = {k: (groups[k][0], S_all[:, :, a:b]) for k, a, b in zip(keys, edges[:-1], edges[1:])}
     prices = {k: REGISTRY[k[0]].feature_price for k in keys}
-    ranked, selection = regress_kinds(responses, r, w, parameters=prices, lost=lost, folds=folds)
+    signs = {k: REGISTRY[k[0]].feature_signs for k in keys}
+    ranked, selection = regress_kinds(responses, r, w, parameters=prices, lost=lost, folds=folds, signs=signs)
     with_values = left_with(responses, S_all[:, :, edges[-1]:], r, w, lost=lost, folds=folds) if beside else {}
 
     def evidence(key, beta):        # the catalogue's sign: an element that takes effort or flow

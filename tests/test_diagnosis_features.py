@@ -155,6 +155,31 @@ def test_regress_kinds_on_exact_columns():
     assert selection.share > 0.999 and ranked[("B", None, "")][0] < 0.05
 
 
+def test_regress_kinds_keeps_no_kind_that_breaks_its_laws_sign():
+    """On one-way motion a Coulomb friction's column (sign(v) = 1) is a constant load's: a load
+    pushing along the motion reads as a Coulomb level of -1.5, a friction that gives energy.  With
+    the law's sign (Kind.feature_signs) the Coulomb group is not significant and the load is
+    selected, alone and beside a second kind; without it, the first of the tie (the Coulomb) was
+    (carriage compound benchmark, seed 4302, case 014: beside a hardening spring)."""
+    rng = np.random.default_rng(1)
+    rows = 600
+    one = np.ones((rows, 1, 1))
+    spring = rng.normal(size=(rows, 1, 1))
+    # responses' sign: an element taking effort c gives the response -c S; the load gives +1.5
+    r = 1.5 * one[:, :, 0] + 0.8 * spring[:, :, 0] + rng.normal(0.0, 0.01, (rows, 1))
+    responses = {("coulomb_friction", None, ""): (["sign(v)"], one), ("constant_load", None, ""): (["1"], one),
+                 ("nonlinear_stiffness", "k", ""): (["q^3"], spring)}
+    signs = {("coulomb_friction", None, ""): (1,)}
+    _, blind = regress_kinds(responses, r, np.array([1e4]))
+    ranked, lawful = regress_kinds(responses, r, np.array([1e4]), signs=signs)
+    assert ("coulomb_friction", None, "") in blind.keys
+    assert set(lawful.keys) == {("constant_load", None, ""), ("nonlinear_stiffness", "k", "")}
+    assert not ranked[("coulomb_friction", None, "")][3] and ranked[("constant_load", None, "")][3]
+    # a friction taking energy (coefficient +1.5 in the catalogue's sign) keeps its place
+    _, friction = regress_kinds(responses, -r, np.array([1e4]), signs=signs)
+    assert ("coulomb_friction", None, "") in friction.keys
+
+
 def _stand_in_case(names):
     """Responses where kinds names[0] and names[1] together make the residual (to unit noise) and
     names[2], two columns, stands in for both: 96 % alone, the rest under 5 % of the start."""

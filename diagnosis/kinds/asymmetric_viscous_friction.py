@@ -44,6 +44,7 @@ class AsymmetricViscousFriction(Kind):
     name = "asymmetric_viscous_friction"
     doors = ("1",)
     feature_doors, feature_names, feature_price = "1", ("max(v, 0)", "min(v, 0)"), 2
+    feature_signs = (1, 1)      # a friction takes energy (features.regress_kinds)
     feature_params = 2
     nests = {"viscous_friction": {0: 0, 1: 0}}
 

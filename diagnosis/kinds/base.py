@@ -128,6 +128,11 @@ class Kind:
     #: :attr:`feature_names` order (a level from ``sign(v)``, a coefficient from ``v``): each
     #: candidate's fit also starts there (:func:`diagnosis.features.with_feature_starts`)
     feature_params: ClassVar[int] = 0
+    #: the law's sign of the leading feature coefficients, in :attr:`feature_names` order: +1 where
+    #: the coefficient (the catalogue's sign: what the element takes) cannot be negative, a friction
+    #: level, a damping, a leak's conductance: energy taken, never given (0: either sign).  The
+    #: feature regression keeps no selection that breaks it (:func:`diagnosis.features.regress_kinds`)
+    feature_signs: ClassVar[tuple] = ()
     #: the parameters (indices) a feature group's grid value sets, in the order of
     #: ``FeatureGroup.grid`` (a Stribeck velocity, a modulating signal's lag)
     feature_grid_params: ClassVar[tuple] = ()

@@ -13,6 +13,7 @@ class CoulombFriction(Kind):
     doors = ("1",)
     domains = ("translation", "rotation", "electrical")
     feature_doors, feature_names, feature_price = "1", ("sign(v)",), 1
+    feature_signs = (1,)      # a friction takes energy (features.regress_kinds)
     feature_params, feature_grid_params = 1, (1,)
 
     def features(self, s):

@@ -35,6 +35,7 @@ class Hysteresis(Kind):
     doors = ("1",)
     domains = ("translation", "rotation", "electrical")
     feature_doors, feature_names, feature_price = "1", ("z_dahl",), 2
+    feature_signs = (1,)      # a friction takes energy (features.regress_kinds)
 
     def features(self, s):
         """The Dahl state for sigma/F_h on a grid of the RMS displacement."""

@@ -22,6 +22,7 @@ class Leak(Kind):
     name = "leak"
     doors = ("0",)
     feature_doors, feature_names, feature_price = "0", ("e - P_amb",), 1
+    feature_signs = (1,)      # a loss takes energy (features.regress_kinds)
     feature_params = 1
 
     def features(self, s):

@@ -92,6 +92,7 @@ class ModulatedFriction(Kind):
     doors = ("1",)
     domains = ("translation", "rotation")
     feature_doors, feature_names, feature_price = "1", ("sign(v)", "(lag(m) - m_mean) sign(v)"), 3
+    feature_signs = (1,)      # a friction takes energy (features.regress_kinds)
     nests = {"coulomb_friction": {0: 0, 3: 1}}
     # F0, k from the coefficients; the lag from the grid.  Guessed, a slope of the wrong size or a
     # lag decades off left the fit ten times above a pressure-dependent friction that needs neither,

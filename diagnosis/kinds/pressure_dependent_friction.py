@@ -21,6 +21,7 @@ class PressureDependentFriction(Kind):
     doors = ("1",)
     domains = ("translation", "rotation")
     feature_doors, feature_names, feature_price = "1", ("sign(v)", "(P - P_mean) sign(v)"), 2
+    feature_signs = (1,)      # a friction takes energy (features.regress_kinds)
     feature_params, feature_grid_params = 2, (2,)
     nests = {"coulomb_friction": {0: 0, 2: 1}}
 

@@ -22,6 +22,7 @@ class QuadraticDrag(Kind):
     doors = ("1",)
     domains = ("translation", "rotation", "hydraulic", "pneumatic")
     feature_doors, feature_names, feature_price = "1", ("v |v|",), 1
+    feature_signs = (1,)      # a friction takes energy (features.regress_kinds)
     feature_params = 1
 
     def features(self, s):

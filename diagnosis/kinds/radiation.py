@@ -30,6 +30,7 @@ class Radiation(Kind):
     doors = ("0",)
     domains = ("thermal",)
     feature_doors, feature_names, feature_price = "0", ("T^4 - T_amb^4",), 1
+    feature_signs = (1,)      # a loss takes energy (features.regress_kinds)
     feature_params = 1
 
     def features(self, s):

@@ -43,6 +43,7 @@ class Relaxation(Kind):
     doors = ("1",)
     domains = ("electrical", "translation", "rotation", "hydraulic")
     feature_doors, feature_names, feature_price = "1", ("lag(v)",), 2
+    feature_signs = (1,)      # a damping takes energy (features.regress_kinds)
     feature_params, feature_grid_params = 1, (1,)
 
     def features(self, s):

@@ -25,6 +25,7 @@ class StribeckFriction(Kind):
     doors = ("1",)
     domains = ("translation", "rotation")
     feature_doors, feature_names, feature_price = "1", ("sign(v)", "exp(-(v/v_s)^2) sign(v)"), 3
+    feature_signs = (1, 1)      # a friction takes energy (features.regress_kinds)
     feature_params, feature_grid_params = 2, (2, 3)    # Fc, dFs from the coefficients; v_s, v_eps from the grid
     nests = {"coulomb_friction": {0: 0, 3: 1}}
 

@@ -12,6 +12,7 @@ class ViscousFriction(Kind):
     name = "viscous_friction"
     doors = ("1",)
     feature_doors, feature_names, feature_price = "1", ("v",), 1
+    feature_signs = (1,)      # a friction takes energy (features.regress_kinds)
     feature_params = 1
 
     def features(self, s):

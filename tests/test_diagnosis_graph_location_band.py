@@ -1,7 +1,7 @@
 """Junction corrections whose time resolution follows the residual's band, not the record's length.
 
 Truth: a 70 Hz oscillator (10 g, 1934 N/m, damping ratio 5 %) with a cubic hardening spring,
-integrated here by hand (numpy RK4, 10 sub-steps per sample), driven by random held force
+integrated by the tests' own RK4 (msd_truth.rk4_states, 10 sub-steps per sample), driven by random held force
 levels, sampled at 1 kHz for 30 s; the nominal model is the linear oscillator.  Spread over
 21 s of training data, the junction correction's 500 knots are 42 ms apart (three periods):
 the spring's junction explained 0.1 % there; confined to a window it must be located.
@@ -13,6 +13,7 @@ import plants.library as library
 from diagnosis.graph_location import locate_on_graph
 from diagnosis.graph_location_band import busiest_window, excited_band, knot_spacing
 from diagnosis.recording import Experiment
+from msd_truth import rk4_states
 
 M, K, B, FS, DURATION = 0.01, 1934.0, 0.44, 1000.0, 30.0
 
@@ -26,20 +27,10 @@ def _oscillator_recording(k3, rng):
         j = i + int(rng.integers(3, 30))
         force[i:j] = rng.uniform(-1.0, 1.0)
         i = j
-    h = 1.0 / FS / 10
-    s = np.zeros(2)
-    x = np.empty(n)
 
     def rates(s, u):
         return np.array([s[1], (u - B * s[1] - K * s[0] - k3 * s[0] ** 3) / M])
-    for m in range(n):
-        x[m] = s[0]
-        for _ in range(10):
-            a1 = rates(s, force[m])
-            a2 = rates(s + h / 2 * a1, force[m])
-            a3 = rates(s + h / 2 * a2, force[m])
-            a4 = rates(s + h * a3, force[m])
-            s = s + h / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
+    x = rk4_states(rates, t, force, substeps=10)[:, 0]
     return t, force, x
 
 

@@ -197,7 +197,8 @@ class Candidate:
         return f"{self.kind} at {self.place}"
 
 
-def candidates(graph, place: Place, *, regime_variables=None, experiment=None, x0=None) -> list[Candidate]:
+def candidates(graph, place: Place, *, regime_variables=None, experiment=None, x0=None,
+               kinds=None) -> list[Candidate]:
     """The kinds that make physical sense at `place`, with guesses scaled from the data.
 
     Parameters
@@ -216,6 +217,9 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None, x
         a nominal simulation on it.  Without it every scale is 1 (SI).
     x0 : dict or array, optional
         The state that simulation starts from (the recording's; default the model's).
+    kinds : iterable of str, optional
+        Only these kinds are proposed (default: every kind; proposing one may simulate, as an
+        input's kinds read where it rests).
 
     Returns
     -------
@@ -240,12 +244,13 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None, x
         from .law_places import at_junction
         split, at = at_junction(graph, place)
         return [replace(c, place=place) for c in candidates(split, at, regime_variables=regime_variables,
-                                                            experiment=experiment, x0=x0)]
+                                                            experiment=experiment, x0=x0, kinds=kinds)]
     site = site_of(graph, place, regime_variables=regime_variables, experiment=experiment, x0=x0)
     domain = junction_domain(graph, place.name) if site.door in ("1", "0") else "generic"
     out = [Candidate(kind.name, place, list(prop.params), regime=prop.regime, constants=tuple(prop.constants),
                      target=prop.target, initial=dict(prop.initial), starts=tuple(prop.starts))
-           for kind in REGISTRY.values() if kind.admits(site.door, domain) for prop in kind.propose(site)]
+           for kind in REGISTRY.values() if (kinds is None or kind.name in kinds) and kind.admits(site.door, domain)
+           for prop in kind.propose(site)]
     order = list(REGISTRY)
     named = set(regime_variables or ()) if site.door == "1" else None
     # at a 1-junction, within a kind, laws of a located regime variable first (a pressure, a signal)

@@ -121,3 +121,11 @@ def test_end_to_end_a_carriage_with_an_actuator_gain_and_friction_names_both_rea
     assert ("viscous_friction", "junction v_cart") in named
     readings = {("input_gain", "input F"), ("nominal_value", "junction v_cart")}
     assert readings & named and readings <= named | listed
+
+
+def test_candidates_propose_only_the_kinds_asked_for():
+    from plants import library
+    msd = library.build("mass-spring-damper")
+    assert [c.kind for c in candidates(msd, Place("output", "x"), kinds=("sensor_gain",))] == ["sensor_gain"]
+    values = [c.target for c in candidates(msd, Place("junction", "v_mass"), kinds=("nominal_value",))]
+    assert sorted(values) == ["b", "k", "m"]

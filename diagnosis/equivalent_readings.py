@@ -134,7 +134,8 @@ def _swapped(graph, twin, cand, names, values, c, weight, x0, experiment, output
     if abs(c[k]) < MOVES or not cand.params[0].guess or values[names[k]] / cand.params[0].guess <= 0:
         return None
     delta = -np.log(cand.params[0].guess / values[names[k]]) / c[k]
-    moved = {n: values[n] * np.exp(-c[j] * delta) for j, n in enumerate(names)}
+    # a relative column's value scales along the symmetry; a value at 0 took an absolute column (_parameter_column)
+    moved = {n: values[n] * np.exp(-c[j] * delta) if values[n] else -c[j] * delta for j, n in enumerate(names)}
     moved[names[k]] = float(cand.params[0].guess)
     spec = twin.params[0]
     at = float(spec.guess) * np.exp(delta)
@@ -154,8 +155,8 @@ def _swapped(graph, twin, cand, names, values, c, weight, x0, experiment, output
         return None
     if not gap < COLLAPSED:
         return None
-    scaled = ", ".join(f"{n} x {moved[n] / values[n]:.3g}" for n in names if n != names[k]
-                       and abs(moved[n] / values[n] - 1) > 1e-3)
+    changed = [n for n in names if n != names[k] and abs(moved[n] - values[n]) > 1e-3 * abs(values[n])]
+    scaled = ", ".join(f"{n} x {moved[n] / values[n]:.3g}" if values[n] else f"{n} = {moved[n]:.3g}" for n in changed)
     return gap, (f"with {cand.params[0].name} back at {cand.params[0].guess:.4g} {cand.params[0].unit}".rstrip()
                  + f", {spec.name} = {at:.3g}" + (f" and {scaled}" if scaled else "")
                  + f" reproduce the answer's outputs to {gap:.2g} noise standard deviations: it is {cand.kind} "

@@ -380,6 +380,7 @@ def regress_kinds(responses: dict, r, w, *, price: float = FEATURE_PRICE, valida
         selected.append(key)
         cols.append(responses[key][1])
         current, sse_now = score, sse
+
     def lawful(keys):
         return not _breaks_sign(_joint_coefficients(responses, list(keys), sw, b), signs)
 

@@ -178,7 +178,7 @@ def run_case(spec: CaseSpec, plants: dict, workdir: Path, *, max_effects: int = 
     a duration scaled by factors drawn within `sampling`: :mod:`diagnosis.benchmark.sampling`);
     never raises (errors are scored)."""
     from ..diagnose import diagnose
-    from .detune import detuned_nominal
+    from .detune import detuned_nominal, stated_start
     from .sampling import resampled
     plant, drawn = resampled(plants[spec.plant](), spec.seed, sampling)
     nominal, detuned = detuned_nominal(plant.model, spec.seed, detune, detune_kinds)
@@ -196,9 +196,10 @@ def run_case(spec: CaseSpec, plants: dict, workdir: Path, *, max_effects: int = 
     # a user binds the outputs that were measured varying (the diagnosis refuses a constant one)
     ins, outs = bindings(rec, constant)
     try:
-        # the recording starts where the plant rests, which a user states (diagnose's x0)
+        # the recording starts where the plant rests, which a user states (diagnose's x0) in
+        # their own model's terms
         report = diagnose(nominal, str(path), inputs=ins, outputs=outs, max_effects=max_effects,
-                          x0=plant.nominal_x0)
+                          x0=stated_start(plant.nominal_x0, nominal, detuned))
         score = score_case(rec, report, detuned)
     except Exception as exc:
         score = score_case(rec, {"missing_physics": [], "fit": {"nominal": {}, "improved": {}}}, detuned)

@@ -62,6 +62,6 @@ def heater_pair(*, C1=2.0, C2=2.0, R1=1 / 0.012, R2=1 / 0.012, R_link=500.0, alp
     g.connect("block1", "link")
     g.connect("link", "R_link")
     g.connect("link", "block2")
-    g.add_output("T1", "q_C1/C1", unit="K", description="temperature of block 1")
-    g.add_output("T2", "q_C2/C2", unit="K", description="temperature of block 2")
+    g.add_output("T1", "e_C1", unit="K", description="temperature of block 1")
+    g.add_output("T2", "e_C2", unit="K", description="temperature of block 2")
     return g

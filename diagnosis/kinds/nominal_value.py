@@ -12,7 +12,9 @@ the junction, its one parameter the element's own (refitted under its name by
 an I or a C.  An R's resistance is refitted only the way no other kind goes: down at a 1-junction
 (a nominal resistance too low there is the viscous friction the vocabulary adds, e = b f beside
 e = R f) and up at a 0-junction (one too high there is a leak, f = e / R beside another flow).
-Both ways, the two kinds would be one model and tie on every recording.  A C's value refitted
+Both ways, the two kinds would be one model and tie on every recording.  An I or a C whose
+content does not start at 0 (a heater block's heat, a moving mass's momentum) keeps its start's
+effort or flow when refitted (:func:`~diagnosis.kinds.storage_common.held_start`).  A C's value refitted
 with a cubic term is ``nonlinear_stiffness``, which the choice's price per parameter tells from
 this one.
 """
@@ -23,6 +25,7 @@ import numpy as np
 from ..catalogue_common import ParamSpec, junction_elements
 from .base import Kind, Proposal, register
 from .feature_signals import FeatureGroup
+from .storage_common import held_start, held_start_law
 
 #: the factor either way a nominal value may be refitted within
 RANGE = 3.0
@@ -43,12 +46,16 @@ class NominalValue(Kind):
                 lower, upper = (lower, v) if site.door == "1" else (v, upper)
             out.append(Proposal(target=element.name, params=(
                 ParamSpec(element.value.name, v, lower, upper, element.value.unit,
-                          f"{_quantity(element)} of {element.name} (refitted)"),)))
+                          f"{_quantity(element)} of {element.name} (refitted)"),),
+                constants=held_start(site, element) if element.kind != "R" else ()))
         return out
 
     def build(self, graph, cand, values):
-        """`graph` itself: the value is refitted under the element's own parameter name."""
-        return graph
+        """`graph` itself: the value is refitted under the element's own parameter name; an I or
+        a C whose content starts off 0 gets the law that holds its start's effort or flow."""
+        if not cand.constants:
+            return graph
+        return graph.with_law(cand.target, lambda old, x: held_start_law(old, x, cand.constants))
 
     def explain(self, cand, values, show):
         spec = cand.params[0]

@@ -2,16 +2,22 @@
 :math:`e = \\Phi(q) + k_3 q^3`, and its own linear value is refitted with it (a linear C's
 stiffness or compliance, named as the element; a linear term added to a law): a linear model
 identified from data carries the cubic term's average in its linear value.  One candidate per C
-on the junction."""
+on the junction.
+
+The cubic is in the content's departure from its relaxed value, the content at which the C's
+effort is the ambient one: 0 for a spring or a gauge pressure, :math:`q_0 = C T_a` for a heat
+capacity in absolute temperature (:func:`~diagnosis.catalogue_common.ambient_effort`).  A cubic
+about zero content there, 300 K away, is a constant and a linear term over the record's range (a
+heat leak's shape, which it had been mistaken for: benchmark seed 4401, case 001), no stiffening."""
 from __future__ import annotations
 
 import numpy as np
 import sympy as sp
 
-from ..catalogue_common import ParamSpec, fresh_name, junction_units
+from ..catalogue_common import ParamSpec, ambient_effort, fresh_name, junction_units
 from .base import Kind, Proposal, register
 from .feature_signals import FeatureGroup
-from .storage_common import capacitors, displacement_scale, units_of
+from .storage_common import START_PREFIXES, capacitors, displacement_scale, held_start, held_start_law, units_of
 
 
 @register
@@ -46,16 +52,21 @@ class NonlinearStiffness(Kind):
 
     def propose(self, site):
         e_unit, _ = junction_units(site.graph, site.name)
+        # the effort a 0-junction's C relaxes towards (its content's zero is elsewhere)
+        e_amb = ambient_effort(site.graph, site.name, site.effort) if site.door == "0" else 0.0
         out = []
         for element in capacitors(site):
             c = element.name
             s_unit, q_unit = units_of(element)
-            X = displacement_scale(site, element)
+            refits_own = element.value is not None and float(element.value.value) > 0     # _linear_value's
+            constants = _relaxed_effort(element, site, e_amb, e_unit) + (held_start(site, element) if refits_own else ())
+            X = displacement_scale(site, element, _relaxed_content(element, constants, nominal=True))
             k_lin = site.scales.effort / X
             out.append(Proposal(target=c, params=(
                 ParamSpec(fresh_name(site.taken, f"k3_{c}"), 0.0, -100 * k_lin / X ** 2, 100 * k_lin / X ** 2,
                           _cubed(e_unit, q_unit) if q_unit else s_unit, f"cubic stiffness coefficient of {c}"),
-                _linear_value(element, site.taken, k_lin))))
+                _linear_value(element, site.taken, k_lin)),
+                constants=constants))
         return out
 
     def build(self, graph, cand, values):
@@ -64,9 +75,11 @@ class NonlinearStiffness(Kind):
         c = graph.elements[cand.target]
         k3, linear = (sp.Symbol(spec.name) for spec in cand.params)
         refit_own = c.value is not None and linear.name == c.value.name
+        relaxed = _relaxed_content(c, cand.constants)
 
         def law(old, q):
-            return old + (0 if refit_own else linear * q) + k3 * q ** 3
+            own = held_start_law(old, q, cand.constants) if refit_own else old + linear * q
+            return own + k3 * (q - relaxed) ** 3
         return graph.with_law(cand.target, law, description=f"{c.description} (with nonlinear stiffness)".strip())
 
     def explain(self, cand, values, show):
@@ -75,7 +88,12 @@ class NonlinearStiffness(Kind):
         cubic = values.get(k3.name, 0.0)
         word = "stiffens" if cubic > 0 else ("softens" if cubic < 0 else "changes its stiffness")
         was = f"{linear.guess:.3g} {linear.unit if linear.unit != '1' else ''}".strip()
-        return (f"the spring {cand.target} at {j} {word} with deflection (cubic term {show(k3.name)}; "
+        what = f"the spring {cand.target} at {j} {word} with deflection"
+        ambient = [c for c in cand.constants if c[0].startswith("e_amb_")]
+        if ambient:              # a heat capacity, an absolute pressure's: no spring
+            _, e_amb, unit, _ = ambient[0]
+            what = f"{cand.target} at {j} {word} away from its content at {e_amb:.5g} {unit}"
+        return (f"{what} (cubic term {show(k3.name)}; "
                 f"{linear.description.replace(' (refitted)', '')} refitted with it: {show(linear.name)}, "
                 f"nominal {was}): nonlinear stiffness of {cand.target}")
 
@@ -97,6 +115,30 @@ def _linear_value(element, taken, k_lin: float) -> ParamSpec:
         return ParamSpec(c, v, low, high, element.value.unit, f"linear {quantity} of {c} (refitted)")
     return ParamSpec(fresh_name(taken, f"dk_{c}"), 0.0, -3 * k_lin, 3 * k_lin, units_of(element)[0],
                      f"change of the linear stiffness of {c} (refitted)")
+
+
+def _relaxed_effort(element, site, e_amb: float, e_unit: str) -> tuple:
+    """The constant naming the ambient effort a linear C's content relaxes at (none at 0, or for
+    a C with a law of its own, whose relaxed content the cubic is not moved to)."""
+    if e_amb == 0.0 or element.value is None or not np.isfinite(e_amb):
+        return ()
+    return ((fresh_name(site.taken, f"e_amb_{element.name}"), float(e_amb), e_unit,
+             f"ambient effort at which {element.name}'s content is relaxed"),)
+
+
+def _relaxed_content(element, constants, nominal: bool = False):
+    """The content at which a linear C's effort is the ambient one, in its own (refitted) value
+    (sympy; a number at its nominal value with `nominal`): ``e_amb*C`` (``e_amb/k`` in stiffness
+    form), or with its start held (:func:`~diagnosis.kinds.storage_common.held_start_law`)
+    ``q0 + (e_amb - e0)*C``; 0 without an ambient constant."""
+    named = {n.split("_", 1)[0] + "_": (sp.Symbol(n), v) for n, v, *_ in constants}
+    if "e_" not in named or element.value is None:
+        return 0.0 if nominal else 0
+    pick = 1 if nominal else 0
+    value = float(element.value.value) if nominal else sp.Symbol(element.value.name)
+    q0, e0 = (named[k][pick] if k in named else 0 for k in START_PREFIXES)
+    e_amb = named["e_"][pick]
+    return q0 + ((e_amb - e0) / value if element.stiffness_form else (e_amb - e0) * value)
 
 
 def _cubed(e_unit: str, q_unit: str) -> str:

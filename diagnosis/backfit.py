@@ -21,7 +21,11 @@ the outputs the round's effect leaves unexplained are fitted with them (a sensor
 larger residual hides from graph location).  The round's own rule (:func:`diagnosis.fit.choose`)
 chooses among them against that model's held-out error.  A different winner replaces the effect
 (the round keeps the one it replaced, ``Round.replaced``, and the refits, ``Round.backfit``); no
-winner leaves it as it was.
+winner leaves it as it was, and neither does a winner whose held-out error the round's own refit
+ties (:func:`diagnosis.fit.within_tie`) with as many parameters or fewer: between two readings the
+recording does not tell apart, a swap is named by tie-breakers only, and it moves what the later
+rounds were fitted beside (a carriage's force gain swapped on a tie for a gain of its velocity
+sensor left the next round's refits no sensor to find that sensor's offset at).
 The rounds are swept in order, and once more up to the last one the first sweep replaced
 (:data:`SWEEPS`): those before it were chosen beside the effect it replaced.  This is the
 backfitting of additive models (Hastie and Tibshirani, *Generalized Additive Models*, 1990, ch.
@@ -35,7 +39,7 @@ from dataclasses import replace
 import numpy as np
 
 from .errors import BondcosimError, DiagnosisError
-from .fit import harms, needs_explaining, unpriced_error, usable_fits
+from .fit import harms, needs_explaining, unpriced_error, usable_fits, within_tie
 from .fit_in_turn import HOPELESS, train_cost
 from .kinds.base import extends
 from .pairs import claims, clashes, effect_count
@@ -217,9 +221,12 @@ def backfit(graph, rounds, *, fit, floor: dict, judge_model, choose, with_values
             best = min(best, train_cost(refit))
         r.backfit = refits
         winner = choose(reference, refits)
-        # only a refit of the round's own choice, beaten, is replaced
-        kept = any(_key(f) == _key(r.chosen) and f.success for f in refits)
-        if kept and winner is not None and _key(winner) != _key(r.chosen):
+        # only a refit of the round's own choice, beaten, is replaced: not by a reading within the
+        # tie margin of it with no fewer parameters (only tie-breakers would name it; see above)
+        own_refit = next((f for f in refits if _key(f) == _key(r.chosen) and f.success), None)
+        if (own_refit is not None and winner is not None and _key(winner) != _key(r.chosen)
+                and not (own_refit.n_params <= winner.n_params
+                         and within_tie(own_refit, winner, reference, floor))):
             say("backfitting", f"round {rounds.index(r) + 1}: {winner.candidate} replaces {r.chosen.candidate}")
             tuned.update({k: v for k, v in winner.values.items() if k in names})
             own = {p.name for p in winner.candidate.params}

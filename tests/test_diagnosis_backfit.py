@@ -204,6 +204,36 @@ def test_a_storage_kind_that_refits_its_elements_value_is_backfitted_and_kept_un
     assert rounds[1].replaced is None and graph.names >= {"Fc", "k3", "k_s"}
 
 
+@pytest.mark.parametrize("sensor_error, replaced", [(0.0199, False), (0.010, True)])
+def test_a_reading_that_only_ties_the_rounds_own_refit_does_not_replace_it(sensor_error, replaced):
+    """Seed 4401's detuned case 007: round 1's gain on a carriage's force was swapped for a gain of
+    its velocity sensor that tied it, and round 2's backfit then had no sensor left to find the
+    velocity sensor's offset at.  A refit within the tie margin of the winner, with no more
+    parameters, keeps the round's choice; a clearly better one still replaces it."""
+    from diagnosis.backfit import backfit
+    from diagnosis.rounds import Round
+    force = _candidate("input_gain", "input F", ["g_F"])
+    sensor = _candidate("sensor_gain", "output v", ["g_v"])
+    friction = _candidate("viscous_friction", "junction v", ["b"])
+    first = CandidateFit(force, {"g_F": 1.0}, {}, {"x": 0.2}, 1, True, "")
+    other = CandidateFit(sensor, {"g_v": 1.0}, {}, {"x": 0.2}, 1, True, "")
+    second = CandidateFit(friction, {"b": 1.0}, {}, {"x": 0.02}, 1, True, "")
+    rounds = [Round(first, [first, other], {"x": 1.0}, {"x": 0.2}), Round(second, [second], {"x": 0.2}, {"x": 0.02})]
+    error = {"input_gain": 0.02, "sensor_gain": sensor_error, "viscous_friction": 0.02}
+
+    def fit(base, cand, names, bounds, abandon_above):
+        return CandidateFit(cand, {p.name: 1.0 for p in cand.params}, {}, {"x": error[cand.kind]}, 1, True, "",
+                            extra={"train_cost": error[cand.kind]})
+
+    def choose(reference, refits):
+        return min(refits, key=lambda f: f.holdout_nrmse["x"])
+
+    effects, _ = backfit(_Graph({"m"}), rounds, fit=fit, floor={"x": 0.01}, judge_model=lambda base: {"x": 0.5},
+                         choose=choose, with_values=lambda g, values: g, say=lambda *a: None)
+    assert effects[0].candidate.kind == ("sensor_gain" if replaced else "input_gain")
+    assert (rounds[0].replaced is not None) == replaced
+
+
 def test_sensors_are_refitted_only_at_the_outputs_a_rounds_effect_leaves_unexplained():
     """Without round 1's friction the position and velocity outputs need explaining and the force
     output is at its floor: a sensor there changes nothing the rule counts, and only the two are

@@ -253,6 +253,29 @@ def test_summary_counts():
     assert "| leak | 1 | 0 % |" in markdown(s, seed=0)
 
 
+def test_a_detuned_value_read_as_another_effect_is_the_value_not_the_answer():
+    """Under --detune, an answered effect that lists a nominal_value at a junction bonded to the
+    detuned element as not told apart from it is that value read another way: it names the detuned
+    value and leaves the scored answer; listed elsewhere, it stays the answer."""
+    from types import SimpleNamespace
+    from diagnosis.benchmark.run import score_case
+    spec = CaseSpec(0, 5, "msd", "sensor_offset", "output", "x", target_change=0.1, ratio=10.0)
+    rec = SimpleNamespace(spec=spec, plant=SimpleNamespace(model="mass-spring-damper", drifts=False), change=0.1,
+                          nominal_drifts=False, affected="x",
+                          effect=SimpleNamespace(place="x", accepted_places=lambda: ["output x"],
+                                                 equivalent_answers=set))
+    detuned = {"element": "m", "parameter": "m", "nominal": 1.0, "factor": 0.874}
+    gain = {"kind": "input_gain", "attached_to": "input F", "parameters": {"gain": 0.874},
+            "indistinguishable": [{"kind": "nominal_value", "place": "junction v_mass"}]}
+    offset = {"kind": "sensor_offset", "attached_to": "output x", "parameters": {"offset": 0.01}}
+    answer = {"missing_physics": [gain, offset], "fit": {"nominal": {"x": 0.2}, "improved": {"x": 0.03}}}
+    s = score_case(rec, answer, detuned)
+    assert (s.answer_kind, s.answer_place, s.kind_ok, s.detuned_named) == ("sensor_offset", "output x", True, True)
+    gain["indistinguishable"] = [{"kind": "nominal_value", "place": "junction elsewhere"}]
+    s = score_case(rec, answer, detuned)
+    assert (s.answer_kind, s.kind_ok, s.detuned_named) == ("input_gain", False, False)
+
+
 def test_kind_right_or_indistinguishable_is_a_measure_apart_from_kind_right():
     """A concealed kind the answer lists as indistinguishable (diagnosis.alternatives) counts in the
     separate measure, never in kind right; case files scored before the measure are left out of it."""

@@ -125,9 +125,10 @@ def score_case(rec: Realised, report, detuned: dict | None = None) -> Score:
     s.answers = [f"{e['kind']} @ {e['attached_to']}" for e in found]
     if detuned:
         s.detuned = dict(detuned)
-        s.detuned_named = any(e["kind"] == "nominal_value" and detuned["parameter"] in e.get("parameters", {})
-                              for e in found)
-        found = [e for e in found if e["kind"] != "nominal_value"]
+        value = [e for e in found if e["kind"] == "nominal_value" or _reads_as_value(e, rec.plant.model, detuned)]
+        s.detuned_named = any(detuned["parameter"] in e.get("parameters", {}) or e["kind"] != "nominal_value"
+                              for e in value)
+        found = [e for e in found if e not in value]
     s.judge = str(data.get("fit", {}).get("judge", ""))
     s.answer_kind = found[0]["kind"] if found else "none"
     s.answer_place = found[0]["attached_to"] if found else ""
@@ -155,6 +156,20 @@ def score_case(rec: Realised, report, detuned: dict | None = None) -> Score:
         s.nominal_nrmse, s.improved_nrmse = float(nom), float(imp)
         s.improvement = 1.0 - float(imp) / float(nom) if nom > 0 else float("nan")
     return s
+
+
+def _reads_as_value(effect: dict, model: str, detuned: dict) -> bool:
+    """Whether the answered `effect` (report JSON) is, by the report's own account, the detuned
+    element's value: it lists a ``nominal_value`` at a junction bonded to that element as not told
+    apart from it (a force-driven carriage's input gain is its mass's value rescaled,
+    :mod:`diagnosis.equivalent_readings`; seed 4401, case 007, answered its 13 % light mass as a
+    gain of 0.874 on the force, then the concealed velocity sensor's offset)."""
+    from plants import load
+    graph, element = load(model), detuned.get("element")
+    junctions = {f"junction {b.tail.element if end == 'head' else b.head.element}"
+                 for b, end in graph.bonds_of(element)} if element in graph.elements else set()
+    return any(a.get("kind") == "nominal_value" and a.get("place") in junctions
+               for a in effect.get("indistinguishable", []))
 
 
 def _names(found: list, kind: str, places: set, equivalents: set = frozenset()) -> bool:

@@ -345,19 +345,47 @@ def _initial_magnitude(spec, plant, rec, scales, sh, probe_gain):
 SIZE_TOLERANCE = 10.0
 
 
+def _size(truth_of, m: float, target: float, bounded: bool):
+    """The secant search on log magnitude for the effect whose change is `target` (five truth runs
+    at most; a `bounded` magnitude kept in [0.02, 0.9]): ``(effect, truth, output, change, m)`` of
+    the run closest to it, None when no run was finite."""
+    best, log_m, prev = None, math.log(m), None
+    for _ in range(5):
+        m = math.exp(log_m)
+        if bounded:
+            m = min(max(m, 0.02), 0.9)
+        eff, out, name, c = truth_of(m)
+        if np.isfinite(c) and c > 0 and (best is None or abs(math.log(c / target)) < abs(math.log(best[3] / target))):
+            best = (eff, out, name, c, m)
+        if not np.isfinite(c) or c <= 0:
+            log_m -= math.log(10.0)
+            prev = None
+            continue
+        g = math.log(c / target)
+        if abs(g) < math.log(1.3):
+            break
+        slope = 1.0 if prev is None or prev[0] == log_m else (g - prev[1]) / (log_m - prev[0])
+        if not np.isfinite(slope) or abs(slope) < 0.1:
+            slope = 1.0 if slope >= 0 else -1.0
+        prev = (log_m, g)
+        log_m -= g / slope
+    return best
+
+
 def _calibrate(rec: Realised, rng) -> None:
     spec, plant = rec.spec, rec.plant
     scales = _scales(rec.nominal)
     sh = _shape(spec, plant, rec, rng, scales)
-    runs = 0
+    runs, stiffer = 0, 1.0
 
     def truth_of(m):
         nonlocal runs
         runs += 1
         if spec.kind == "saturation" and spec.door == "storage":
             sh["hi"] = sh["hi0"] - m * sh["span"]
-            k_stop = (1.0 / (5.0 / plant.rate) if plant.junction(plant.storage(spec.name).junction).kind == "0"
-                      else 20.0 * (plant.storage(spec.name).stiffness or 1.0))
+            storage = plant.storage(spec.name)
+            k_stop = stiffer * (1.0 / (5.0 / plant.rate) if plant.junction(storage.junction).kind == "0"
+                                else 20.0 * (storage.stiffness or 1.0))
             eff = make_effect(spec.kind, plant, spec.door, spec.name, k_stop, scales, sh)
         else:
             if spec.kind == "hysteresis":
@@ -389,31 +417,17 @@ def _calibrate(rec: Realised, rng) -> None:
         return 1.0
 
     bounded = spec.kind == "saturation"
-    m = _initial_magnitude(spec, plant, rec, scales, sh, probe_gain)
-    if not (np.isfinite(m) and m > 0):
-        m = 1e-3          # a guess without a sign or size; the secant steps find the size
+    m0 = _initial_magnitude(spec, plant, rec, scales, sh, probe_gain)
+    if not (np.isfinite(m0) and m0 > 0):
+        m0 = 1e-3          # a guess without a sign or size; the secant steps find the size
+    best = _size(truth_of, m0, spec.target_change, bounded)
+    # an end stop as stiff as 20 springs is soft beside stiffer paths in parallel (the pam's
+    # muscles beside its seesaw spring): too soft to be seen, it is stiffened tenfold, twice at most
+    while (spec.kind == "saturation" and spec.door == "storage" and stiffer < 100.0 and best is not None
+           and abs(math.log(best[3] / spec.target_change)) > math.log(SIZE_TOLERANCE)):
+        stiffer *= 10.0
+        best = _size(truth_of, m0, spec.target_change, bounded)
     target = spec.target_change
-    best = None
-    log_m, prev = math.log(m), None
-    for _ in range(5):
-        m = math.exp(log_m)
-        if bounded:
-            m = min(max(m, 0.02), 0.9)
-        eff, out, name, c = truth_of(m)
-        if np.isfinite(c) and c > 0 and (best is None or abs(math.log(c / target)) < abs(math.log(best[3] / target))):
-            best = (eff, out, name, c, m)
-        if not np.isfinite(c) or c <= 0:
-            log_m -= math.log(10.0)
-            prev = None
-            continue
-        g = math.log(c / target)
-        if abs(g) < math.log(1.3):
-            break
-        slope = 1.0 if prev is None or prev[0] == log_m else (g - prev[1]) / (log_m - prev[0])
-        if not np.isfinite(slope) or abs(slope) < 0.1:
-            slope = 1.0 if slope >= 0 else -1.0
-        prev = (log_m, g)
-        log_m -= g / slope
     if best is None:
         raise BenchmarkError(f"{spec.label}: no finite truth run while sizing the effect")
     eff, out, name, c, m = best

@@ -254,9 +254,11 @@ def test_summary_counts():
 
 
 def test_a_detuned_value_read_as_another_effect_is_the_value_not_the_answer():
-    """Under --detune, an answered effect that lists a nominal_value at a junction bonded to the
-    detuned element as not told apart from it is that value read another way: it names the detuned
-    value and leaves the scored answer; listed elsewhere, it stays the answer."""
+    """Under --detune, the first answered effect that lists a nominal_value at a junction bonded to
+    the detuned element as not told apart from it is that value read another way, unless a value
+    answer names the detuned value itself: it names the detuned value and leaves the scored answer;
+    listed elsewhere, or beside the value answered, it stays the answer (seed 3739's case 012: an
+    asymmetric viscous friction beside its spring's value refitted)."""
     from types import SimpleNamespace
     from diagnosis.benchmark.run import score_case
     spec = CaseSpec(0, 5, "msd", "sensor_offset", "output", "x", target_change=0.1, ratio=10.0)
@@ -271,7 +273,13 @@ def test_a_detuned_value_read_as_another_effect_is_the_value_not_the_answer():
     answer = {"missing_physics": [gain, offset], "fit": {"nominal": {"x": 0.2}, "improved": {"x": 0.03}}}
     s = score_case(rec, answer, detuned)
     assert (s.answer_kind, s.answer_place, s.kind_ok, s.detuned_named) == ("sensor_offset", "output x", True, True)
+    # beside a value answer that names the detuned value, the reading is an answer of its own
+    value = {"kind": "nominal_value", "attached_to": "junction v_mass", "parameters": {"m": 0.874}}
+    answer["missing_physics"] = [gain, value]
+    s = score_case(rec, answer, detuned)
+    assert (s.answer_kind, s.kind_ok, s.detuned_named) == ("input_gain", False, True)
     gain["indistinguishable"] = [{"kind": "nominal_value", "place": "junction elsewhere"}]
+    answer["missing_physics"] = [gain, offset]
     s = score_case(rec, answer, detuned)
     assert (s.answer_kind, s.kind_ok, s.detuned_named) == ("input_gain", False, False)
 

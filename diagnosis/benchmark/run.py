@@ -125,10 +125,14 @@ def score_case(rec: Realised, report, detuned: dict | None = None) -> Score:
     s.answers = [f"{e['kind']} @ {e['attached_to']}" for e in found]
     if detuned:
         s.detuned = dict(detuned)
-        value = [e for e in found if e["kind"] == "nominal_value" or _reads_as_value(e, rec.plant.model, detuned)]
-        s.detuned_named = any(detuned["parameter"] in e.get("parameters", {}) or e["kind"] != "nominal_value"
-                              for e in value)
-        found = [e for e in found if e not in value]
+        value = [e for e in found if e["kind"] == "nominal_value"]
+        s.detuned_named = any(detuned["parameter"] in e.get("parameters", {}) for e in value)
+        # where no value answered names it, the first answer that is the value read another way
+        # stands for it (then it is no answer to the concealed effect)
+        reading = None if s.detuned_named else next(
+            (e for e in found if e not in value and _reads_as_value(e, rec.plant.model, detuned)), None)
+        s.detuned_named = s.detuned_named or reading is not None
+        found = [e for e in found if e not in value and e is not reading]
     s.judge = str(data.get("fit", {}).get("judge", ""))
     s.answer_kind = found[0]["kind"] if found else "none"
     s.answer_place = found[0]["attached_to"] if found else ""
@@ -159,7 +163,7 @@ def score_case(rec: Realised, report, detuned: dict | None = None) -> Score:
 
 
 def _reads_as_value(effect: dict, model: str, detuned: dict) -> bool:
-    """Whether the answered `effect` (report JSON) is, by the report's own account, the detuned
+    """Whether the answered `effect` (report JSON) may be, by the report's own account, the detuned
     element's value: it lists a ``nominal_value`` at a junction bonded to that element as not told
     apart from it (a force-driven carriage's input gain is its mass's value rescaled,
     :mod:`diagnosis.equivalent_readings`; seed 4401, case 007, answered its 13 % light mass as a

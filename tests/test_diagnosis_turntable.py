@@ -119,3 +119,20 @@ def test_the_features_read_the_period_off_the_estimate_on_a_fine_grid():
     estimate = 0.8 * np.sin(2 * np.pi * theta / truth + 1.0) + 0.3 + np.random.default_rng(0).normal(0, 0.2, 3001)
     best = best_periods(theta, estimate, fine_periods(trial))
     assert len(best) == 3 and min(abs(np.log(np.array(best) / truth))) < 0.004
+
+
+def test_a_periodic_loads_period_is_read_off_the_models_own_travel(tmp_path):
+    """Seed 4401's case 002 at --sampling 2: the cylinder's position follower (20 ms) sampled every
+    14 ms has a velocity that jumps with each held sample of the commanded position, and the
+    travel summed from the sampled velocity is 1.4 times the travel; the features found the seal's
+    periodic load at 1.4 times its period (0.0146 m), no fit recovered from there and the answer
+    was none.  The features now read the travel the model integrates (diagnosis.features)."""
+    from diagnosis.benchmark.draw import KINDS, draw_cases
+    from diagnosis.benchmark.plants import PLANTS
+    from diagnosis.benchmark.run import run_case
+    spec = draw_cases(40, 4401, PLANTS, KINDS)[2]
+    r = run_case(spec, PLANTS, tmp_path, detune=0.2, sampling=2.0)
+    assert r["label"] == "002-pneumatic-cylinder-periodic_load@junction:piston"
+    assert r["kind_ok"] and r["place_ok"] and r["improvement"] > 0.6
+    period = next(v for k, v in r["parameters"].items() if k.startswith("P_periodic"))
+    assert period == pytest.approx(r["effect"]["shape"]["period"], rel=0.02)

@@ -45,7 +45,8 @@ class FeatureSignals:
     values : dict str -> ndarray
         ``flow``, ``effort``, ``pressure:<expr>``, ``signal:<expr>``, ``content:<C name>``,
         ``c_effort:<C name>`` (the effort the C's law puts on its bond), ``momentum:<I name>``,
-        and ``estimate`` (the location's estimated extra effort or flow at the junction, where
+        ``travel`` (a 1-junction's flow integrated by the model from 0 at the start), and
+        ``estimate`` (the location's estimated extra effort or flow at the junction, where
         there is one).
     one : bool
         A 1-junction (else a 0-junction).

@@ -41,6 +41,7 @@ import numpy as np
 
 from .fit import (COLLAPSED, MIN_GAIN, MIN_SHARE, TIE, acceptance, needs_explaining, unpriced_error, usable_fits,
                   within_tie)
+from .errors import BondcosimError
 from .holdout_resolution import Z_RESOLVED, largest_difference, resolution
 from .kinds.base import REGISTRY, Kind, holds
 
@@ -172,20 +173,31 @@ def unexcited(graph, winner, experiment, x0=None) -> list[Alternative]:
         That run's start state.
     """
     cand = getattr(winner, "candidate", None)
-    if (cand is None or hasattr(cand, "members") or cand.place.kind != "junction"
-            or winner.extra.get("judge") == "training"):
+    if cand is None or winner.extra.get("judge") == "training":
         return []
-    richer = [k for k in REGISTRY.values() if winner.kind in k.nests and type(k).unexcited is not Kind.unexcited]
-    if not richer:
+    # a value pair's effect (a friction beside its mass refitted) is judged as the effect alone
+    members = [m for m in getattr(cand, "members", (cand,)) if m.place.kind == "junction"]
+    richer = [(m, [k for k in REGISTRY.values() if m.kind in k.nests and type(k).unexcited is not Kind.unexcited])
+              for m in members]
+    if not any(kinds for _, kinds in richer):
         return []
     from .catalogue_scales import junction_scales
-    _, values = junction_scales(graph, cand.place.name, experiment, x0=x0)
+    model = graph
+    if members != [cand]:            # the junction's values along the answer's own model
+        try:
+            model = cand.build(graph, winner.values)
+        except BondcosimError:
+            pass
     found = []
-    for k in richer:
-        reason = k.unexcited(cand.place.name, values) if values else ""
-        if reason:
-            found.append(Alternative(k.name, _place_of(winner), dict(winner.holdout_nrmse), float("nan"), 0.0,
-                                     max(winner.n_params, k.feature_params), reason))
+    for m, kinds in richer:
+        if not kinds:
+            continue
+        _, values = junction_scales(model, m.place.name, experiment, x0=x0)
+        for k in kinds:
+            reason = k.unexcited(m.place.name, values) if values else ""
+            if reason:
+                found.append(Alternative(k.name, _place_of(winner), dict(winner.holdout_nrmse), float("nan"), 0.0,
+                                         max(winner.n_params, k.feature_params), reason))
     return found
 
 

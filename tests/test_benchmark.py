@@ -278,6 +278,11 @@ def test_a_detuned_value_read_as_another_effect_is_the_value_not_the_answer():
     answer["missing_physics"] = [gain, value]
     s = score_case(rec, answer, detuned)
     assert (s.answer_kind, s.kind_ok, s.detuned_named) == ("input_gain", False, True)
+    # nor beside a value answer that lists the detuned value as not told apart from its own (seed
+    # 3739's case 011: a valve lag beside a geared inertia's value, the other inertia detuned)
+    value["parameters"], value["indistinguishable"] = {"other": 1.0}, gain["indistinguishable"]
+    s = score_case(rec, answer, detuned)
+    assert (s.answer_kind, s.kind_ok, s.detuned_named) == ("input_gain", False, True)
     gain["indistinguishable"] = [{"kind": "nominal_value", "place": "junction elsewhere"}]
     answer["missing_physics"] = [gain, offset]
     s = score_case(rec, answer, detuned)

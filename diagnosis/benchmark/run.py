@@ -126,7 +126,10 @@ def score_case(rec: Realised, report, detuned: dict | None = None) -> Score:
     if detuned:
         s.detuned = dict(detuned)
         value = [e for e in found if e["kind"] == "nominal_value"]
-        s.detuned_named = any(detuned["parameter"] in e.get("parameters", {}) for e in value)
+        # a value answer names the detuned value, or lists it as not told apart from its own (two
+        # inertias geared together: one's value is the other's rescaled)
+        s.detuned_named = any(detuned["parameter"] in e.get("parameters", {})
+                              or _reads_as_value(e, rec.plant.model, detuned) for e in value)
         # where no value answered names it, the first answer that is the value read another way
         # stands for it (then it is no answer to the concealed effect)
         reading = None if s.detuned_named else next(

@@ -237,3 +237,24 @@ def test_a_direction_dependent_law_the_record_never_excites_is_listed_beside_the
     load = next(c for c in candidates(nominal, place, experiment=exp) if c.kind == "constant_load")
     assert unexcited(nominal, CandidateFit(load, {}, {}, {"x": 0.02}, 1, True, ""), _recording(ONE_WAY)) == []
     assert unexcited(nominal, None, exp) == []
+
+
+def test_an_unexcited_law_is_listed_beside_a_value_pairs_effect():
+    """Seed 4401's detuned carriage (--sampling 2, case 000): its asymmetric viscous friction on a
+    motion that never reversed was answered as a viscous friction beside its mass refitted (a value
+    pair), and the asymmetric law was not listed: pairs were passed over.  Now the pair's effect is
+    judged as the effect alone, on the values along the pair's own model."""
+    from diagnosis.pairs import CandidatePair
+    nominal = mass_spring_damper(b=B)
+    place = Place("junction", "v_mass")
+    exp = _recording(ONE_WAY)
+    cands = candidates(nominal, place, experiment=exp)
+    viscous = next(c for c in cands if c.kind == "viscous_friction")
+    value = next(c for c in cands if c.kind == "nominal_value")
+    values = {"b_visc_v_mass": 0.1, **{p.name: p.guess for p in value.params}}
+    pair = CandidatePair((viscous, value))
+    winner = CandidateFit(pair, values, {"x": 0.01}, {"x": 0.02, "v": 0.03}, 2, True, "")
+    (a,) = unexcited(nominal, winner, exp)
+    assert a.kind == "asymmetric_viscous_friction" and "positive in 100% and negative in 0%" in a.unexcited
+    assert unexcited(nominal, winner, _recording(REVERSING)) == []
+

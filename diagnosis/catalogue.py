@@ -198,7 +198,7 @@ class Candidate:
 
 
 def candidates(graph, place: Place, *, regime_variables=None, experiment=None, x0=None,
-               kinds=None) -> list[Candidate]:
+               kinds=None, estimate=None) -> list[Candidate]:
     """The kinds that make physical sense at `place`, with guesses scaled from the data.
 
     Parameters
@@ -220,6 +220,11 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None, x
     kinds : iterable of str, optional
         Only these kinds are proposed (default: every kind; proposing one may simulate, as an
         input's kinds read where it rests).
+    estimate : ndarray, optional
+        At a junction, the located correction there on `experiment`'s times
+        (:attr:`diagnosis.graph_location.PlaceScore.estimate`): the values are read along the
+        run it corrects (:func:`~diagnosis.catalogue_scales.junction_scales`), for a nominal
+        whose own run drifts away from the recording.
 
     Returns
     -------
@@ -245,7 +250,8 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None, x
         split, at = at_junction(graph, place)
         return [replace(c, place=place) for c in candidates(split, at, regime_variables=regime_variables,
                                                             experiment=experiment, x0=x0, kinds=kinds)]
-    site = site_of(graph, place, regime_variables=regime_variables, experiment=experiment, x0=x0)
+    site = site_of(graph, place, regime_variables=regime_variables, experiment=experiment, x0=x0,
+                   estimate=estimate)
     domain = junction_domain(graph, place.name) if site.door in ("1", "0") else "generic"
     out = [Candidate(kind.name, place, list(prop.params), regime=prop.regime, constants=tuple(prop.constants),
                      target=prop.target, initial=dict(prop.initial), starts=tuple(prop.starts))
@@ -258,7 +264,7 @@ def candidates(graph, place: Place, *, regime_variables=None, experiment=None, x
                                       and c.regime is not None and c.regime not in named))
 
 
-def site_of(graph, place: Place, *, regime_variables=None, experiment=None, x0=None) -> Site:
+def site_of(graph, place: Place, *, regime_variables=None, experiment=None, x0=None, estimate=None) -> Site:
     """What the kinds see at `place` (:class:`~diagnosis.kinds.base.Site`): its door, the names
     taken, and the scales and nominal values read off a simulation of `experiment` from `x0`; a place the
     model does not have is an :class:`UnknownNameError` listing those it has."""
@@ -271,7 +277,7 @@ def site_of(graph, place: Place, *, regime_variables=None, experiment=None, x0=N
             junctions = [n for n, e in graph.elements.items() if e.kind in ("0", "1")]
             raise UnknownNameError("junction", place.name, junctions, model=graph.name)
         signals = modulating_signals(graph, place.name, regime_variables) if element.kind == "1" else {}
-        scales, values = junction_scales(graph, place.name, experiment, signals, x0=x0)
+        scales, values = junction_scales(graph, place.name, experiment, signals, x0=x0, estimate=estimate)
         return Site(graph, place, element.kind, taken, scales, dict(values or {}), regime_variables, signals)
     span, dt = experiment_times(experiment) if experiment is not None else (1.0, 0.01)
     if place.kind == "input":

@@ -103,12 +103,15 @@ def experiment_times(experiment) -> tuple[float, float]:
     return float(t[-1] - t[0]), float(np.median(np.diff(t)))
 
 
-def junction_scales(graph, junction: str, experiment, signals=None, x0=None) -> tuple[Scales, dict]:
+def junction_scales(graph, junction: str, experiment, signals=None, x0=None, estimate=None) -> tuple[Scales, dict]:
     """Scales at a junction and the nominal values the catalogue needs there, from ONE simulation.
 
     `signals` (label -> expression, optional): further variables to read, keyed
     ``signal:<label>`` (the signals that may modulate a friction there); `x0` the state the
-    simulation starts from (default the model's).
+    simulation starts from (default the model's); `estimate` (optional, on the experiment's
+    times) an extra effort (1-junction) or flow (0-junction) the simulation adds at the junction:
+    the located correction, which keeps the run on the recording where the nominal's own drifts
+    (a force-driven carriage whose mass is off drifts one way, and its flow there never reverses).
 
     Returns
     -------
@@ -130,7 +133,14 @@ def junction_scales(graph, junction: str, experiment, signals=None, x0=None) -> 
         other = graph.elements[b.head.element if end == "tail" else b.tail.element]
         if other.kind in ("C", "I"):
             exprs[f"state:{other.state}"] = other.state
-    values = simulate_expressions(graph, experiment, exprs, x0=x0)
+    run_graph, run_experiment = graph, experiment
+    if estimate is not None and np.size(estimate) == np.size(experiment.t):
+        from .graph_location_graph import augment, junction_unit, with_inputs
+        run_graph, inputs = augment(graph, [junction])
+        d = inputs[junction]
+        run_experiment = with_inputs(experiment, {d: np.nan_to_num(np.asarray(estimate, float), nan=0.0)},
+                                     {d: junction_unit(graph, junction)})
+    values = simulate_expressions(run_graph, run_experiment, exprs, x0=x0)
     if not values:
         return Scales(span=span, dt=dt), {}
     flows = [values[f"f_{b.name}"] for b in bonds]

@@ -431,8 +431,12 @@ def diagnose(graph, recording, *, inputs, outputs, time=None, holdout: float = 0
     # a diverging nominal's candidates take their scales from where it still runs
     cand_part = _before_divergence(train, diverged)
     springs = spring_places(graph, place_list)      # the storage kinds only (place_choice.spring_places)
-    cands = [c for p in place_list + springs for c in candidates(graph, p, regime_variables=rv, experiment=cand_part,
-                                                                x0=x0) if p not in springs or on_storage(graph, c)]
+    # a nominal whose open-loop run is mostly drift: the kinds read their junction's values along
+    # the run the located correction keeps on the recording (catalogue_scales.junction_scales)
+    along = {s.place: s.estimate for s in scores} if judge.kind == "segments" and not diverged else {}
+    cands = [c for p in place_list + springs
+             for c in candidates(graph, p, regime_variables=rv, experiment=cand_part, x0=x0, estimate=along.get(p))
+             if p not in springs or on_storage(graph, c)]
     place_list += springs
     # the feature regression runs along the nominal run: none where it diverges, nor where its mode is
     # unstable (the run has left the plant's motion within seconds): every candidate is fitted

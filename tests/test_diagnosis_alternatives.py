@@ -258,3 +258,19 @@ def test_an_unexcited_law_is_listed_beside_a_value_pairs_effect():
     assert a.kind == "asymmetric_viscous_friction" and "positive in 100% and negative in 0%" in a.unexcited
     assert unexcited(nominal, winner, _recording(REVERSING)) == []
 
+
+def test_the_kinds_read_a_junctions_values_along_the_run_its_estimate_corrects():
+    """candidates(estimate=...) reads the junction's values along the nominal run with the located
+    correction added (catalogue_scales.junction_scales), as diagnose does where the nominal's own
+    run drifts: a correction that turns the reversing force into the one-way ramp leaves a flow
+    that never reverses, where the direction-dependent friction is not offered."""
+    nominal = mass_spring_damper(b=B)
+    place = Place("junction", "v_mass")
+    exp = _recording(REVERSING)
+
+    def offered(**kw):
+        return "asymmetric_viscous_friction" in {c.kind for c in candidates(nominal, place, experiment=exp, **kw)}
+
+    assert offered() and offered(estimate=np.zeros_like(T))
+    assert not offered(estimate=ONE_WAY - REVERSING)
+    assert offered(estimate=np.zeros(3))            # an estimate off the experiment's times is not read

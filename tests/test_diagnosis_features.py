@@ -217,6 +217,12 @@ def test_dahl_state_against_its_closed_form():
     t = np.linspace(0.0, 0.1, 51)
     z = dahl_state(np.full(t.size, 0.2), t, 30.0)
     assert np.allclose(z, 1.0 - np.exp(-30.0 * 0.2 * t), atol=1e-12)
+    # given the travel, each interval moves z by its own travel: the closed form in the travel,
+    # z = sign(theta) (1 - exp(-alpha |theta|)) on a travel that keeps its sign, whatever the
+    # sampled flow says (here a flow sampled at its jumps, twice the mean)
+    theta = -0.2 * t
+    z = dahl_state(np.full(t.size, -0.4), t, 30.0, travel=theta)
+    assert np.allclose(z, -(1.0 - np.exp(-30.0 * 0.2 * t)), atol=1e-12)
 
 
 def _fit(kind, holdout, n_params=1, place=PLACE, **kw):

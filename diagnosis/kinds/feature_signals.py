@@ -90,10 +90,17 @@ class FeatureSignals:
         return float(self.t[-1] - self.t[0]) if self.t.size > 1 else 1.0
 
     @cached_property
+    def travel(self) -> np.ndarray:
+        """The integral of the flow from 0 at the first sample: the model's own (``travel``, where
+        read; :func:`diagnosis.features._with_travel`), else trapezoids of the sampled flow."""
+        if "travel" in self.values:
+            return np.asarray(self.values["travel"], float)
+        return np.concatenate([[0.0], np.cumsum(0.5 * (self.v[1:] + self.v[:-1]) * np.diff(self.t))])
+
+    @cached_property
     def displacement(self) -> np.ndarray:
-        """The integral of the flow, mean removed."""
-        x = np.concatenate([[0.0], np.cumsum(0.5 * (self.v[1:] + self.v[:-1]) * np.diff(self.t))])
-        return x - x.mean()
+        """The integral of the flow (:attr:`travel`), mean removed."""
+        return self.travel - self.travel.mean()
 
     def labelled(self, prefix: str) -> dict:
         """``{label: values}`` of the signals keyed ``prefix:label`` that move."""
@@ -101,9 +108,13 @@ class FeatureSignals:
                 if k.startswith(f"{prefix}:") and np.ptp(x) > 0}
 
 
-def dahl_state(v, t, alpha):
+def dahl_state(v, t, alpha, travel=None):
     """The normalised Dahl state :math:`\\dot z = \\alpha (v - |v| z)`, z(0) = 0, v held over
-    each interval (exact per interval): the Dahl friction is :math:`F_h z`.
+    each interval (exact per interval): the Dahl friction is :math:`F_h z`.  With `travel` (the
+    flow's integral at the samples), each interval moves z by its own travel instead,
+    :math:`z \\to \\mathrm{sign}(\\Delta\\theta) + (z - \\mathrm{sign}(\\Delta\\theta))
+    e^{-\\alpha |\\Delta\\theta|}` (exact where the flow keeps its sign over the interval):
+    a flow sampled where it jumps (a held input's step) overstates the interval's travel.
 
     Parameters
     ----------
@@ -122,8 +133,9 @@ def dahl_state(v, t, alpha):
     """
     v, t = np.asarray(v, float), np.asarray(t, float)
     z = np.zeros(v.size)
-    decay = np.exp(-alpha * np.abs(v[:-1]) * np.diff(t))
-    target = np.sign(v[:-1])
+    step = v[:-1] * np.diff(t) if travel is None else np.diff(np.asarray(travel, float))
+    decay = np.exp(-alpha * np.abs(step))
+    target = np.sign(step)
     for k in range(v.size - 1):
         z[k + 1] = target[k] + (z[k] - target[k]) * decay[k]
     return z

@@ -40,8 +40,8 @@ class Hysteresis(Kind):
     def features(self, s):
         """The Dahl state for sigma/F_h on a grid of the RMS displacement."""
         X = rms(s.displacement)
-        return [FeatureGroup(None, f"sigma/F_h = {a / X:.3g}", ["z_dahl"], dahl_state(s.v, s.t, a / X)[:, None],
-                             grid=(a / X,))
+        return [FeatureGroup(None, f"sigma/F_h = {a / X:.3g}", ["z_dahl"],
+                             dahl_state(s.v, s.t, a / X, s.travel)[:, None], grid=(a / X,))
                 for a in FEATURE_GRID]
 
     def feature_start(self, cand, evidence):

@@ -100,8 +100,7 @@ class PeriodicLoad(Kind):
         """sin and cos of the travel for the trial periods; with the location's estimate, the
         :data:`PEAKS` periods of a fine grid whose sinusoid fits the estimate best (a period off
         by a step of the coarse grid dephases within a few periods of travel)."""
-        theta = s.values.get("travel")       # the model's own integral of the flow, where read
-        theta = travel(s.v, s.dt) if theta is None else np.asarray(theta, float)
+        theta = s.travel                      # the model's own integral of the flow, where read
         trial = periods(theta, s.domain == "rotation")
         estimate = s.values.get("estimate")
         if trial and estimate is not None and np.ptp(estimate) > 0:

@@ -180,3 +180,30 @@ def test_a_richer_law_beside_a_value_that_fits_the_training_part_no_better_is_no
     assert (r["label"], r["detuned"]["parameter"]) == ("010-geared-inertias-coulomb_friction@junction:w1", "J1")
     assert r["answer_kind"] == "coulomb_friction" and r["kind_ok"] and r["place_ok"]
     assert r["improvement"] > 0.9
+
+
+def test_a_refitted_heat_capacity_keeps_its_blocks_start_temperature():
+    """Seed 4401's detuned heater (--sampling 2, case 020): a capacity refitted 12 % lower with its
+    heat content held had started its block 36 K off the room it stood in.  The refitted storage
+    holds its start's effort (storage_common.held_start): at rest in the room, the block reads the
+    room's temperature at the start for any refitted capacity, and the law's slope is the new one."""
+    from diagnosis.recording import Experiment
+    from diagnosis.residuals import OutputSimulator
+    graph = load("heater-pair")
+    room = 296.15
+    t = np.linspace(0.0, 200.0, 201)
+    heat = np.where(t > 50.0, 60.0, 0.0)
+    exp = Experiment(t, {"Ta": np.full(t.size, room), "Q1": heat, "Q2": np.zeros(t.size)},
+                     {"T1": np.full(t.size, room), "T2": np.full(t.size, room)},
+                     {"Ta": "K", "Q1": "%", "Q2": "%", "T1": "K", "T2": "K"})
+    x0 = {"q_C1": 2.0 * room, "q_C2": 2.0 * room}
+    value = next(c for c in candidates(graph, Place("junction", "block1"), experiment=exp, x0=x0)
+                 if c.kind == "nominal_value" and c.target == "C1")
+    rise = {}
+    for c1 in (1.6, 2.4):
+        built = value.build(graph, {value.params[0].name: c1})
+        t1 = OutputSimulator(built, exp).run(None, x0).outputs["T1"]
+        assert t1[0] == pytest.approx(room, abs=1e-9) and t1[50] == pytest.approx(room, abs=1e-6)
+        rise[c1] = t1[53] - t1[50]
+    # and the law's slope is the refitted capacity's: the first seconds of heating rise as 1/C1
+    assert rise[1.6] / rise[2.4] == pytest.approx(2.4 / 1.6, rel=0.02)

@@ -207,3 +207,33 @@ def test_a_refitted_heat_capacity_keeps_its_blocks_start_temperature():
         rise[c1] = t1[53] - t1[50]
     # and the law's slope is the refitted capacity's: the first seconds of heating rise as 1/C1
     assert rise[1.6] / rise[2.4] == pytest.approx(2.4 / 1.6, rel=0.02)
+
+
+def test_a_heat_capacitys_cubic_acts_about_its_relaxed_content():
+    """A cubic stiffness on a heat capacity in absolute temperature is about the content at which
+    the block is at the room's temperature (kinds.nonlinear_stiffness), not about zero heat, 300 K
+    away, where it is a constant and a linear term (seed 4401's case 001 had read it as a leak):
+    a block resting in the room stays there for any cubic term, and one heated departs from the
+    linear law by the cubic's sign."""
+    from diagnosis.recording import Experiment
+    from diagnosis.residuals import OutputSimulator
+    graph = load("heater-pair")
+    room = 296.15
+    t = np.linspace(0.0, 200.0, 201)
+    rest = Experiment(t, {"Ta": np.full(t.size, room), "Q1": np.zeros(t.size), "Q2": np.zeros(t.size)},
+                      {"T1": np.full(t.size, room), "T2": np.full(t.size, room)},
+                      {"Ta": "K", "Q1": "%", "Q2": "%", "T1": "K", "T2": "K"})
+    heated = Experiment(t, {**rest.inputs, "Q1": np.full(t.size, 80.0)}, rest.outputs, rest.units)
+    x0 = {"q_C1": 2.0 * room, "q_C2": 2.0 * room}
+    cubic = next(c for c in candidates(graph, Place("junction", "block1"), experiment=heated, x0=x0)
+                 if c.kind == "nonlinear_stiffness" and c.target == "C1")
+    k3 = next(p for p in cubic.params if p.name.startswith("k3"))
+    values = {p.name: p.guess for p in cubic.params}
+    linear = OutputSimulator(cubic.build(graph, {**values, k3.name: 0.0}), heated).run(None, x0).outputs["T1"]
+    # a cubic worth 5 % of the heated block's rise at its content's departure there
+    departure = 2.0 * (linear[-1] - room)
+    for sign in (1.0, -1.0):
+        built = cubic.build(graph, {**values, k3.name: sign * 0.05 * (linear[-1] - room) / departure ** 3})
+        assert np.allclose(OutputSimulator(built, rest).run(None, x0).outputs["T1"], room, atol=1e-9)
+        warm = OutputSimulator(built, heated).run(None, x0).outputs["T1"]
+        assert np.sign(warm[-1] - linear[-1]) == sign and abs(warm[-1] - linear[-1]) > 1e-3

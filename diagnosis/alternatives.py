@@ -183,7 +183,7 @@ def unexcited(graph, winner, experiment, x0=None) -> list[Alternative]:
         return []
     from .catalogue_scales import junction_scales
     model = graph
-    if members != [cand]:            # the junction's values along the answer's own model
+    if hasattr(cand, "members"):     # the junction's values along the answer's own model
         try:
             model = cand.build(graph, winner.values)
         except BondcosimError:

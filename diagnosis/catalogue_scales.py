@@ -135,11 +135,8 @@ def junction_scales(graph, junction: str, experiment, signals=None, x0=None, est
             exprs[f"state:{other.state}"] = other.state
     run_graph, run_experiment = graph, experiment
     if estimate is not None and np.size(estimate) == np.size(experiment.t):
-        from .graph_location_graph import augment, junction_unit, with_inputs
-        run_graph, inputs = augment(graph, [junction])
-        d = inputs[junction]
-        run_experiment = with_inputs(experiment, {d: np.nan_to_num(np.asarray(estimate, float), nan=0.0)},
-                                     {d: junction_unit(graph, junction)})
+        from .graph_location_graph import corrected
+        run_graph, run_experiment, _ = corrected(graph, experiment, junction, estimate)
     values = simulate_expressions(run_graph, run_experiment, exprs, x0=x0)
     if not values:
         return Scales(span=span, dt=dt), {}

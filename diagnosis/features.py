@@ -624,13 +624,13 @@ def _evidence_at(graph, p, experiment, x0, regime_variables, d_hat, restart=None
     from bondgraph.io_json import graph_from_dict
 
     from .catalogue_common import ambient_effort, junction_domain
-    from .graph_location_graph import augment, junction_unit, with_inputs
+    from .graph_location_graph import corrected, junction_unit
     from .graph_location_linear import LinearisedResponse
     from .residuals import OutputSimulator, noise_sigma
 
     outputs = list(experiment.outputs)
-    aug, d_inputs = augment(graph, [p.name])
-    d = d_inputs[p.name]
+    aug, exp, d = corrected(graph, experiment, p.name, d_hat)
+    d_hat = exp.inputs[d]
     signals = _signals(graph, p.name, regime_variables)
     if graph.elements[p.name].kind == "1":
         aug, signals["travel"] = _with_travel(aug, p.name)
@@ -641,9 +641,6 @@ def _evidence_at(graph, p, experiment, x0, regime_variables, d_hat, restart=None
         labels[key] = label
         data["outputs"].append({"name": key, "expression": str(expr), "unit": ""})
     aug = graph_from_dict(data, source=f"features of {graph.name}")
-    d_hat = (np.zeros_like(experiment.t) if d_hat is None
-             else np.nan_to_num(np.asarray(d_hat, float), nan=0.0, posinf=0.0, neginf=0.0))
-    exp = with_inputs(experiment, {d: d_hat}, {d: junction_unit(graph, p.name)})
     sim = OutputSimulator(aug, exp, outputs=outputs + list(labels))
     run = sim.run(None, x0)
     t = run.t

@@ -95,6 +95,20 @@ def with_inputs(experiment, extra: dict, units: dict):
                       {**experiment.units, **units}, experiment.source, experiment.substeps)
 
 
+def corrected(graph, experiment, junction: str, estimate=None):
+    """``(graph, experiment, input)``: `graph` with an input-driven source on `junction`
+    (:func:`augment`) and `experiment` with that input recorded as `estimate` (the location's
+    correction there on the experiment's times; 0 where it is None, NaN or infinite), so that a
+    run of the two is the nominal corrected there."""
+    import numpy as np
+
+    aug, inputs = augment(graph, [junction])
+    d = inputs[junction]
+    values = (np.zeros_like(experiment.t) if estimate is None
+              else np.nan_to_num(np.asarray(estimate, float), nan=0.0, posinf=0.0, neginf=0.0))
+    return aug, with_inputs(experiment, {d: values}, {d: junction_unit(graph, junction)}), d
+
+
 def junction_unit(graph, junction: str) -> str:
     """Effort (1-junction) or flow (0-junction) unit at `junction`.
 

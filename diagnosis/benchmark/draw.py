@@ -420,14 +420,14 @@ def _calibrate(rec: Realised, rng) -> None:
     m0 = _initial_magnitude(spec, plant, rec, scales, sh, probe_gain)
     if not (np.isfinite(m0) and m0 > 0):
         m0 = 1e-3          # a guess without a sign or size; the secant steps find the size
-    best = _size(truth_of, m0, spec.target_change, bounded)
+    target = spec.target_change
+    best = _size(truth_of, m0, target, bounded)
     # an end stop as stiff as 20 springs is soft beside stiffer paths in parallel (the pam's
     # muscles beside its seesaw spring): too soft to be seen, it is stiffened tenfold, twice at most
     while (spec.kind == "saturation" and spec.door == "storage" and stiffer < 100.0 and best is not None
-           and abs(math.log(best[3] / spec.target_change)) > math.log(SIZE_TOLERANCE)):
+           and abs(math.log(best[3] / target)) > math.log(SIZE_TOLERANCE)):
         stiffer *= 10.0
-        best = _size(truth_of, m0, spec.target_change, bounded)
-    target = spec.target_change
+        best = _size(truth_of, m0, target, bounded)
     if best is None:
         raise BenchmarkError(f"{spec.label}: no finite truth run while sizing the effect")
     eff, out, name, c, m = best

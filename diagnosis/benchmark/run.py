@@ -126,14 +126,15 @@ def score_case(rec: Realised, report, detuned: dict | None = None) -> Score:
     if detuned:
         s.detuned = dict(detuned)
         value = [e for e in found if e["kind"] == "nominal_value"]
+        beside = _junctions_of(rec.plant.model, detuned.get("element"))
         # a value answer names the detuned value, or lists it as not told apart from its own (two
         # inertias geared together: one's value is the other's rescaled)
-        s.detuned_named = any(detuned["parameter"] in e.get("parameters", {})
-                              or _reads_as_value(e, rec.plant.model, detuned) for e in value)
+        s.detuned_named = any(detuned["parameter"] in e.get("parameters", {}) or _reads_as_value(e, beside)
+                              for e in value)
         # where no value answered names it, the first answer that is the value read another way
         # stands for it (then it is no answer to the concealed effect)
         reading = None if s.detuned_named else next(
-            (e for e in found if e not in value and _reads_as_value(e, rec.plant.model, detuned)), None)
+            (e for e in found if e not in value and _reads_as_value(e, beside)), None)
         s.detuned_named = s.detuned_named or reading is not None
         found = [e for e in found if e not in value and e is not reading]
     s.judge = str(data.get("fit", {}).get("judge", ""))
@@ -165,16 +166,22 @@ def score_case(rec: Realised, report, detuned: dict | None = None) -> Score:
     return s
 
 
-def _reads_as_value(effect: dict, model: str, detuned: dict) -> bool:
-    """Whether the answered `effect` (report JSON) may be, by the report's own account, the detuned
-    element's value: it lists a ``nominal_value`` at a junction bonded to that element as not told
-    apart from it (a force-driven carriage's input gain is its mass's value rescaled,
-    :mod:`diagnosis.equivalent_readings`; seed 4401, case 007, answered its 13 % light mass as a
-    gain of 0.874 on the force, then the concealed velocity sensor's offset)."""
+def _junctions_of(model: str, element) -> set:
+    """The junction places (``"junction <name>"``) bonded to `element` of library `model`."""
     from plants import load
-    graph, element = load(model), detuned.get("element")
-    junctions = {f"junction {b.tail.element if end == 'head' else b.head.element}"
-                 for b, end in graph.bonds_of(element)} if element in graph.elements else set()
+    graph = load(model)
+    if element not in graph.elements:
+        return set()
+    return {f"junction {b.tail.element if end == 'head' else b.head.element}" for b, end in graph.bonds_of(element)}
+
+
+def _reads_as_value(effect: dict, junctions: set) -> bool:
+    """Whether the answered `effect` (report JSON) may be, by the report's own account, the detuned
+    element's value: it lists a ``nominal_value`` at one of `junctions`, those bonded to that
+    element (:func:`_junctions_of`), as not told apart from it (a force-driven carriage's input
+    gain is its mass's value rescaled, :mod:`diagnosis.equivalent_readings`; seed 4401, case 007,
+    answered its 13 % light mass as a gain of 0.874 on the force, then the concealed velocity
+    sensor's offset)."""
     return any(a.get("kind") == "nominal_value" and a.get("place") in junctions
                for a in effect.get("indistinguishable", []))
 
